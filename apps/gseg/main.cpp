@@ -1,0 +1,46 @@
+// gseg: GSeg3D ground segmentation tools (segment one scan, evaluate, benchmark).
+#include "commands.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+namespace {
+
+struct Command {
+    const char* name;
+    int (*run)(int, char**);
+    const char* summary;
+};
+
+const Command kCommands[] = {
+    {"segment", gseg::app::runSegment, "label one scan (KITTI .bin, PLY or rawlog) as ground / non-ground"},
+};
+
+void usage(std::FILE* out) {
+    std::fprintf(out, "usage: gseg <command> [options]   (gseg <command> --help for its options)\n\ncommands:\n");
+    for (const Command& c : kCommands) std::fprintf(out, "  %-9s %s\n", c.name, c.summary);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const std::string cmd = argv[1];
+    if (cmd == "-h" || cmd == "--help" || cmd == "help") {
+        usage(stdout);
+        return 0;
+    }
+    for (const Command& c : kCommands)
+        if (cmd == c.name) {
+            std::string name = std::string("gseg ") + c.name;
+            argv[1] = name.data();
+            return c.run(argc - 1, argv + 1);
+        }
+    std::fprintf(stderr, "gseg: unknown command '%s'\n", cmd.c_str());
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,31 @@
+#pragma once
+/// \file cell_classifier.hpp
+/// Local eigen classification of one cell (paper step 2) and the sparsity buckets of Algorithm 1.
+
+#include <gseg/ground_segmenter.hpp>
+#include <gseg/params.hpp>
+
+#include <Eigen/Core>
+#include <cstddef>
+
+namespace gseg {
+
+/// Outcome of classifying one cell from its points.
+struct CellClassification {
+    CellClass cellClass = CellClass::TooFewPoints;
+    bool groundCandidate = false;  ///< tentative ground (Line/Small), or Plane to be confirmed by the plane fit
+    CellOutcome rejection = CellOutcome::TooFewPoints;  ///< reason when not a candidate
+    Eigen::Vector3f mean = Eigen::Vector3f::Zero();      ///< centroid of the points
+};
+
+/// Classifies a cell from its points `pts[0..n)` given relative to any origin (the mean is
+/// computed here). Planar cells come back as candidates: the plane fit decides their slope.
+CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params);
+
+/// Bounding-box sparsity of Algorithm 1: box volume / point count, in m^3 per point.
+enum class Sparsity : std::uint8_t { Low, Medium, High };
+
+/// Bucket of `volumePerPoint` [m^3/point] against Params::sparsityLow / sparsityMedium.
+Sparsity sparsityBucket(double volumePerPoint, const Params& params);
+
+}  // namespace gseg

@@ -1,0 +1,62 @@
+#pragma once
+/// \file params.hpp
+/// Every parameter of GSeg3D, with its default, unit and meaning. Frames: the cloud is given in
+/// a gravity-aligned frame whose z axis points up and whose origin is the sensor (or a point
+/// straight above the ground under the robot); the ground under the robot is at z = -distToGround.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gseg {
+
+/// Configuration of GroundSegmenter. Defaults: the authors' library defaults and the paper's
+/// SemanticKITTI configuration (Lodhi and Hertzberg, ICRCV 2025). Field names are the YAML keys.
+struct Params {
+    // --- robot / sensor -------------------------------------------------------------------------
+    double distToGround = 1.723;  ///< [m] height of the sensor above the ground under the robot (> 0: ground is below)
+    double robotRadius = 2.7;     ///< [m] radius of the seed disc under the robot from which expansion starts
+
+    // --- grid -------------------------------------------------------------------------------------
+    double cellSizeX = 1.5;        ///< [m] cell size along x, both phases
+    double cellSizeY = 1.0;        ///< [m] cell size along y, both phases
+    double cellSizeZPhase1 = 1.5;  ///< [m] cell height in Phase I (tall cells: throw out tall structures)
+    double cellSizeZPhase2 = 0.2;  ///< [m] cell height in Phase II (thin cells: separate ground from what stands on it)
+
+    // --- local eigen classification ---------------------------------------------------------------
+    int minPointsPerCell = 3;            ///< [points] cells with fewer points are not classified (their points: non-ground)
+    int minPointsForPca = 6;             ///< [points] cells with fewer points (but >= minPointsPerCell) use the variance rule instead of PCA
+    double lineRatioThreshold = 0.95;    ///< [-] l1/(l1+l2+l3) above this: line cell
+    double planeRatioThreshold = 0.4;    ///< [-] l1/(l1+l2+l3) above this (and not a line): planar cell; else non-planar
+    double slopeThresholdDegrees = 30.0; ///< [deg] steepest line or plane still taken as ground
+
+    // --- surface gradient analysis (RANSAC plane fit) ----------------------------------------------
+    double groundInlierThreshold = 0.125;  ///< [m] point-to-plane distance of a plane inlier
+    int ransacMaxIterations = 1000;        ///< [-] upper bound of RANSAC iterations per cell
+    double ransacConfidence = 0.999;       ///< [-] stop once another sample would find a better plane with less than 1 - this probability
+    std::uint64_t ransacSeed = 42;         ///< [-] seed of the per-cell random generators (mixed with the cell index: results never depend on call order)
+
+    // --- ground region expansion ------------------------------------------------------------------
+    double centroidSearchRadius = 5.0;  ///< [m] radius of the KD-tree search between ground-candidate centroids
+    double heightGate = 0.5;            ///< [m] Phase II: a neighbour is taken only if its ground height differs by at most this (tau)
+
+    // --- per-cell refinement ----------------------------------------------------------------------
+    double sparsityLow = 0.001;              ///< [m^3/point] bounding-box volume per point below this: Low sparsity
+    double sparsityMedium = 0.01;            ///< [m^3/point] below this (and not Low): Medium; otherwise High
+    double maxGroundHeightDeviation = 0.3;   ///< [m] ambiguous cell rejected if its ground is higher than this above the lowest neighbour
+
+    /// Throws std::invalid_argument naming the first invalid key and its value.
+    void validate() const;
+
+    /// Names of all keys, in declaration order (the YAML/INI keys).
+    static const std::vector<std::string>& keys();
+
+    /// Sets the field named `key` from its text form. Throws std::invalid_argument on an unknown
+    /// key or a value that does not parse as the field's type (does not validate ranges).
+    void set(const std::string& key, const std::string& value);
+
+    /// The field named `key` as text (round-trips through set()). Throws on an unknown key.
+    std::string get(const std::string& key) const;
+};
+
+}  // namespace gseg

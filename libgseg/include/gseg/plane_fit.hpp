@@ -1,0 +1,40 @@
+#pragma once
+/// \file plane_fit.hpp
+/// Seeded, adaptive RANSAC plane fit with least-squares refinement (paper step 3).
+
+#include <gseg/params.hpp>
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace gseg {
+
+/// A plane n . p + d = 0 with |n| = 1 and n_z >= 0.
+struct PlaneFitResult {
+    bool valid = false;          ///< false if the points are degenerate (all collinear / too few)
+    Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
+    float d = 0.f;
+    std::size_t numInliers = 0;  ///< points within Params::groundInlierThreshold of the plane
+    int iterations = 0;          ///< RANSAC iterations run
+};
+
+/// Fits a plane to `pts[0..n)` by RANSAC (random generator seeded with `seed`; the iteration count
+/// adapts to the inlier ratio found, up to Params::ransacMaxIterations) followed by a
+/// least-squares refit on the inliers. Writes 1/0 per point into `inlier` (resized to n).
+PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params,
+                        std::uint64_t seed, std::vector<std::uint8_t>& inlier);
+
+/// Angle [deg] between a unit normal and the z axis (0 = horizontal plane).
+double planeSlopeDegrees(const Eigen::Vector3f& normal);
+
+/// SplitMix64: the small deterministic generator behind every random choice of the library.
+inline std::uint64_t splitmix64(std::uint64_t& state) {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+}  // namespace gseg

@@ -1,0 +1,31 @@
+#pragma once
+/// \file region_growing.hpp
+/// KD-tree ground region expansion over tentative-ground cell centroids (paper step 4).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <vector>
+
+namespace gseg {
+
+/// Settings of one expansion.
+struct ExpansionSettings {
+    Eigen::Vector3f seed = Eigen::Vector3f::Zero();  ///< [m] synthetic seed under the robot
+    double seedRadius = 7.7;    ///< [m] candidates within this distance of the seed start the expansion
+    double radius = 5.0;        ///< [m] neighbour search radius between centroids
+    double heightGate = std::numeric_limits<double>::infinity();  ///< [m] max |dz| to a neighbour (Phase II)
+};
+
+/// Decides a reached candidate: given its index and its neighbours (candidate indices within
+/// the radius and the gate, itself excluded), returns true to accept it and expand from it.
+using AcceptFn = std::function<bool(std::uint32_t candidate, const std::vector<std::uint32_t>& neighbours)>;
+
+/// Breadth-first expansion from the seed. Each candidate reached is passed to `accept` exactly
+/// once, in a deterministic order; only accepted candidates propagate. Returns, per candidate,
+/// 0 not reached, 1 reached and rejected, 2 accepted.
+std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centroids,
+                                       const ExpansionSettings& settings, const AcceptFn& accept);
+
+}  // namespace gseg

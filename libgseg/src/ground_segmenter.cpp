@@ -1,0 +1,301 @@
+#include <gseg/cell_classifier.hpp>
+#include <gseg/grid.hpp>
+#include <gseg/ground_segmenter.hpp>
+#include <gseg/plane_fit.hpp>
+#include <gseg/region_growing.hpp>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace gseg {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point& t) {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+    return ms;
+}
+
+void checkCloud(const PointCloudView& cloud) {
+    if (cloud.empty()) throw std::invalid_argument("gseg: the point cloud is empty");
+    if (cloud.strideBytes() < 3 * sizeof(float))
+        throw std::invalid_argument("gseg: point stride must be at least 12 bytes (x, y, z floats)");
+    if (cloud.size() > std::numeric_limits<std::uint32_t>::max())
+        throw std::invalid_argument("gseg: more than 2^32-1 points in one cloud");
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const float* p = cloud.point(i);
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+            std::ostringstream msg;
+            msg << "gseg: point " << i << " has a non-finite coordinate (" << p[0] << ", " << p[1] << ", " << p[2]
+                << ")";
+            throw std::invalid_argument(msg.str());
+        }
+    }
+}
+
+std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
+    std::uint64_t s = base ^ (std::uint64_t(std::uint32_t(c.ix)) * 0x9E3779B97F4A7C15ull);
+    s ^= std::uint64_t(std::uint32_t(c.iy)) * 0xC2B2AE3D27D4EB4Full;
+    s ^= std::uint64_t(std::uint32_t(c.iz)) * 0x165667B19E3779F9ull;
+    s ^= std::uint64_t(phase) << 61;
+    return splitmix64(s);
+}
+
+// Bounding-box volume per point of the masked (want = 1) or unmasked (want = 0) points.
+double volumePerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std::size_t n, std::uint8_t want) {
+    Eigen::AlignedBox3f box;
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (mask[i] == want) box.extend(pts[i]), ++m;
+    return m == 0 ? 0.0 : double(box.volume()) / double(m);
+}
+
+// Per-cell working state of one phase.
+struct CellState {
+    CellClass cellClass = CellClass::TooFewPoints;
+    CellOutcome outcome = CellOutcome::TooFewPoints;
+    std::uint32_t inliers = 0;
+    bool ambiguous = false;
+    Eigen::Vector3f ground = Eigen::Vector3f::Zero();  // centroid of the ground candidates
+};
+
+}  // namespace
+
+struct detail::Workspace {
+    Grid grid;
+    std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
+    std::vector<Eigen::Vector3f> pts;  // points grouped by cell, aligned with grid.order()
+    std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
+    std::vector<std::uint8_t> mask;    // plane-fit scratch
+    std::vector<CellState> cells;
+    std::vector<std::uint32_t> candidateCell;  // candidate -> cell
+    std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
+};
+
+GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
+    params_.validate();
+}
+GroundSegmenter::~GroundSegmenter() = default;
+GroundSegmenter::GroundSegmenter(GroundSegmenter&&) noexcept = default;
+GroundSegmenter& GroundSegmenter::operator=(GroundSegmenter&&) noexcept = default;
+
+namespace {
+
+/// One phase of GSeg3D over the points `input`; appends the indices it calls ground to `ground`.
+class Phase {
+public:
+    Phase(const Params& p, int number, double cellSizeZ, double heightGate)
+        : p_(p), number_(number), sz_(cellSizeZ), gate_(heightGate) {}
+
+    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, std::vector<std::uint32_t>& ground,
+             detail::Workspace& ws, PhaseReport& report, bool keepCells) {
+        report.inputPoints = input.size();
+        auto t = Clock::now();
+        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, sz_);  // Step 1: grid representation
+        report.ms.grid = msSince(t);
+        classifyCells(cloud, ws);  // Step 2: local eigen classification
+        report.ms.classification = msSince(t);
+        fitPlanes(ws);  // Step 3: surface gradient analysis
+        report.ms.planeFit = msSince(t);
+        markAmbiguous(ws);  // Algorithm 1: sparsity buckets of inliers vs outliers
+        report.ms.refinement = msSince(t);
+        expand(ws);  // Step 4: ground region expansion with per-cell checks
+        report.ms.expansion = msSince(t);
+        collect(ws, ground, report, keepCells);
+        report.ms.refinement += msSince(t);
+    }
+
+private:
+    void classifyCells(const PointCloudView& cloud, detail::Workspace& ws) const {
+        const auto& order = ws.grid.order();
+        ws.pts.resize(order.size());
+        for (std::size_t k = 0; k < order.size(); ++k) {
+            const float* q = cloud.point(order[k]);
+            ws.pts[k] = Eigen::Vector3f(q[0], q[1], q[2]);
+        }
+        ws.inlier.assign(order.size(), 0);
+        ws.cells.assign(ws.grid.cells().size(), CellState());
+        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
+            const GridCell& g = ws.grid.cells()[c];
+            const CellClassification cls = classifyCell(&ws.pts[g.begin], g.size(), p_);
+            CellState& s = ws.cells[c];
+            s.cellClass = cls.cellClass;
+            s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
+            if (cls.groundCandidate && cls.cellClass != CellClass::Plane) {
+                // Line and small cells have no plane: all their points are ground candidates.
+                std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 1);
+                s.inliers = g.size();
+                s.ground = cls.mean;
+            }
+        }
+    }
+
+    void fitPlanes(detail::Workspace& ws) const {
+        const double maxSlope = p_.slopeThresholdDegrees;
+        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
+            CellState& s = ws.cells[c];
+            if (s.cellClass != CellClass::Plane) continue;
+            const GridCell& g = ws.grid.cells()[c];
+            const PlaneFitResult fit =
+                fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, number_), ws.mask);
+            if (!fit.valid) {
+                s.outcome = CellOutcome::NonPlanar;
+                continue;
+            }
+            if (planeSlopeDegrees(fit.normal) > maxSlope) {
+                s.outcome = CellOutcome::Steep;
+                continue;
+            }
+            Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+            for (std::uint32_t i = 0; i < g.size(); ++i) {
+                ws.inlier[g.begin + i] = ws.mask[i];
+                if (ws.mask[i]) sum += ws.pts[g.begin + i];
+            }
+            s.inliers = std::uint32_t(fit.numInliers);
+            s.ground = sum / float(fit.numInliers);
+        }
+    }
+
+    void markAmbiguous(detail::Workspace& ws) const {
+        ws.candidateCell.clear();
+        ws.centroids.clear();
+        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
+            CellState& s = ws.cells[c];
+            if (s.outcome != CellOutcome::NotReached) continue;
+            const GridCell& g = ws.grid.cells()[c];
+            if (s.inliers < g.size()) {
+                const Sparsity in = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
+                const Sparsity out = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
+                s.ambiguous = in == out;
+            }
+            ws.candidateCell.push_back(std::uint32_t(c));
+            ws.centroids.push_back(s.ground);
+        }
+    }
+
+    // An occupied cell classified non-ground lies directly below cell c (same column, lower z).
+    bool floating(const detail::Workspace& ws, std::size_t c) const {
+        const auto& g = ws.grid.cells();
+        for (std::size_t b = c; b-- > 0 && g[b].ix == g[c].ix && g[b].iy == g[c].iy;) {
+            const CellOutcome o = ws.cells[b].outcome;
+            if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
+        }
+        return false;
+    }
+
+    void expand(detail::Workspace& ws) const {
+        ExpansionSettings es;
+        es.seed = Eigen::Vector3f(0.f, 0.f, float(-p_.distToGround));
+        es.seedRadius = p_.robotRadius + p_.centroidSearchRadius;
+        es.radius = p_.centroidSearchRadius;
+        es.heightGate = gate_;
+        const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
+            const std::size_t c = ws.candidateCell[cand];
+            CellState& s = ws.cells[c];
+            if (s.ambiguous) {
+                float lowest = std::numeric_limits<float>::infinity();
+                for (std::uint32_t j : nb) lowest = std::min(lowest, ws.centroids[j].z());
+                if (nb.empty() || s.ground.z() - lowest > p_.maxGroundHeightDeviation) {
+                    s.outcome = CellOutcome::RejectedAmbiguous;
+                    return false;
+                }
+            }
+            if (floating(ws, c)) {
+                s.outcome = CellOutcome::RejectedFloating;
+                return false;
+            }
+            s.outcome = CellOutcome::Ground;
+            return true;
+        };
+        expandRegion(ws.centroids, es, accept);
+    }
+
+    void collect(const detail::Workspace& ws, std::vector<std::uint32_t>& ground, PhaseReport& r,
+                 bool keepCells) const {
+        const auto& order = ws.grid.order();
+        const auto& grid = ws.grid.cells();
+        r.occupiedCells = grid.size();
+        r.candidateCells = ws.candidateCell.size();
+        if (keepCells) r.cells.reserve(grid.size());
+        for (std::size_t c = 0; c < grid.size(); ++c) {
+            const GridCell& g = grid[c];
+            const CellState& s = ws.cells[c];
+            if (s.outcome == CellOutcome::Ground) {
+                ++r.groundCells;
+                for (std::uint32_t k = g.begin; k < g.end; ++k)
+                    if (ws.inlier[k]) ground.push_back(order[k]);
+            } else if (s.outcome == CellOutcome::TooFewPoints) {
+                r.unlabelledCellPoints += g.size();
+            } else if (s.outcome == CellOutcome::NotReached) {
+                r.unreachedCellPoints += g.size();
+            }
+            if (keepCells)
+                r.cells.push_back({g.ix, g.iy, g.iz, g.size(), s.inliers, s.cellClass, s.outcome, s.ground.z()});
+        }
+        r.groundPoints = ground.size();
+    }
+
+    const Params& p_;
+    int number_;
+    double sz_, gate_;
+};
+
+}  // namespace
+
+Result GroundSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics) {
+    const auto start = Clock::now();
+    checkCloud(cloud);
+    detail::Workspace& ws = *ws_;
+    Result r;
+
+    ws.input.resize(cloud.size());
+    for (std::uint32_t i = 0; i < ws.input.size(); ++i) ws.input[i] = i;
+    ws.phase1Ground.clear();
+    ws.phase2Ground.clear();
+
+    // Phase I: tall cells over the whole cloud, no height gate.
+    Phase(params_, 1, params_.cellSizeZPhase1, std::numeric_limits<double>::infinity())
+        .run(cloud, ws.input, ws.phase1Ground, ws, r.phase1, keepCellDiagnostics);
+    // Phase II: thin cells over Phase I's ground, with the height gate.
+    Phase(params_, 2, params_.cellSizeZPhase2, params_.heightGate)
+        .run(cloud, ws.phase1Ground, ws.phase2Ground, ws, r.phase2, keepCellDiagnostics);
+
+    r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
+    for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
+    r.numGround = ws.phase2Ground.size();
+    r.numNonGround = cloud.size() - r.numGround;
+    r.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return r;
+}
+
+const char* toString(CellClass c) {
+    switch (c) {
+        case CellClass::TooFewPoints: return "too_few_points";
+        case CellClass::Small: return "small";
+        case CellClass::Line: return "line";
+        case CellClass::Plane: return "plane";
+        case CellClass::NonPlanar: return "non_planar";
+    }
+    return "?";
+}
+
+const char* toString(CellOutcome o) {
+    switch (o) {
+        case CellOutcome::Ground: return "ground";
+        case CellOutcome::TooFewPoints: return "too_few_points";
+        case CellOutcome::Steep: return "steep";
+        case CellOutcome::NonPlanar: return "non_planar";
+        case CellOutcome::NotReached: return "not_reached";
+        case CellOutcome::RejectedAmbiguous: return "rejected_ambiguous";
+        case CellOutcome::RejectedFloating: return "rejected_floating";
+    }
+    return "?";
+}
+
+}  // namespace gseg

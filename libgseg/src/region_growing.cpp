@@ -1,0 +1,84 @@
+#include <gseg/region_growing.hpp>
+
+#include <nanoflann.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+
+namespace gseg {
+namespace {
+
+struct CentroidSet {
+    const std::vector<Eigen::Vector3f>& pts;
+    std::size_t kdtree_get_point_count() const { return pts.size(); }
+    float kdtree_get_pt(std::size_t i, std::size_t dim) const { return pts[i][int(dim)]; }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const { return false; }
+};
+
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CentroidSet>, CentroidSet,
+                                                 3, std::uint32_t>;
+
+// Collects indices only (nanoflann takes the *squared* radius), works with nanoflann 1.4 and 1.5.
+struct IndexCollector {
+    float radiusSq;
+    std::vector<std::uint32_t>& out;
+    void init() { out.clear(); }
+    void clear() { out.clear(); }
+    std::size_t size() const { return out.size(); }
+    bool full() const { return true; }
+    bool addPoint(float dist, std::uint32_t index) {
+        if (dist < radiusSq) out.push_back(index);
+        return true;
+    }
+    float worstDist() const { return radiusSq; }
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centroids,
+                                       const ExpansionSettings& s, const AcceptFn& accept) {
+    std::vector<std::uint8_t> state(centroids.size(), 0);
+    if (centroids.empty()) return state;
+    const CentroidSet set{centroids};
+    const Tree tree(3, set, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+
+    std::vector<std::uint32_t> found, neighbours;
+    auto search = [&](const Eigen::Vector3f& q, double radius, std::vector<std::uint32_t>& out) {
+        out.clear();
+        IndexCollector collector{float(radius * radius), out};
+        tree.radiusSearchCustomCallback(q.data(), collector);
+        std::sort(out.begin(), out.end());  // deterministic order, independent of tree layout
+    };
+    auto gated = [&](const Eigen::Vector3f& from, std::uint32_t j) {
+        return std::abs(centroids[j].z() - from.z()) <= s.heightGate;
+    };
+
+    std::deque<std::uint32_t> queue;
+    search(s.seed, s.seedRadius, found);
+    for (std::uint32_t j : found)
+        if (gated(s.seed, j)) {
+            state[j] = 1;
+            queue.push_back(j);
+        }
+
+    while (!queue.empty()) {
+        const std::uint32_t c = queue.front();
+        queue.pop_front();
+        search(centroids[c], s.radius, found);
+        neighbours.clear();
+        for (std::uint32_t j : found)
+            if (j != c && gated(centroids[c], j)) neighbours.push_back(j);
+        if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
+        state[c] = 2;
+        for (std::uint32_t j : neighbours)
+            if (state[j] == 0) {
+                state[j] = 1;
+                queue.push_back(j);
+            }
+    }
+    return state;
+}
+
+}  // namespace gseg
