@@ -6,7 +6,7 @@
 namespace gseg {
 
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx,
-                 double sy, double sz) {
+                 double sy, double sz, double originZ) {
     const std::size_t n = indices.size();
     cells_.clear();
     order_.resize(n);
@@ -19,7 +19,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
                           std::numeric_limits<std::int32_t>::min()};
     for (std::size_t k = 0; k < n; ++k) {
         const float* p = cloud.point(indices[k]);
-        const std::int32_t c[3] = {cellCoord(p[0], sx), cellCoord(p[1], sy), cellCoord(p[2], sz)};
+        const std::int32_t c[3] = {cellCoord(p[0], sx), cellCoord(p[1], sy), cellCoord(p[2], sz, originZ)};
         for (int a = 0; a < 3; ++a) {
             coords_[3 * k + a] = c[a];
             lo[a] = std::min(lo[a], c[a]);

@@ -97,7 +97,11 @@ public:
              detail::Workspace& ws, PhaseReport& report, bool keepCells) {
         report.inputPoints = input.size();
         auto t = Clock::now();
-        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, sz_);  // Step 1: grid representation
+        // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
+        // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
+        // instead of straddling a border wherever the sensor height happens to put one.
+        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, sz_,
+                        -p_.distToGround - p_.gridGroundLevel * sz_);
         report.ms.grid = msSince(t);
         classifyCells(cloud, ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -136,19 +140,16 @@ private:
         }
     }
 
+    // Planar cells: the best plane within the slope limit must hold most of the cell's points;
+    // otherwise the cell is dominated by something steeper (a wall, a car side) and is not ground.
     void fitPlanes(detail::Workspace& ws) const {
-        const double maxSlope = p_.slopeThresholdDegrees;
         for (std::size_t c = 0; c < ws.cells.size(); ++c) {
             CellState& s = ws.cells[c];
             if (s.cellClass != CellClass::Plane) continue;
             const GridCell& g = ws.grid.cells()[c];
-            const PlaneFitResult fit =
-                fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, number_), ws.mask);
-            if (!fit.valid) {
-                s.outcome = CellOutcome::NonPlanar;
-                continue;
-            }
-            if (planeSlopeDegrees(fit.normal) > maxSlope) {
+            const PlaneFitResult fit = fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, number_),
+                                                ws.mask, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
+            if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
                 s.outcome = CellOutcome::Steep;
                 continue;
             }
@@ -169,7 +170,9 @@ private:
             CellState& s = ws.cells[c];
             if (s.outcome != CellOutcome::NotReached) continue;
             const GridCell& g = ws.grid.cells()[c];
-            if (s.inliers < g.size()) {
+            // A handful of outliers has no meaningful bounding box: only a population of at least
+            // minPointsPerCell outliers can compete with the inliers.
+            if (g.size() - s.inliers >= std::uint32_t(p_.minPointsPerCell)) {
                 const Sparsity in = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
                 const Sparsity out = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
                 s.ambiguous = in == out;

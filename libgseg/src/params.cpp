@@ -25,12 +25,14 @@ const std::vector<Entry>& table() {
         {"cellSizeY", &Params::cellSizeY},
         {"cellSizeZPhase1", &Params::cellSizeZPhase1},
         {"cellSizeZPhase2", &Params::cellSizeZPhase2},
+        {"gridGroundLevel", &Params::gridGroundLevel},
         {"minPointsPerCell", &Params::minPointsPerCell},
         {"minPointsForPca", &Params::minPointsForPca},
         {"lineRatioThreshold", &Params::lineRatioThreshold},
         {"planeRatioThreshold", &Params::planeRatioThreshold},
         {"slopeThresholdDegrees", &Params::slopeThresholdDegrees},
         {"groundInlierThreshold", &Params::groundInlierThreshold},
+        {"minGroundInlierRatio", &Params::minGroundInlierRatio},
         {"ransacMaxIterations", &Params::ransacMaxIterations},
         {"ransacConfidence", &Params::ransacConfidence},
         {"ransacSeed", &Params::ransacSeed},
@@ -110,6 +112,7 @@ void Params::validate() const {
                                   std::pair{"cellSizeZPhase1", cellSizeZPhase1},
                                   std::pair{"cellSizeZPhase2", cellSizeZPhase2}})
         require(finite(v) && v >= 0.01 && v <= 1000, name, v, "must be between 0.01 and 1000 m");
+    require(gridGroundLevel >= 0 && gridGroundLevel < 1, "gridGroundLevel", gridGroundLevel, "must be in [0, 1)");
     require(minPointsPerCell >= 3, "minPointsPerCell", minPointsPerCell, "must be >= 3 (a plane needs 3 points)");
     require(minPointsForPca >= minPointsPerCell, "minPointsForPca", minPointsForPca, "must be >= minPointsPerCell");
     require(lineRatioThreshold > 1.0 / 3 && lineRatioThreshold <= 1, "lineRatioThreshold", lineRatioThreshold,
@@ -120,6 +123,8 @@ void Params::validate() const {
             "slopeThresholdDegrees", slopeThresholdDegrees, "must be between 0 and 90 degrees");
     require(finite(groundInlierThreshold) && groundInlierThreshold > 0, "groundInlierThreshold",
             groundInlierThreshold, "must be > 0");
+    require(minGroundInlierRatio >= 0 && minGroundInlierRatio < 1, "minGroundInlierRatio", minGroundInlierRatio,
+            "must be in [0, 1)");
     require(ransacMaxIterations >= 1, "ransacMaxIterations", ransacMaxIterations, "must be >= 1");
     require(ransacConfidence > 0 && ransacConfidence < 1, "ransacConfidence", ransacConfidence,
             "must be in (0, 1)");

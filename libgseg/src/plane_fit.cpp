@@ -20,7 +20,7 @@ std::size_t markInliers(const Eigen::Vector3f* pts, std::size_t n, const Eigen::
 
 // Least-squares plane through the masked points: normal = smallest principal axis.
 bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vector<std::uint8_t>& mask,
-                       Eigen::Vector3f& normal, float& d) {
+                       float thr, Eigen::Vector3f& normal, float& d) {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     std::size_t m = 0;
     for (std::size_t i = 0; i < n; ++i)
@@ -35,9 +35,37 @@ bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vec
         }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
-    if (eig.eigenvalues()(1) <= 1e-12) return false;  // collinear inliers: no plane
+    // Inliers spread less than the inlier distance across their main axis: a line, no plane.
+    if (eig.eigenvalues()(1) / double(m) < double(thr) * double(thr)) return false;
     normal = eig.eigenvectors().col(0).normalized().cast<float>();
+    if (normal.z() < 0) normal = -normal;
     d = float(-normal.cast<double>().dot(mean));
+    return true;
+}
+
+// Plane hypothesis from three points. A triangle thinner than `thr` (its third point within the
+// inlier distance of the line through the other two) does not fix the tilt of a plane around that
+// line: such a sample stands for the line itself, and the hypothesis is the least tilted plane
+// containing it (a scan ring across a ground cell is a line, not a wall).
+bool hypothesis(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c, float thr,
+                Eigen::Vector3f& normal, float& d) {
+    const Eigen::Vector3f e[3] = {b - a, c - b, a - c};
+    const float len2[3] = {e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()};
+    const int longest = len2[0] >= len2[1] ? (len2[0] >= len2[2] ? 0 : 2) : (len2[1] >= len2[2] ? 1 : 2);
+    if (!(len2[longest] > 1e-12f)) return false;
+    const Eigen::Vector3f cross = e[0].cross(-e[2]);  // (b - a) x (c - a)
+    const float height = cross.norm() / std::sqrt(len2[longest]);  // smallest height of the triangle
+    const Eigen::Vector3f& origin = longest == 0 ? a : (longest == 1 ? b : c);
+    if (height >= thr) {
+        normal = cross.normalized();
+    } else {
+        const Eigen::Vector3f dir = e[longest] / std::sqrt(len2[longest]);
+        const Eigen::Vector3f side = Eigen::Vector3f::UnitZ().cross(dir);  // horizontal, across the line
+        if (!(side.squaredNorm() > 1e-12f)) return false;                 // vertical line: no ground plane
+        normal = dir.cross(side).normalized();
+    }
+    if (normal.z() < 0) normal = -normal;
+    d = -normal.dot(origin);
     return true;
 }
 
@@ -49,18 +77,28 @@ double planeSlopeDegrees(const Eigen::Vector3f& normal) {
 }
 
 PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
-                        std::vector<std::uint8_t>& inlier) {
+                        std::vector<std::uint8_t>& inlier, double maxSlopeDegrees, double minInlierRatio) {
     PlaneFitResult res;
     inlier.assign(n, 0);
     if (n < 3) return res;
     const float thr = float(params.groundInlierThreshold);
     const double logFail = std::log(1.0 - params.ransacConfidence);
+    const float minNz = float(std::cos(std::min(90.0, maxSlopeDegrees) * M_PI / 180.0)) - 1e-6f;
 
     std::uint64_t state = seed;
     std::size_t best = 0;
     Eigen::Vector3f bestN = Eigen::Vector3f::UnitZ();
     float bestD = 0.f;
-    int needed = params.ransacMaxIterations;
+    // Iterations needed to draw one all-inlier sample with probability ransacConfidence when a
+    // share w of the points are inliers; a plane holding less than minInlierRatio is of no use, so
+    // w never counts as lower than that.
+    const auto iterationsFor = [&](double w) {
+        const double w3 = std::pow(std::max(w, minInlierRatio), 3.0);
+        if (w3 >= 1.0) return 1;
+        if (w3 <= 0.0) return params.ransacMaxIterations;
+        return int(std::min<double>(params.ransacMaxIterations, std::max(1.0, std::ceil(logFail / std::log(1.0 - w3)))));
+    };
+    int needed = iterationsFor(0.0);
     int it = 0;
     while (it < needed) {
         ++it;
@@ -72,30 +110,27 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
         const std::size_t a = std::min(i, j), b = std::max(i, j);
         if (k >= a) ++k;
         if (k >= b) ++k;
-        Eigen::Vector3f nrm = (pts[j] - pts[i]).cross(pts[k] - pts[i]);
-        const float len = nrm.norm();
-        if (!(len > 1e-9f)) continue;
-        nrm /= len;
-        const float d = -nrm.dot(pts[i]);
+        Eigen::Vector3f nrm;
+        float d;
+        if (!hypothesis(pts[i], pts[j], pts[k], thr, nrm, d) || nrm.z() < minNz) continue;
         const std::size_t count = markInliers(pts, n, nrm, d, thr, nullptr);
         if (count > best) {
             best = count;
             bestN = nrm;
             bestD = d;
             if (best == n) break;
-            const double w3 = std::pow(double(best) / double(n), 3.0);
-            const double adaptive = std::ceil(logFail / std::log(1.0 - w3));
-            needed = int(std::min<double>(params.ransacMaxIterations, std::max(1.0, adaptive)));
+            needed = iterationsFor(double(best) / double(n));
         }
     }
     res.iterations = it;
-    if (best < 3) return res;  // every sample collinear
+    if (best < 3) return res;  // no acceptable plane
 
-    // Least-squares refinement on the inliers; kept only if it does not lose inliers.
+    // Least-squares refinement on the inliers; kept only if it is well defined (inliers not
+    // collinear at the noise scale), within the slope limit, and does not lose inliers.
     markInliers(pts, n, bestN, bestD, thr, &inlier);
     Eigen::Vector3f refN;
     float refD;
-    if (leastSquaresPlane(pts, n, inlier, refN, refD)) {
+    if (leastSquaresPlane(pts, n, inlier, thr, refN, refD) && refN.z() >= minNz) {
         std::vector<std::uint8_t> refMask(n);
         const std::size_t refCount = markInliers(pts, n, refN, refD, thr, &refMask);
         if (refCount >= best) {
@@ -103,7 +138,6 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
             inlier.swap(refMask);
         }
     }
-    if (bestN.z() < 0) bestN = -bestN, bestD = -bestD;
     res.valid = true;
     res.normal = bestN;
     res.d = bestD;

@@ -10,10 +10,10 @@
 
 namespace gseg {
 
-/// Integer index of a cell along one axis: floor(v / size), clamped to +-2^30 so that absurdly
+/// Integer index of a cell along one axis: floor((v - origin) / size), clamped to +-2^30 so that absurdly
 /// far points land in a far cell of their own instead of overflowing.
-inline std::int32_t cellCoord(float v, double size) {
-    const double c = std::floor(static_cast<double>(v) / size);
+inline std::int32_t cellCoord(float v, double size, double origin = 0.0) {
+    const double c = std::floor((static_cast<double>(v) - origin) / size);
     constexpr double lim = 1073741824.0;  // 2^30
     return static_cast<std::int32_t>(c < -lim ? -lim : (c > lim ? lim : c));
 }
@@ -29,9 +29,10 @@ struct GridCell {
 /// of one vertical column are adjacent and ordered bottom to top. Reuses its memory across builds.
 class Grid {
 public:
-    /// Bins the points `indices` of `cloud` into cells of size sx * sy * sz metres.
+    /// Bins the points `indices` of `cloud` into cells of size sx * sy * sz metres; the vertical
+    /// grid starts at `originZ` (cell iz spans [originZ + iz sz, originZ + (iz + 1) sz)).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx,
-               double sy, double sz);
+               double sy, double sz, double originZ = 0.0);
 
     const std::vector<GridCell>& cells() const { return cells_; }
     /// Point indices (into the cloud) grouped by cell: cell c owns order()[c.begin .. c.end).

@@ -22,6 +22,7 @@ struct Params {
     double cellSizeY = 1.0;        ///< [m] cell size along y, both phases
     double cellSizeZPhase1 = 1.5;  ///< [m] cell height in Phase I (tall cells: throw out tall structures)
     double cellSizeZPhase2 = 0.2;  ///< [m] cell height in Phase II (thin cells: separate ground from what stands on it)
+    double gridGroundLevel = 0.8;  ///< [-] where the expected ground (z = -distToGround) lies inside its cell, as a fraction of the cell height from its bottom (both phases)
 
     // --- local eigen classification ---------------------------------------------------------------
     int minPointsPerCell = 3;            ///< [points] cells with fewer points are not classified (their points: non-ground)
@@ -32,6 +33,7 @@ struct Params {
 
     // --- surface gradient analysis (RANSAC plane fit) ----------------------------------------------
     double groundInlierThreshold = 0.125;  ///< [m] point-to-plane distance of a plane inlier
+    double minGroundInlierRatio = 0.5;     ///< [-] a planar cell is ground candidate only if its best plane within the slope limit holds more than this share of its points
     int ransacMaxIterations = 1000;        ///< [-] upper bound of RANSAC iterations per cell
     double ransacConfidence = 0.999;       ///< [-] stop once another sample would find a better plane with less than 1 - this probability
     std::uint64_t ransacSeed = 42;         ///< [-] seed of the per-cell random generators (mixed with the cell index: results never depend on call order)

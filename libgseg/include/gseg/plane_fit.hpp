@@ -13,18 +13,26 @@ namespace gseg {
 
 /// A plane n . p + d = 0 with |n| = 1 and n_z >= 0.
 struct PlaneFitResult {
-    bool valid = false;          ///< false if the points are degenerate (all collinear / too few)
+    bool valid = false;          ///< false if no acceptable plane was found (too few points, vertical lines only, all too steep)
     Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
     float d = 0.f;
     std::size_t numInliers = 0;  ///< points within Params::groundInlierThreshold of the plane
     int iterations = 0;          ///< RANSAC iterations run
 };
 
-/// Fits a plane to `pts[0..n)` by RANSAC (random generator seeded with `seed`; the iteration count
-/// adapts to the inlier ratio found, up to Params::ransacMaxIterations) followed by a
-/// least-squares refit on the inliers. Writes 1/0 per point into `inlier` (resized to n).
+/// Fits the plane with the most inliers to `pts[0..n)` by RANSAC (random generator seeded with
+/// `seed`; the iteration count adapts to the inlier ratio found, up to
+/// Params::ransacMaxIterations) followed by a least-squares refit on the inliers. Writes 1/0 per
+/// point into `inlier` (resized to n).
+///
+/// Only planes at most `maxSlopeDegrees` from horizontal are hypotheses (90: any plane). A sample
+/// whose three points lie within Params::groundInlierThreshold of one line (a single scan ring)
+/// stands for that line: its hypothesis is the least tilted plane containing the line.
+/// `minInlierRatio` (in [0, 1)): the caller has no use for a plane holding a smaller share of the
+/// points, so the search stops once such a plane is unlikely to exist (adaptive RANSAC bound).
 PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params,
-                        std::uint64_t seed, std::vector<std::uint8_t>& inlier);
+                        std::uint64_t seed, std::vector<std::uint8_t>& inlier, double maxSlopeDegrees = 90.0,
+                        double minInlierRatio = 0.0);
 
 /// Angle [deg] between a unit normal and the z axis (0 = horizontal plane).
 double planeSlopeDegrees(const Eigen::Vector3f& normal);
