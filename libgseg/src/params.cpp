@@ -1,5 +1,6 @@
 #include <gseg/params.hpp>
 
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -53,15 +54,18 @@ const Entry& find(const std::string& key) {
 
 template <typename T>
 T parse(const std::string& key, const std::string& text) {
-    std::istringstream in(text);
-    in.imbue(std::locale::classic());
+    // Surrounding blanks are allowed; anything else after the number is not.
+    const std::size_t b = text.find_first_not_of(" \t");
+    const std::size_t e = text.find_last_not_of(" \t");
     T v{};
-    if constexpr (std::is_unsigned_v<T>) {
-        if (text.find('-') != std::string::npos) in.setstate(std::ios::failbit);
+    bool ok = b != std::string::npos;
+    if (ok) {
+        const char* first = text.data() + b;
+        const char* last = text.data() + e + 1;
+        const auto [ptr, ec] = std::from_chars(first, last, v);
+        ok = ec == std::errc() && ptr == last;
     }
-    in >> v;
-    in >> std::ws;
-    if (in.fail() || !in.eof())
+    if (!ok)
         throw std::invalid_argument("parameter '" + key + "': cannot read '" + text + "' as a " +
                                     (std::is_floating_point_v<T> ? "number" : "whole number"));
     return v;
