@@ -198,6 +198,7 @@ private:
         es.seedRadius = p_.robotRadius + p_.centroidSearchRadius;
         es.radius = p_.centroidSearchRadius;
         es.heightGate = gate_;
+        es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
             const std::size_t c = ws.candidateCell[cand];
             CellState& s = ws.cells[c];

@@ -55,13 +55,21 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         return std::abs(centroids[j].z() - from.z()) <= s.heightGate;
     };
 
+    // Seed: the candidates near the robot within the height gate of the synthetic ground point. If
+    // there are none (the robot stands on a slope and its blind spot hides the ground at its own
+    // height), the gate widens with horizontal distance at the slope limit.
     std::deque<std::uint32_t> queue;
     search(s.seed, s.seedRadius, found);
-    for (std::uint32_t j : found)
-        if (gated(s.seed, j)) {
-            state[j] = 1;
-            queue.push_back(j);
+    for (const double slope : {0.0, s.seedSlope}) {
+        for (std::uint32_t j : found) {
+            const float horizontal = (centroids[j] - s.seed).head<2>().norm();
+            if (std::abs(centroids[j].z() - s.seed.z()) <= s.heightGate + slope * horizontal) {
+                state[j] = 1;
+                queue.push_back(j);
+            }
         }
+        if (!queue.empty()) break;
+    }
 
     while (!queue.empty()) {
         const std::uint32_t c = queue.front();

@@ -16,6 +16,7 @@ struct ExpansionSettings {
     double seedRadius = 7.7;    ///< [m] candidates within this distance of the seed start the expansion
     double radius = 5.0;        ///< [m] neighbour search radius between centroids
     double heightGate = std::numeric_limits<double>::infinity();  ///< [m] max |dz| to a neighbour (Phase II)
+    double seedSlope = 0.0;  ///< [-] if no candidate passes the seed's gate, it widens by this much per metre of horizontal distance (the robot stands on a slope)
 };
 
 /// Decides a reached candidate: given its index and its neighbours (candidate indices within
