@@ -48,8 +48,9 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     auto search = [&](const Eigen::Vector3f& q, double radius, std::vector<std::uint32_t>& out) {
         out.clear();
         IndexCollector collector{float(radius * radius), out};
+        // The tree is built deterministically from the centroids, so the order of the results is
+        // deterministic too: no sort needed.
         tree.radiusSearchCustomCallback(q.data(), collector);
-        std::sort(out.begin(), out.end());  // deterministic order, independent of tree layout
     };
     auto gated = [&](const Eigen::Vector3f& from, std::uint32_t j) {
         return std::abs(centroids[j].z() - from.z()) <= s.heightGate;
