@@ -1,0 +1,37 @@
+# The main job, run by `cmake --build build --target demo` (README Quick start, first command):
+# segment the real VLP-16 scan that Debian's mrpt-common ships and, where ../shared/data is present,
+# the SemanticKITTI scans; write a coloured PLY and a top-down PNG of each into OUT.
+# Inputs (-D): GSEG (the gseg executable), SRC (source dir), OUT (output dir).
+file(MAKE_DIRECTORY "${OUT}")
+
+function(run_segment scan config name)
+  message(STATUS "gseg segment ${scan}")
+  execute_process(COMMAND "${GSEG}" segment "${scan}" --config "${config}"
+                          --ply-out "${OUT}/${name}.ply" --png-out "${OUT}/${name}.png"
+                          --labels-out "${OUT}/${name}.labels"
+                  RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "gseg segment failed on ${scan} (exit ${rc})")
+  endif()
+endfunction()
+
+set(vlp16 /usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog)
+if(NOT EXISTS "${vlp16}")
+  message(FATAL_ERROR "${vlp16} is missing: apt-get install mrpt-common")
+endif()
+run_segment("${vlp16}" "${SRC}/config/vlp16.yaml" vlp16)
+
+set(kitti "${SRC}/../shared/data/semantickitti/sequences")
+file(GLOB scans "${kitti}/*/velodyne/*.bin")
+if(scans)
+  foreach(scan IN LISTS scans)
+    get_filename_component(frame "${scan}" NAME_WE)
+    get_filename_component(seqdir "${scan}" DIRECTORY)
+    get_filename_component(seqdir "${seqdir}" DIRECTORY)
+    get_filename_component(seq "${seqdir}" NAME)
+    run_segment("${scan}" "${SRC}/config/kitti_hdl64.yaml" "kitti_${seq}_${frame}")
+  endforeach()
+else()
+  message(STATUS "No SemanticKITTI scans at ${kitti}: segmented the VLP-16 scan only")
+endif()
+message(STATUS "Outputs (PLY: open in any point-cloud viewer; PNG: top-down picture) in ${OUT}")

@@ -1,0 +1,18 @@
+#pragma once
+/// \file paths.hpp
+/// Where tests find the shared real data and the built tools.
+
+#include <string>
+
+namespace gseg::test {
+
+/// `<shared>/data/<relative>` if that file exists, else "" (the caller skips with a message).
+std::string sharedData(const std::string& relative);
+
+/// Message for GTEST_SKIP() when shared data is absent.
+std::string missingDataMessage(const std::string& relative);
+
+/// Path of a built executable (`<build>/bin/<name>`).
+std::string tool(const std::string& name);
+
+}  // namespace gseg::test
