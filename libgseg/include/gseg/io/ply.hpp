@@ -1,0 +1,32 @@
+#pragma once
+/// \file ply.hpp
+/// PLY point clouds: reading vertices (x, y, z, optional intensity) and writing a cloud coloured
+/// by ground labels for viewers.
+
+#include <gseg/point_cloud.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gseg::io {
+
+/// Reads the vertices of a PLY file (ascii or binary_little_endian; the vertex element must come
+/// first; properties x, y, z required, intensity optional, any other scalar property skipped).
+/// Returns 4 floats per point: x, y, z, intensity (0 where absent). Throws std::runtime_error
+/// naming the file on a missing, malformed or truncated file.
+std::vector<float> readPly(const std::string& path);
+
+/// Colours of writeLabelledPly (RGB).
+struct PlyColours {
+    std::uint8_t ground[3] = {40, 200, 60};     ///< green
+    std::uint8_t nonGround[3] = {230, 60, 40};  ///< red
+};
+
+/// Writes `cloud` as binary little-endian PLY with x, y, z (float) and red, green, blue (uchar)
+/// from `labels` (1 ground, 0 non-ground), atomically (temporary file, then rename). Throws
+/// std::invalid_argument if the label count differs from the point count.
+void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                      const PlyColours& colours = PlyColours());
+
+}  // namespace gseg::io

@@ -1,0 +1,28 @@
+#pragma once
+/// \file render.hpp
+/// Top-down pictures of a labelled scan (PNG, via MRPT's CImage).
+
+#include <gseg/point_cloud.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gseg::mrpt {
+
+/// How the picture is drawn. The sensor is at the centre; x (forward) points up, y (left) points left.
+struct RenderOptions {
+    int sizePx = 800;          ///< [px] width and height
+    double rangeM = 0;         ///< [m] half-width shown; 0: fit the 98th percentile of the points' range (at most 80 m)
+    double ringStepM = 10;     ///< [m] distance between range circles
+    std::string title;         ///< text at the top-left (e.g. the scan's name)
+};
+
+/// Writes a top-down PNG: ground green, non-ground red (drawn over the ground), range circles,
+/// the sensor as a white cross, a legend with the counts. Written atomically. Throws
+/// std::invalid_argument if the label count differs from the point count, std::runtime_error if
+/// the file cannot be written.
+void writeTopDownPng(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                     const RenderOptions& options = RenderOptions());
+
+}  // namespace gseg::mrpt
