@@ -5,6 +5,7 @@
 #include <gseg/region_growing.hpp>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -57,6 +58,10 @@ double volumePerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std:
 }
 
 // Per-cell working state of one phase.
+std::uint64_t columnKey(const GridCell& g) {
+    return (std::uint64_t(std::uint32_t(g.ix)) << 32) | std::uint32_t(g.iy);
+}
+
 struct CellState {
     CellClass cellClass = CellClass::TooFewPoints;
     CellOutcome outcome = CellOutcome::TooFewPoints;
@@ -76,6 +81,10 @@ struct detail::Workspace {
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
+    // Per column (ix, iy), ascending: the lowest z of a point Phase I called non-ground (points of
+    // cells too small to classify excepted). Phase II sees only Phase I's ground, so this is how it
+    // knows what stands below its cells.
+    std::vector<std::pair<std::uint64_t, float>> lowestRejected;
 };
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
@@ -100,8 +109,7 @@ public:
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, sz_,
-                        -p_.distToGround - p_.gridGroundLevel * sz_);
+        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, sz_, originZ());
         report.ms.grid = msSince(t);
         classifyCells(cloud, ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -182,15 +190,23 @@ private:
         }
     }
 
-    // An occupied cell classified non-ground lies directly below cell c (same column, lower z).
+    // An occupied cell classified non-ground lies directly below cell c (same column, lower z); in
+    // Phase II also any point Phase I called non-ground below the cell's bottom.
     bool floating(const detail::Workspace& ws, std::size_t c) const {
         const auto& g = ws.grid.cells();
         for (std::size_t b = c; b-- > 0 && g[b].ix == g[c].ix && g[b].iy == g[c].iy;) {
             const CellOutcome o = ws.cells[b].outcome;
             if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
         }
-        return false;
+        if (number_ != 2) return false;
+        const std::uint64_t key = columnKey(g[c]);
+        const auto it = std::lower_bound(ws.lowestRejected.begin(), ws.lowestRejected.end(),
+                                         std::pair<std::uint64_t, float>(key, -std::numeric_limits<float>::infinity()));
+        const double bottom = originZ() + double(g[c].iz) * sz_;
+        return it != ws.lowestRejected.end() && it->first == key && double(it->second) < bottom;
     }
+
+    double originZ() const { return -p_.distToGround - p_.gridGroundLevel * sz_; }
 
     void expand(detail::Workspace& ws) const {
         ExpansionSettings es;
@@ -220,16 +236,18 @@ private:
         expandRegion(ws.centroids, es, accept);
     }
 
-    void collect(const detail::Workspace& ws, std::vector<std::uint32_t>& ground, PhaseReport& r,
+    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, PhaseReport& r,
                  bool keepCells) const {
         const auto& order = ws.grid.order();
         const auto& grid = ws.grid.cells();
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
+        if (number_ == 1) ws.lowestRejected.clear();
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
+            if (number_ == 1 && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
             if (s.outcome == CellOutcome::Ground) {
                 ++r.groundCells;
                 for (std::uint32_t k = g.begin; k < g.end; ++k)
@@ -243,6 +261,21 @@ private:
                 r.cells.push_back({g.ix, g.iy, g.iz, g.size(), s.inliers, s.cellClass, s.outcome, s.ground.z()});
         }
         r.groundPoints = ground.size();
+    }
+
+    // Phase I: lowest non-ground point of cell c's column (cells arrive column by column).
+    void recordRejected(detail::Workspace& ws, std::size_t c) const {
+        const GridCell& g = ws.grid.cells()[c];
+        const bool ground = ws.cells[c].outcome == CellOutcome::Ground;
+        float lowest = std::numeric_limits<float>::infinity();
+        for (std::uint32_t k = g.begin; k < g.end; ++k)
+            if (!ground || !ws.inlier[k]) lowest = std::min(lowest, ws.pts[k].z());
+        if (lowest == std::numeric_limits<float>::infinity()) return;
+        const std::uint64_t key = columnKey(g);
+        if (!ws.lowestRejected.empty() && ws.lowestRejected.back().first == key)
+            ws.lowestRejected.back().second = std::min(ws.lowestRejected.back().second, lowest);
+        else
+            ws.lowestRejected.emplace_back(key, lowest);
     }
 
     const Params& p_;
