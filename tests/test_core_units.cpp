@@ -1,0 +1,235 @@
+// Grid indexing, parameters, plane fit, classification and region growing in isolation.
+#include <gseg/cell_classifier.hpp>
+#include <gseg/grid.hpp>
+#include <gseg/params.hpp>
+#include <gseg/plane_fit.hpp>
+#include <gseg/region_growing.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+// --- grid --------------------------------------------------------------------------------------
+
+TEST(CellCoord, FloorNotTruncationTable) {
+    struct Row {
+        float v;
+        double size;
+        int expected;
+    } rows[] = {{0.f, 1.5, 0},   {1.49f, 1.5, 0},   {1.5f, 1.5, 1},     {-0.f, 1.5, 0},  {-1e-6f, 1.5, -1},
+                {-1.5f, 1.5, -1}, {-1.51f, 1.5, -2}, {-0.1f, 0.2, -1},  {0.2f, 0.2, 1},  {-3.f, 1.0, -3},
+                {1e12f, 0.2, 1 << 30}, {-1e12f, 0.2, -(1 << 30)}};
+    for (const Row& r : rows) EXPECT_EQ(gseg::cellCoord(r.v, r.size), r.expected) << r.v << " / " << r.size;
+    EXPECT_EQ(gseg::cellCoord(-1.8f, 0.2, -1.9), 0);  // origin shifts the borders
+    EXPECT_EQ(gseg::cellCoord(-1.95f, 0.2, -1.9), -1);
+}
+
+TEST(Grid, GroupsPointsByCellSortedByColumnThenHeight) {
+    const std::vector<float> xyz = {0.1f, 0.1f, 0.1f,  -0.1f, 0.1f, 0.1f,  0.2f, 0.3f, 0.15f,
+                                    0.1f, 0.1f, -0.1f, -0.1f, -0.1f, -0.1f};
+    gseg::Grid g;
+    g.build(gseg::PointCloudView(xyz.data(), 5), {0, 1, 2, 3, 4}, 1.0, 1.0, 1.0);
+    ASSERT_EQ(g.cells().size(), 4u);
+    // (-1,-1,-1) (-1,0,0) (0,0,-1) (0,0,0): lexicographic, z fastest
+    EXPECT_EQ(g.cells()[0].ix, -1);
+    EXPECT_EQ(g.cells()[0].iy, -1);
+    EXPECT_EQ(g.cells()[2].iz, -1);
+    EXPECT_EQ(g.cells()[3].iz, 0);
+    EXPECT_EQ(g.cells()[3].size(), 2u);  // points 0 and 2
+    std::size_t total = 0;
+    for (const auto& c : g.cells()) total += c.size();
+    EXPECT_EQ(total, 5u);
+}
+
+TEST(Grid, SparseFallbackMatchesDensePath) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-20, 20);
+    std::vector<float> xyz;
+    for (int i = 0; i < 2000; ++i) xyz.insert(xyz.end(), {u(rng), u(rng), u(rng) * 0.1f});
+    std::vector<std::uint32_t> idx(2000);
+    for (std::uint32_t i = 0; i < 2000; ++i) idx[i] = i;
+    gseg::Grid dense;
+    dense.build(gseg::PointCloudView(xyz.data(), 2000), idx, 1.5, 1.0, 0.2);
+    xyz.insert(xyz.end(), {1e7f, -1e7f, 1e6f});  // forces the sparse path
+    idx.push_back(2000);
+    gseg::Grid sparse;
+    sparse.build(gseg::PointCloudView(xyz.data(), 2001), idx, 1.5, 1.0, 0.2);
+    ASSERT_EQ(sparse.cells().size(), dense.cells().size() + 1);
+    for (std::size_t c = 0; c < dense.cells().size(); ++c) {
+        const auto &a = dense.cells()[c], &b = sparse.cells()[c];
+        EXPECT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end));
+    }
+}
+
+// --- params ------------------------------------------------------------------------------------
+
+TEST(Params, DefaultsAreValidAndRoundTripThroughText) {
+    gseg::Params p;
+    EXPECT_NO_THROW(p.validate());
+    gseg::Params q;
+    q.cellSizeX = 9;
+    for (const auto& k : gseg::Params::keys()) q.set(k, p.get(k));
+    for (const auto& k : gseg::Params::keys()) EXPECT_EQ(q.get(k), p.get(k)) << k;
+    EXPECT_EQ(q.cellSizeX, 1.5);
+}
+
+TEST(Params, RejectsUnknownKeysAndBadText) {
+    gseg::Params p;
+    EXPECT_THROW(p.set("cellSize", "1"), std::invalid_argument);
+    EXPECT_THROW(p.set("cellSizeX", "1.5m"), std::invalid_argument);
+    EXPECT_THROW(p.set("cellSizeX", ""), std::invalid_argument);
+    EXPECT_THROW(p.set("minPointsPerCell", "3.5"), std::invalid_argument);
+    EXPECT_THROW(p.set("ransacSeed", "-1"), std::invalid_argument);
+    p.set("cellSizeX", " 2.25 ");
+    EXPECT_EQ(p.cellSizeX, 2.25);
+}
+
+TEST(Params, ValidateNamesTheOffendingKey) {
+    const struct {
+        const char* key;
+        const char* value;
+    } bad[] = {{"cellSizeX", "-1"},          {"cellSizeZPhase2", "0"},      {"slopeThresholdDegrees", "95"},
+               {"groundInlierThreshold", "0"}, {"minPointsPerCell", "2"},     {"ransacConfidence", "1"},
+               {"centroidSearchRadius", "nan"}, {"heightGate", "-0.1"},       {"gridGroundLevel", "1"},
+               {"sparsityMedium", "0.0001"},  {"minGroundInlierRatio", "1"}, {"distToGround", "inf"}};
+    for (const auto& b : bad) {
+        gseg::Params p;
+        p.set(b.key, b.value);
+        try {
+            p.validate();
+            ADD_FAILURE() << b.key << " = " << b.value << " accepted";
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find(b.key), std::string::npos) << e.what();
+        }
+    }
+}
+
+// --- plane fit ---------------------------------------------------------------------------------
+
+namespace {
+std::vector<Eigen::Vector3f> tiltedPlane(double deg, int n, int outliers, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0, 1.5);
+    std::normal_distribution<float> noise(0, 0.01f);
+    const float t = float(std::tan(deg * M_PI / 180));
+    std::vector<Eigen::Vector3f> pts;
+    for (int i = 0; i < n; ++i) {
+        const float x = u(rng), y = u(rng);
+        pts.emplace_back(x, y, -1.7f + t * x + noise(rng));
+    }
+    for (int i = 0; i < outliers; ++i) pts.emplace_back(u(rng), u(rng), -1.0f + u(rng));
+    return pts;
+}
+}  // namespace
+
+TEST(PlaneFit, RecoversPlaneAndInliersDeterministically) {
+    const auto pts = tiltedPlane(10, 200, 40, 1);
+    gseg::Params p;
+    std::vector<std::uint8_t> in1, in2;
+    const auto a = gseg::fitPlane(pts.data(), pts.size(), p, 123, in1);
+    const auto b = gseg::fitPlane(pts.data(), pts.size(), p, 123, in2);
+    ASSERT_TRUE(a.valid);
+    EXPECT_NEAR(gseg::planeSlopeDegrees(a.normal), 10.0, 0.5);
+    EXPECT_GE(a.numInliers, 199u);
+    EXPECT_LE(a.numInliers, 200u + 5u);  // a few outliers may fall within 0.125 m
+    EXPECT_EQ(in1, in2);
+    EXPECT_EQ(a.numInliers, b.numInliers);
+    EXPECT_LT(a.iterations, 100);  // adaptive: far from the 1000 bound
+}
+
+TEST(PlaneFit, SlopeLimitRejectsSteepPlanes) {
+    const auto pts = tiltedPlane(50, 100, 0, 2);
+    gseg::Params p;
+    std::vector<std::uint8_t> in;
+    EXPECT_TRUE(gseg::fitPlane(pts.data(), pts.size(), p, 1, in).valid);
+    const auto limited = gseg::fitPlane(pts.data(), pts.size(), p, 1, in, 30.0, 0.5);
+    EXPECT_TRUE(!limited.valid || limited.numInliers <= 50u);
+}
+
+TEST(PlaneFit, SingleRingIsALineNotATiltedPlane) {
+    // 20 points on one horizontal line plus one stray point above and aside: the least tilted plane
+    // through the line keeps the line, instead of tilting towards the stray point.
+    std::vector<Eigen::Vector3f> pts;
+    for (int i = 0; i < 20; ++i) pts.emplace_back(0.07f * i, 0.f, -1.7f);
+    pts.emplace_back(0.7f, 0.45f, -1.33f);
+    gseg::Params p;
+    std::vector<std::uint8_t> in;
+    const auto fit = gseg::fitPlane(pts.data(), pts.size(), p, 5, in, 30.0, 0.5);
+    ASSERT_TRUE(fit.valid);
+    EXPECT_EQ(fit.numInliers, 20u);
+    EXPECT_EQ(in.back(), 0);
+    EXPECT_LT(gseg::planeSlopeDegrees(fit.normal), 5.0);
+}
+
+TEST(PlaneFit, DegenerateInputIsInvalid) {
+    gseg::Params p;
+    std::vector<std::uint8_t> in;
+    const std::vector<Eigen::Vector3f> two = {{0, 0, 0}, {1, 0, 0}};
+    EXPECT_FALSE(gseg::fitPlane(two.data(), two.size(), p, 1, in).valid);
+    std::vector<Eigen::Vector3f> vertical;
+    for (int i = 0; i < 10; ++i) vertical.emplace_back(0.f, 0.f, 0.1f * i);
+    EXPECT_FALSE(gseg::fitPlane(vertical.data(), vertical.size(), p, 1, in, 30.0).valid);
+}
+
+// --- classification ----------------------------------------------------------------------------
+
+TEST(CellClassifier, LinePlaneClutterAndSmallCells) {
+    gseg::Params p;
+    std::vector<Eigen::Vector3f> line, steepLine, plane, blob, smallUpright, smallFlat;
+    for (int i = 0; i < 20; ++i) {
+        line.emplace_back(0.07f * i, 0.001f * (i % 2), -1.7f);
+        steepLine.emplace_back(0.f, 0.001f * (i % 2), 0.07f * i);
+    }
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) plane.emplace_back(0.15f * i, 0.1f * j, -1.7f + 0.002f * ((i + j) % 3));
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(0, 1);
+    for (int i = 0; i < 100; ++i) blob.emplace_back(u(rng), u(rng), u(rng));
+    smallUpright = {{0, 0, 0}, {0.01f, 0, 0.5f}, {0, 0.01f, 1.0f}};
+    smallFlat = {{0, 0, 0}, {0.5f, 0, 0.01f}, {0, 0.5f, 0}, {0.5f, 0.5f, 0}};
+    EXPECT_EQ(gseg::classifyCell(line.data(), line.size(), p).cellClass, gseg::CellClass::Line);
+    EXPECT_TRUE(gseg::classifyCell(line.data(), line.size(), p).groundCandidate);
+    EXPECT_FALSE(gseg::classifyCell(steepLine.data(), steepLine.size(), p).groundCandidate);
+    EXPECT_EQ(gseg::classifyCell(plane.data(), plane.size(), p).cellClass, gseg::CellClass::Plane);
+    EXPECT_EQ(gseg::classifyCell(blob.data(), blob.size(), p).cellClass, gseg::CellClass::NonPlanar);
+    EXPECT_EQ(gseg::classifyCell(smallUpright.data(), 3, p).cellClass, gseg::CellClass::Small);
+    EXPECT_FALSE(gseg::classifyCell(smallUpright.data(), 3, p).groundCandidate);
+    EXPECT_TRUE(gseg::classifyCell(smallFlat.data(), 4, p).groundCandidate);
+    EXPECT_EQ(gseg::classifyCell(smallFlat.data(), 2, p).cellClass, gseg::CellClass::TooFewPoints);
+}
+
+TEST(Sparsity, Buckets) {
+    gseg::Params p;
+    EXPECT_EQ(gseg::sparsityBucket(0.0005, p), gseg::Sparsity::Low);
+    EXPECT_EQ(gseg::sparsityBucket(0.001, p), gseg::Sparsity::Medium);
+    EXPECT_EQ(gseg::sparsityBucket(0.0099, p), gseg::Sparsity::Medium);
+    EXPECT_EQ(gseg::sparsityBucket(0.01, p), gseg::Sparsity::High);
+}
+
+// --- region growing ----------------------------------------------------------------------------
+
+TEST(RegionGrowing, ChainReachedGapNotGateBlocksRejectedDoNotPropagate) {
+    // A chain along x every 3 m from the seed, a gap of 8 m, then more; a step up of 1 m at x = 9.
+    std::vector<Eigen::Vector3f> c;
+    for (float x : {3.f, 6.f}) c.emplace_back(x, 0.f, -1.7f);
+    c.emplace_back(9.f, 0.f, -0.7f);   // 2: 1 m higher
+    c.emplace_back(20.f, 0.f, -1.7f);  // 3: beyond a gap
+    gseg::ExpansionSettings s;
+    s.seed = {0, 0, -1.7f};
+    s.seedRadius = 5;
+    s.radius = 5;
+    std::vector<int> calls(c.size(), 0);
+    auto acceptAll = [&](std::uint32_t i, const std::vector<std::uint32_t>&) { return ++calls[i] > 0; };
+    auto state = gseg::expandRegion(c, s, acceptAll);
+    EXPECT_EQ(state, (std::vector<std::uint8_t>{2, 2, 2, 0}));
+    for (int n : {calls[0], calls[1], calls[2]}) EXPECT_EQ(n, 1);
+
+    s.heightGate = 0.5;  // Phase II gate stops the 1 m step
+    state = gseg::expandRegion(c, s, acceptAll);
+    EXPECT_EQ(state, (std::vector<std::uint8_t>{2, 2, 0, 0}));
+
+    s.heightGate = 10;  // a rejected cell does not propagate
+    state = gseg::expandRegion(c, s, [](std::uint32_t i, const std::vector<std::uint32_t>&) { return i != 1; });
+    EXPECT_EQ(state, (std::vector<std::uint8_t>{2, 1, 0, 0}));
+}
