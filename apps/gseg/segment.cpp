@@ -1,4 +1,5 @@
 // gseg segment: label one scan as ground / non-ground.
+#include "cli.hpp"
 #include "commands.hpp"
 
 #include <gseg/ground_segmenter.hpp>
@@ -7,8 +8,6 @@
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/render.hpp>
 #include <gseg/mrpt/scan_source.hpp>
-
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <cstdio>
 #include <exception>
@@ -78,7 +77,7 @@ int runSegment(int argc, char** argv) {
                                          "FILE", cmd);
         TCLAP::ValueArg<int> index("", "index", "rawlogs: segment the N-th LiDAR observation (0-based; default the "
                                    "first)", false, -1, "N", cmd);
-        cmd.parse(argc, argv);
+        if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
         cli = {scan.getValue(), config.getValue(), labels.getValue(), ply.getValue(), png.getValue(), index.getValue()};
     } catch (const TCLAP::ArgException& e) {
         std::fprintf(stderr, "gseg segment: %s (%s); see gseg segment --help\n", e.error().c_str(), e.argId().c_str());
