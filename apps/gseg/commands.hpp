@@ -5,4 +5,5 @@
 
 namespace gseg::app {
 int runSegment(int argc, char** argv);
+int runBench(int argc, char** argv);
 }  // namespace gseg::app
