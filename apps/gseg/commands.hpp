@@ -6,4 +6,5 @@
 namespace gseg::app {
 int runSegment(int argc, char** argv);
 int runBench(int argc, char** argv);
+int runEval(int argc, char** argv);
 }  // namespace gseg::app

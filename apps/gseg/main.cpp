@@ -15,6 +15,7 @@ struct Command {
 
 const Command kCommands[] = {
     {"segment", gseg::app::runSegment, "label one scan (KITTI .bin, PLY or rawlog) as ground / non-ground"},
+    {"eval", gseg::app::runEval, "precision / recall on SemanticKITTI (Ground Segmentation Benchmark protocol)"},
     {"bench", gseg::app::runBench, "time the segmentation per scan, phase and step"},
 };
 

@@ -1,0 +1,138 @@
+// `gseg eval` end to end: report files, parallel == serial, the independent scorer, bad trees.
+#include <gseg/io/kitti.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "eval_tool";
+
+std::string runTool(const std::string& args, int& status) {
+    std::string out;
+    FILE* pipe = ::popen(("'" + gseg::test::tool("gseg") + "' eval " + args + " 2>&1").c_str(), "r");
+    char buf[1024];
+    while (pipe && std::fgets(buf, sizeof buf, pipe)) out += buf;
+    const int st = pipe ? ::pclose(pipe) : -1;
+    status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return out;
+}
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+// The CSV without its last column (ms), which differs between runs.
+std::string withoutTimes(const std::string& csv) {
+    std::istringstream in(csv);
+    std::string out;
+    for (std::string line; std::getline(in, line);) out += line.substr(0, line.rfind(',')) + "\n";
+    return out;
+}
+
+void writeFloats(const fs::path& p, const std::vector<float>& v) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
+}
+
+}  // namespace
+
+TEST(EvalTool, SharedKittiReportsAgreeSerialParallelAndWithTheIndependentScorer) {
+    const std::string root = gseg::test::sharedData("semantickitti");
+    if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
+    fs::remove_all(kDir);
+    int status = -1;
+    const std::string serial = runTool("'" + root + "' --threads 1 --report '" + (kDir / "serial/k").string() +
+                                       "' --labels-out-dir '" + (kDir / "pred").string() + "'", status);
+    ASSERT_EQ(status, 0) << serial;
+    const std::string parallel = runTool("'" + root + "' --threads 2 --report '" + (kDir / "parallel/k").string() + "'",
+                                         status);
+    ASSERT_EQ(status, 0) << parallel;
+    // 00/000003..000005 have no labels: reported by name and skipped.
+    EXPECT_NE(serial.find("4 frames evaluated, 3 skipped"), std::string::npos) << serial;
+    EXPECT_NE(serial.find("skipped 00/000005"), std::string::npos) << serial;
+    for (const char* f : {"k_frames.csv", "k_sequences.csv", "k_table.md", "k_range.png"})
+        EXPECT_GT(fs::file_size(kDir / "serial" / f), 100u) << f;
+    const std::string csv = slurp(kDir / "serial/k_frames.csv");
+    EXPECT_EQ(withoutTimes(csv), withoutTimes(slurp(kDir / "parallel/k_frames.csv")));
+    EXPECT_NE(slurp(kDir / "serial/k_table.md").find("| **mean** |"), std::string::npos);
+
+    // Each frame's counts equal the independent scorer's on the same predictions.
+    if (std::system("python3 --version > /dev/null 2>&1") != 0) GTEST_SKIP() << "python3 is not installed";
+    std::istringstream rows(csv);
+    std::string line;
+    std::getline(rows, line);  // header
+    int checked = 0;
+    while (std::getline(rows, line)) {
+        std::vector<std::string> c;
+        std::istringstream cells(line);
+        for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+        ASSERT_GE(c.size(), 6u);
+        const std::string seq = root + "/sequences/" + c[0];
+        const std::string cmd = "python3 '" GSEG_SHARED_DIR "/tools/eval_labels.py' '" + seq + "/velodyne/" + c[1] +
+                                ".bin' '" + seq + "/labels/" + c[1] + ".label' '" +
+                                (kDir / "pred" / (c[0] + "_" + c[1] + ".pred")).string() + "'";
+        FILE* pipe = ::popen(cmd.c_str(), "r");
+        std::string out;
+        char buf[512];
+        while (pipe && std::fgets(buf, sizeof buf, pipe)) out += buf;
+        ASSERT_EQ(::pclose(pipe), 0) << out;
+        const std::string want = "TP=" + c[3] + " FP=" + c[4] + " FN=" + c[5] + " ";
+        EXPECT_NE(out.find(want), std::string::npos) << want << " not in " << out;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 4);
+}
+
+TEST(EvalTool, SingleScanMode) {
+    const std::string scan = gseg::test::sharedData("semantickitti/sequences/08/velodyne/000000.bin");
+    const std::string label = gseg::test::sharedData("semantickitti/sequences/08/labels/000000.label");
+    if (scan.empty() || label.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/08");
+    int status = -1;
+    const std::string out = runTool("--scan '" + scan + "' --labels '" + label + "'", status);
+    EXPECT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("1 frames evaluated, 0 skipped"), std::string::npos) << out;
+}
+
+TEST(EvalTool, BadTrees) {
+    int status = -1;
+    fs::remove_all(kDir / "bad");
+    fs::create_directories(kDir / "bad/empty");
+    std::string out = runTool("'" + (kDir / "bad/empty").string() + "'", status);
+    EXPECT_EQ(status, 1);
+    EXPECT_NE(out.find("no sequences/ folder"), std::string::npos) << out;
+
+    // One good frame, one truncated label file, one label/point count mismatch.
+    const fs::path seq = kDir / "bad/root/sequences/01";
+    std::vector<float> pts;
+    for (int i = 0; i < 400; ++i) pts.insert(pts.end(), {float(i % 20) * 0.5f, float(i / 20) * 0.5f, -1.7f, 0.f});
+    for (const char* f : {"000000", "000001", "000002"}) writeFloats(seq / "velodyne" / (std::string(f) + ".bin"), pts);
+    fs::create_directories(seq / "labels");
+    const std::vector<std::uint32_t> labels(400, 40);
+    std::ofstream(seq / "labels/000000.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), 1600);
+    std::ofstream(seq / "labels/000001.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), 1598);
+    std::ofstream(seq / "labels/000002.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), 1200);
+    out = runTool("'" + (kDir / "bad/root").string() + "' --report '" + (kDir / "bad/out/r").string() + "'", status);
+    EXPECT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("1 frames evaluated, 2 skipped"), std::string::npos) << out;
+    EXPECT_NE(out.find("skipped 01/000001"), std::string::npos) << out;
+    EXPECT_NE(out.find("not a multiple of 4"), std::string::npos) << out;
+    EXPECT_NE(out.find("300 labels for 400 points"), std::string::npos) << out;
+    EXPECT_TRUE(fs::exists(kDir / "bad/out/r_table.md"));
+
+    out = runTool("'" + (kDir / "bad/root").string() + "' --sequences 07", status);
+    EXPECT_EQ(status, 1);
+    EXPECT_NE(out.find("no scans"), std::string::npos) << out;
+    runTool("", status);
+    EXPECT_EQ(status, 2);
+}
