@@ -10,13 +10,9 @@
 namespace {
 
 std::string runTool(const std::string& args, int& status) {
-    std::string out;
-    FILE* pipe = ::popen(("'" + gseg::test::tool("gseg") + "' bench " + args + " 2>&1").c_str(), "r");
-    char buf[512];
-    while (pipe && std::fgets(buf, sizeof buf, pipe)) out += buf;
-    const int st = pipe ? ::pclose(pipe) : -1;
-    status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return out;
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' bench " + args);
+    status = r.status;
+    return r.output;
 }
 
 }  // namespace

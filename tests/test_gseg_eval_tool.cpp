@@ -16,13 +16,9 @@ namespace {
 const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "eval_tool";
 
 std::string runTool(const std::string& args, int& status) {
-    std::string out;
-    FILE* pipe = ::popen(("'" + gseg::test::tool("gseg") + "' eval " + args + " 2>&1").c_str(), "r");
-    char buf[1024];
-    while (pipe && std::fgets(buf, sizeof buf, pipe)) out += buf;
-    const int st = pipe ? ::pclose(pipe) : -1;
-    status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return out;
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval " + args);
+    status = r.status;
+    return r.output;
 }
 
 std::string slurp(const fs::path& p) {
@@ -82,11 +78,9 @@ TEST(EvalTool, SharedKittiReportsAgreeSerialParallelAndWithTheIndependentScorer)
         const std::string cmd = "python3 '" GSEG_SHARED_DIR "/tools/eval_labels.py' '" + seq + "/velodyne/" + c[1] +
                                 ".bin' '" + seq + "/labels/" + c[1] + ".label' '" +
                                 (kDir / "pred" / (c[0] + "_" + c[1] + ".pred")).string() + "'";
-        FILE* pipe = ::popen(cmd.c_str(), "r");
-        std::string out;
-        char buf[512];
-        while (pipe && std::fgets(buf, sizeof buf, pipe)) out += buf;
-        ASSERT_EQ(::pclose(pipe), 0) << out;
+        const auto scored = gseg::test::runCommand(cmd);
+        const std::string& out = scored.output;
+        ASSERT_EQ(scored.status, 0) << out;
         const std::string want = "TP=" + c[3] + " FP=" + c[4] + " FN=" + c[5] + " ";
         EXPECT_NE(out.find(want), std::string::npos) << want << " not in " << out;
         ++checked;

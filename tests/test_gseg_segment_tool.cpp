@@ -17,20 +17,11 @@ namespace {
 
 const std::string kDir = std::string(GSEG_BINARY_DIR) + "/tests/segment_tool";
 
-struct ToolRun {
-    int status = -1;
-    std::string output;  // stdout + stderr
-};
+using ToolRun = gseg::test::CommandResult;
 
 ToolRun segmentTool(const std::string& args) {
     ::mkdir(kDir.c_str(), 0755);
-    ToolRun r;
-    FILE* pipe = ::popen(("'" + gseg::test::tool("gseg") + "' segment " + args + " 2>&1").c_str(), "r");
-    char buf[512];
-    while (pipe && std::fgets(buf, sizeof buf, pipe)) r.output += buf;
-    const int st = pipe ? ::pclose(pipe) : -1;
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
+    return gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' segment " + args);
 }
 
 bool exists(const std::string& p) {

@@ -108,12 +108,9 @@ TEST(RealKitti, ScoresMatchTheIndependentScorer) {
     const std::string pred = std::string(GSEG_BINARY_DIR) + "/tests/real_kitti_pred.bin";
     gseg::io::writeFileAtomic(pred, r.labels.data(), r.labels.size());
     const std::string cmd = "python3 '" + scorer + "' '" + scanPath + "' '" + labelPath + "' '" + pred + "'";
-    FILE* pipe = ::popen(cmd.c_str(), "r");
-    ASSERT_NE(pipe, nullptr);
-    std::string out;
-    char buf[512];
-    while (std::fgets(buf, sizeof buf, pipe)) out += buf;
-    ASSERT_EQ(::pclose(pipe), 0) << out;
+    const auto scored = gseg::test::runCommand(cmd);
+    const std::string& out = scored.output;
+    ASSERT_EQ(scored.status, 0) << out;
     const auto s = gseg::scoreFrame(cloud, labels, r.labels);
     auto expectCounts = [&](const char* tag, const gseg::Counts& c) {
         const std::string want = " TP=" + std::to_string(c.tp) + " FP=" + std::to_string(c.fp) +

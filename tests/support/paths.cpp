@@ -1,6 +1,8 @@
 #include <support/paths.hpp>
 
+#include <cstdio>
 #include <sys/stat.h>
+#include <sys/wait.h>
 
 namespace gseg::test {
 
@@ -16,5 +18,16 @@ std::string missingDataMessage(const std::string& relative) {
 }
 
 std::string tool(const std::string& name) { return std::string(GSEG_BINARY_DIR) + "/bin/" + name; }
+
+CommandResult runCommand(const std::string& shellCommand) {
+    CommandResult r;
+    FILE* pipe = ::popen((shellCommand + " 2>&1").c_str(), "r");
+    if (!pipe) return r;
+    char buf[1024];
+    while (std::fgets(buf, sizeof buf, pipe)) r.output += buf;
+    const int st = ::pclose(pipe);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
+}
 
 }  // namespace gseg::test

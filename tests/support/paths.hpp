@@ -15,4 +15,11 @@ std::string missingDataMessage(const std::string& relative);
 /// Path of a built executable (`<build>/bin/<name>`).
 std::string tool(const std::string& name);
 
+/// Exit status and combined stdout + stderr of a shell command.
+struct CommandResult {
+    int status = -1;  ///< exit code, -1 if it did not exit normally
+    std::string output;
+};
+CommandResult runCommand(const std::string& shellCommand);
+
 }  // namespace gseg::test
