@@ -1,8 +1,17 @@
 # The main job, run by `cmake --build build --target demo` (README Quick start, first command):
 # segment the real VLP-16 scan that Debian's mrpt-common ships and, where ../shared/data is present,
 # the SemanticKITTI scans; write a coloured PLY and a top-down PNG of each into OUT.
-# Inputs (-D): GSEG (the gseg executable), SRC (source dir), OUT (output dir).
+# Then build traversability OctoMaps: of the VLP-16 scan (a stationary sensor: one identity pose),
+# and of the SemanticKITTI sequence-00 drive (six scans with their poses) where present.
+# Inputs (-D): GSEG (the gseg executable), BIN (folder of the tools), SRC (source dir), OUT (output dir).
 file(MAKE_DIRECTORY "${OUT}")
+
+function(run_tool)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (exit ${rc}): ${ARGN}")
+  endif()
+endfunction()
 
 function(run_segment scan config name)
   message(STATUS "gseg segment ${scan}")
@@ -34,4 +43,15 @@ if(scans)
 else()
   message(STATUS "No SemanticKITTI scans at ${kitti}: segmented the VLP-16 scan only")
 endif()
-message(STATUS "Outputs (PLY: open in any point-cloud viewer; PNG: top-down picture) in ${OUT}")
+# Traversability maps. The VLP-16 scan has no pose: a TUM file with one identity pose, matched
+# whatever the scan's time stamp, stands for a sensor that did not move.
+file(WRITE "${OUT}/stationary.tum" "0 0 0 0 0 0 0 1\n")
+message(STATUS "rawlog-octomap ${vlp16}")
+run_tool("${BIN}/rawlog-octomap" -i "${vlp16}" -o "${OUT}/vlp16" --poses "${OUT}/stationary.tum"
+         --pose-tolerance 1e12 -c "${SRC}/config/vlp16.yaml")
+if(EXISTS "${kitti}/00/poses.txt")
+  message(STATUS "kitti2rawlog + rawlog-octomap: SemanticKITTI sequence 00")
+  run_tool("${BIN}/kitti2rawlog" "${kitti}/00" -o "${OUT}/seq00.rawlog")
+  run_tool("${BIN}/rawlog-octomap" -i "${OUT}/seq00.rawlog" -o "${OUT}/seq00" -c "${SRC}/config/kitti_hdl64.yaml")
+endif()
+message(STATUS "Outputs in ${OUT}: *.ply (any point-cloud viewer), *.png (pictures), *.bt / *.ot (octovis)")

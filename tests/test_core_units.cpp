@@ -4,6 +4,8 @@
 #include <gseg/params.hpp>
 #include <gseg/plane_fit.hpp>
 #include <gseg/region_growing.hpp>
+#include <gseg/sensor_height.hpp>
+#include <support/lidar_sim.hpp>
 
 #include <gtest/gtest.h>
 
@@ -232,4 +234,22 @@ TEST(RegionGrowing, ChainReachedGapNotGateBlocksRejectedDoNotPropagate) {
     s.heightGate = 10;  // a rejected cell does not propagate
     state = gseg::expandRegion(c, s, [](std::uint32_t i, const std::vector<std::uint32_t>&) { return i != 1; });
     EXPECT_EQ(state, (std::vector<std::uint8_t>{2, 1, 0, 0}));
+}
+
+// --- sensor height (distToGround: auto) ---------------------------------------------------------
+
+TEST(SensorHeight, EstimatedFromTheLowestDenseSurface) {
+    for (const double h : {0.8, 1.73, 2.5}) {
+        gseg::test::Scene s;
+        s.addFlatGround(h);
+        s.addBox(6, -3, -h, 9, 3, -h + 2.0);         // a van
+        s.addBox(-20, -25, -h, 20, -24, -h + 4.0);   // a wall
+        s.addBox(-8, 5, -h + 2.5, -4, 9, -h + 3.0);  // an overhang
+        const auto scan = gseg::test::simulate(s, gseg::test::Lidar::hdl64());
+        const auto e = gseg::estimateSensorHeight(gseg::PointCloudView(scan.xyz.data(), scan.size()));
+        ASSERT_TRUE(e.valid) << h;
+        EXPECT_NEAR(e.height, h, 0.05) << h;
+    }
+    const std::vector<float> few = {5, 0, -1, 6, 0, -1};
+    EXPECT_FALSE(gseg::estimateSensorHeight(gseg::PointCloudView(few.data(), 2)).valid);
 }

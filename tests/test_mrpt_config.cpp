@@ -56,7 +56,7 @@ TEST(Config, YamlAndIniGiveIdenticalParams) {
     const auto y = gseg::mrpt::loadConfig(
         writeTemp("same.yaml", "distToGround: 0.9\ncellSizeX: 1.25\nransacSeed: 7\nminPointsForPca: 8\n"));
     const auto i = gseg::mrpt::loadConfig(
-        writeTemp("same.ini", "[gseg]\ndistToGround = 0.9\ncellSizeX = 1.25\nransacSeed = 7\nminPointsForPca = 8\n"));
+        writeTemp("same.ini", "[gseg]\ndistToGround = 0.9 ; metres\ncellSizeX = 1.25\nransacSeed = 7\nminPointsForPca = 8\n"));
     for (const auto& key : gseg::Params::keys()) EXPECT_EQ(y.params.get(key), i.params.get(key)) << key;
     EXPECT_DOUBLE_EQ(y.params.cellSizeX, 1.25);
     EXPECT_EQ(y.params.minPointsForPca, 8);

@@ -3,6 +3,7 @@
 #include "commands.hpp"
 
 #include <gseg/ground_segmenter.hpp>
+#include <gseg/sensor_height.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
 #include <gseg/mrpt/config.hpp>
@@ -28,16 +29,20 @@ void printPhase(const char* name, const PhaseReport& r) {
 }
 
 int run(const Cli& cli) {
-    Params params;
-    if (!cli.config.empty()) {
-        const mrpt::LoadedConfig cfg = mrpt::loadConfig(cli.config);
-        if (cfg.distToGroundAuto)
-            throw std::runtime_error(cli.config + ": distToGround: auto needs the MRPT observation filter "
-                                     "(rawlog-gseg); give the sensor height in metres here");
-        params = cfg.params;
-    }
+    mrpt::LoadedConfig cfg;
+    if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
+    Params params = cfg.params;
     const mrpt::Scan scan = mrpt::loadScan(cli.scan, cli.index);
     const PointCloudView cloud(scan.xyzi.data(), scan.size(), 4 * sizeof(float));
+    if (cfg.distToGroundAuto) {
+        const SensorHeightEstimate h = estimateSensorHeight(cloud);
+        if (!h.valid)
+            throw std::runtime_error("distToGround: auto: no ground level found around the sensor (" +
+                                     std::to_string(h.columns) + " usable columns); give the height in metres");
+        params.distToGround = h.height;
+        std::printf("distToGround auto: %.3f m (lowest points of %d columns, spread %.2f m)\n", h.height, h.columns,
+                    h.spread);
+    }
     GroundSegmenter segmenter(params);
     const Result r = segmenter.segment(cloud, false);
 

@@ -68,7 +68,12 @@ LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const
     LoadedConfig cfg;
     std::vector<std::string> keys;
     ini.getAllKeys(section, keys);
-    for (const std::string& key : keys) apply(cfg, key, ini.read_string(section, key, "", true), where);
+    for (const std::string& key : keys) {
+        std::string value = ini.read_string(section, key, "", true);
+        value = value.substr(0, value.find_first_of(";#"));  // inline comment
+        value.erase(value.find_last_not_of(" \t") + 1);
+        apply(cfg, key, value, where);
+    }
     finish(cfg, where);
     return cfg;
 }

@@ -11,7 +11,12 @@ void forEachRawlogEntry(
     const std::string& path,
     const std::function<bool(std::size_t, const std::shared_ptr<::mrpt::serialization::CSerializable>&)>& visit) {
     ::mrpt::io::CFileGZInputStream file;
-    if (!file.open(path)) throw std::runtime_error(path + ": cannot open the rawlog");
+    bool opened = false;
+    try {
+        opened = file.open(path);
+    } catch (const std::exception&) {  // MRPT reports a missing file with a multi-line trace
+    }
+    if (!opened) throw std::runtime_error(path + ": cannot open the rawlog");
     auto archive = ::mrpt::serialization::archiveFrom(file);
     for (std::size_t index = 0;; ++index) {
         ::mrpt::serialization::CSerializable::Ptr obj;

@@ -1,0 +1,65 @@
+#pragma once
+/// \file octomap_plugin.hpp
+/// gseg's traversability OctoMaps as an MRPT metric map, so that an INI `[MAPS]` section can ask
+/// for them and stock apps (`observations2map`) build them once `libgseg_map.so` is loaded
+/// (LD_PRELOAD, or mrpt::system::loadPluginModule()).
+///
+/// INI (section prefix `<S>_gsegTraversabilityMap_<NN>` as MRPT builds it, S = the app's section):
+/// \code
+/// [MappingApplication]
+/// gsegTraversabilityMap_count = 1
+/// [MappingApplication_gsegTraversabilityMap_00_creationOpts]
+/// resolution = 0.2      ; and maxRange, clearance, probHit, probMiss, clampMin, clampMax, occupancyThreshold
+/// [MappingApplication_gsegTraversabilityMap_00_gseg]
+/// distToGround = 1.73   ; any gseg::Params key (see gseg/params.hpp)
+/// \endcode
+/// Saving (CMultiMetricMap names it `<prefix>_gseg_maps__CTraversabilityOctoMap_<NN>` (MRPT turns "::" into "__")) writes the
+/// four files of TraversabilityMap::write() with that prefix.
+
+#include <gseg/ground_segmenter.hpp>
+#include <gseg/map/traversability_map.hpp>
+#include <gseg/params.hpp>
+
+#include <mrpt/maps/CMetricMap.h>
+
+/// Top-level namespace on purpose: MRPT's macros name `mrpt::...` unqualified, which inside
+/// `namespace gseg` would find `gseg::mrpt` instead.
+namespace gseg_maps {
+
+/// Metric map holding a TraversabilityMap. Each inserted 3D LiDAR observation is segmented with
+/// gseg::GroundSegmenter (observations already split by rawlog-gseg, labels ending in `_ground` /
+/// `_obstacles`, are used as they are); other observation kinds are ignored (insertion returns
+/// false). Not serialisable (the OctoMap files are its persistent form); no likelihood.
+class CTraversabilityOctoMap : public ::mrpt::maps::CMetricMap {
+    DEFINE_SERIALIZABLE(CTraversabilityOctoMap, gseg_maps)
+
+public:
+    explicit CTraversabilityOctoMap(const gseg::map::TraversabilityOptions& options = gseg::map::TraversabilityOptions(),
+                                    const gseg::Params& params = gseg::Params());
+
+    const gseg::map::TraversabilityMap& map() const { return map_; }
+
+    bool isEmpty() const override { return map_.empty(); }
+    void saveMetricMapRepresentationToFile(const std::string& prefix) const override;
+    void getVisualizationInto(::mrpt::opengl::CSetOfObjects& o) const override;
+    std::string asString() const override;
+
+    MAP_DEFINITION_START(CTraversabilityOctoMap)
+    gseg::map::TraversabilityOptions options;  ///< from `<prefix>_creationOpts`
+    gseg::Params params;                  ///< from `<prefix>_gseg`
+    MAP_DEFINITION_END(CTraversabilityOctoMap)
+
+protected:
+    void internal_clear() override;
+    bool internal_insertObservation(const ::mrpt::obs::CObservation& obs,
+                                    const std::optional<const ::mrpt::poses::CPose3D>& robotPose = std::nullopt) override;
+    double internal_computeObservationLikelihood(const ::mrpt::obs::CObservation& obs,
+                                                 const ::mrpt::poses::CPose3D& takenFrom) const override;
+    bool internal_canComputeObservationLikelihood(const ::mrpt::obs::CObservation& obs) const override;
+
+private:
+    gseg::map::TraversabilityMap map_;
+    gseg::GroundSegmenter segmenter_;
+};
+
+}  // namespace gseg_maps

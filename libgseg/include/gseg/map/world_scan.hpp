@@ -1,0 +1,49 @@
+#pragma once
+/// \file world_scan.hpp
+/// From an MRPT observation and the robot pose to ground and obstacle points in the world frame,
+/// with the sensor's world position as ray origin. The scan's mounting (`sensorPose`) is applied
+/// to the points and to the origin (MRPT 2.5.8's COctoMap applies it to the origin only).
+
+#include <gseg/ground_segmenter.hpp>
+#include <gseg/point_cloud.hpp>
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace mrpt::obs {
+class CObservation;
+}
+namespace mrpt::poses {
+class CPose3D;
+}
+
+namespace gseg::map {
+
+/// One scan in the world frame.
+struct WorldScan {
+    std::vector<float> ground;     ///< x, y, z triples [m], world frame
+    std::vector<float> obstacles;  ///< x, y, z triples [m], world frame
+    Eigen::Vector3d sensorOrigin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
+    PointCloudView groundView() const { return PointCloudView(ground.data(), ground.size() / 3); }
+    PointCloudView obstaclesView() const { return PointCloudView(obstacles.data(), obstacles.size() / 3); }
+};
+
+/// What an observation written by `rawlog-gseg` holds: its sensor label ends in `_ground` or
+/// `_obstacles`. Anything else is Raw (to be segmented).
+enum class ScanPart { Raw, Ground, Obstacles };
+ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs);
+
+/// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) and puts
+/// both classes into the world frame with `robotPose` + the observation's sensorPose. Throws
+/// std::invalid_argument for a non-LiDAR observation or an empty scan.
+WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
+                         GroundSegmenter& segmenter);
+
+/// Appends every point of `obs` (one class already) in the world frame to `out` (x, y, z
+/// triples) and returns the sensor's world position.
+Eigen::Vector3d appendWorldPoints(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
+                                  std::vector<float>& out);
+
+}  // namespace gseg::map

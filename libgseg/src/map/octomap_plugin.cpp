@@ -1,0 +1,116 @@
+#include <gseg/map/octomap_plugin.hpp>
+
+#include <gseg/map/world_scan.hpp>
+#include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/observation_points.hpp>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/core/initializer.h>
+#include <mrpt/poses/CPose3D.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <ostream>
+#include <stdexcept>
+
+namespace gseg_maps {
+
+IMPLEMENTS_SERIALIZABLE(CTraversabilityOctoMap, mrpt::maps::CMetricMap, gseg_maps)
+
+}  // namespace gseg_maps
+
+// Registration on library load: INI name `gsegTraversabilityMap` (or the full class name).
+MAP_DEFINITION_REGISTER("gseg_maps::CTraversabilityOctoMap,gsegTraversabilityMap", gseg_maps::CTraversabilityOctoMap)
+
+MRPT_INITIALIZER(gseg_map_register_classes) {
+    ::mrpt::rtti::registerClass(CLASS_ID(gseg_maps::CTraversabilityOctoMap));
+}
+
+namespace gseg_maps {
+
+CTraversabilityOctoMap::TMapDefinition::TMapDefinition() = default;
+
+void CTraversabilityOctoMap::TMapDefinition::loadFromConfigFile_map_specific(const ::mrpt::config::CConfigFileBase& source,
+                                                                            const std::string& prefix) {
+    const std::string s = prefix + "_creationOpts";
+    auto read = [&](const char* key, double& v) { v = source.read_double(s, key, v); };
+    read("resolution", options.resolution);
+    read("maxRange", options.maxRange);
+    read("clearance", options.clearance);
+    read("probHit", options.probHit);
+    read("probMiss", options.probMiss);
+    read("clampMin", options.clampMin);
+    read("clampMax", options.clampMax);
+    read("occupancyThreshold", options.occupancyThreshold);
+    options.validate();
+    params = gseg::mrpt::loadConfigFromIni(source, prefix + "_gseg", "[" + prefix + "_gseg]").params;
+}
+
+void CTraversabilityOctoMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
+    out << "resolution = " << options.resolution << " m, maxRange = " << options.maxRange
+        << " m, clearance = " << options.clearance << " m\n";
+    for (const std::string& key : gseg::Params::keys()) out << key << " = " << params.get(key) << "\n";
+}
+
+::mrpt::maps::CMetricMap* CTraversabilityOctoMap::internal_CreateFromMapDefinition(
+    const ::mrpt::maps::TMetricMapInitializer& def) {
+    const auto& d = dynamic_cast<const CTraversabilityOctoMap::TMapDefinition&>(def);
+    return new CTraversabilityOctoMap(d.options, d.params);
+}
+
+CTraversabilityOctoMap::CTraversabilityOctoMap(const gseg::map::TraversabilityOptions& options, const gseg::Params& params)
+    : map_(options), segmenter_(params) {}
+
+void CTraversabilityOctoMap::saveMetricMapRepresentationToFile(const std::string& prefix) const {
+    if (!map_.empty()) map_.write(prefix);
+}
+
+void CTraversabilityOctoMap::getVisualizationInto(::mrpt::opengl::CSetOfObjects&) const {
+    // Nothing: open the written .ot / .bt files in octovis instead.
+}
+
+std::string CTraversabilityOctoMap::asString() const {
+    return "gseg traversability OctoMaps (" + std::to_string(map_.path().size()) + " scans, " +
+           std::to_string(map_.options().resolution) + " m voxels)";
+}
+
+void CTraversabilityOctoMap::internal_clear() { map_ = gseg::map::TraversabilityMap(map_.options()); }
+
+bool CTraversabilityOctoMap::internal_insertObservation(const ::mrpt::obs::CObservation& obs,
+                                                        const std::optional<const ::mrpt::poses::CPose3D>& robotPose) {
+    const ::mrpt::poses::CPose3D pose = robotPose ? *robotPose : ::mrpt::poses::CPose3D();
+    using namespace gseg::map;
+    const ScanPart part = scanPartOf(obs);
+    if (part == ScanPart::Raw && !gseg::mrpt::isLidarObservation(obs)) return false;
+    if (part == ScanPart::Raw) {
+        const WorldScan scan = segmentToWorld(obs, pose, segmenter_);
+        map_.insertScan(scan.groundView(), scan.obstaclesView(), scan.sensorOrigin);
+        return true;
+    }
+    std::vector<float> pts;
+    const Eigen::Vector3d origin = appendWorldPoints(obs, pose, pts);
+    const gseg::PointCloudView view(pts.data(), pts.size() / 3), none;
+    if (part == ScanPart::Ground) map_.insertScan(view, none, origin);
+    else map_.insertScan(none, view, origin);
+    return true;
+}
+
+double CTraversabilityOctoMap::internal_computeObservationLikelihood(const ::mrpt::obs::CObservation&,
+                                                                     const ::mrpt::poses::CPose3D&) const {
+    return 0;
+}
+
+bool CTraversabilityOctoMap::internal_canComputeObservationLikelihood(const ::mrpt::obs::CObservation&) const {
+    return false;
+}
+
+uint8_t CTraversabilityOctoMap::serializeGetVersion() const { return 0; }
+
+void CTraversabilityOctoMap::serializeTo(::mrpt::serialization::CArchive&) const {
+    throw std::logic_error("gseg_maps::CTraversabilityOctoMap is not serialisable: save its OctoMap files instead");
+}
+
+void CTraversabilityOctoMap::serializeFrom(::mrpt::serialization::CArchive&, uint8_t) {
+    throw std::logic_error("gseg_maps::CTraversabilityOctoMap is not serialisable: load its OctoMap files instead");
+}
+
+}  // namespace gseg_maps

@@ -1,0 +1,138 @@
+#include <gseg/map/poses.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+namespace gseg::map {
+namespace {
+
+/// Every number of `line` (whitespace separated); nullopt if a token is not a finite number.
+std::optional<std::vector<double>> parseNumbers(const std::string& line) {
+    std::vector<double> out;
+    const char* p = line.c_str();
+    while (true) {
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == ',') ++p;
+        if (*p == '\0') break;
+        char* end = nullptr;
+        const double v = std::strtod(p, &end);
+        if (end == p || !std::isfinite(v)) return std::nullopt;
+        out.push_back(v);
+        p = end;
+    }
+    return out;
+}
+
+bool isSkipped(const std::string& line) {
+    const auto first = line.find_first_not_of(" \t\r");
+    return first == std::string::npos || line[first] == '#';
+}
+
+std::ifstream openText(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open (" + std::strerror(errno) + ")");
+    return in;
+}
+
+std::runtime_error lineError(const std::string& path, std::size_t lineNo, const std::string& what) {
+    return std::runtime_error(path + ":" + std::to_string(lineNo) + ": " + what);
+}
+
+Eigen::Isometry3d fromRowMajor3x4(const std::vector<double>& v, std::size_t first = 0) {
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) m(r, c) = v[first + std::size_t(4 * r + c)];
+    return Eigen::Isometry3d(m);
+}
+
+}  // namespace
+
+std::vector<StampedPose> readTumTrajectory(const std::string& path) {
+    std::ifstream in = openText(path);
+    std::vector<StampedPose> out;
+    std::string line;
+    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
+        if (isSkipped(line)) continue;
+        const auto v = parseNumbers(line);
+        if (!v || v->size() != 8) throw lineError(path, lineNo, "expected 8 numbers `t x y z qx qy qz qw`");
+        const Eigen::Quaterniond q((*v)[7], (*v)[4], (*v)[5], (*v)[6]);
+        if (q.norm() < 1e-9) throw lineError(path, lineNo, "zero quaternion");
+        StampedPose sp;
+        sp.t = (*v)[0];
+        sp.pose.linear() = q.normalized().toRotationMatrix();
+        sp.pose.translation() = Eigen::Vector3d((*v)[1], (*v)[2], (*v)[3]);
+        if (!out.empty() && sp.t <= out.back().t)
+            throw lineError(path, lineNo, "time stamp " + std::to_string(sp.t) + " is not after the previous one");
+        out.push_back(sp);
+    }
+    if (out.empty()) throw std::runtime_error(path + ": no poses in the file");
+    return out;
+}
+
+std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path) {
+    std::ifstream in = openText(path);
+    std::vector<Eigen::Isometry3d> out;
+    std::string line;
+    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
+        if (isSkipped(line)) continue;
+        const auto v = parseNumbers(line);
+        if (!v || v->size() != 12) throw lineError(path, lineNo, "expected 12 numbers (row-major 3x4 KITTI pose)");
+        out.push_back(fromRowMajor3x4(*v));
+    }
+    if (out.empty()) throw std::runtime_error(path + ": no poses in the file");
+    return out;
+}
+
+Eigen::Isometry3d readKittiCalibTr(const std::string& path) {
+    std::ifstream in = openText(path);
+    std::string line;
+    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
+        if (line.rfind("Tr:", 0) != 0) continue;
+        const auto v = parseNumbers(line.substr(3));
+        if (!v || v->size() != 12) throw lineError(path, lineNo, "`Tr:` needs 12 numbers (velodyne to camera-0, 3x4)");
+        return fromRowMajor3x4(*v);
+    }
+    throw std::runtime_error(path + ": no `Tr:` line (velodyne-to-camera calibration)");
+}
+
+std::vector<Eigen::Isometry3d> kittiToVelodyneFrame(const std::vector<Eigen::Isometry3d>& cameraPoses,
+                                                    const Eigen::Isometry3d& tr) {
+    const Eigen::Isometry3d trInv = tr.inverse();
+    std::vector<Eigen::Isometry3d> out;
+    out.reserve(cameraPoses.size());
+    for (const auto& p : cameraPoses) out.push_back(trInv * p * tr);
+    return out;
+}
+
+PoseFileFormat detectPoseFileFormat(const std::string& path) {
+    std::ifstream in = openText(path);
+    std::string line;
+    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
+        if (isSkipped(line)) continue;
+        const auto v = parseNumbers(line);
+        if (v && v->size() == 8) return PoseFileFormat::Tum;
+        if (v && v->size() == 12) return PoseFileFormat::Kitti;
+        throw lineError(path, lineNo,
+                        "neither a TUM trajectory (8 numbers `t x y z qx qy qz qw`) nor KITTI poses (12 numbers)");
+    }
+    throw std::runtime_error(path + ": no poses in the file");
+}
+
+std::optional<std::size_t> nearestPose(const std::vector<StampedPose>& trajectory, double t, double tolerance) {
+    const auto after = std::lower_bound(trajectory.begin(), trajectory.end(), t,
+                                        [](const StampedPose& p, double v) { return p.t < v; });
+    std::optional<std::size_t> best;
+    double bestDt = tolerance;
+    for (auto it : {after, after == trajectory.begin() ? trajectory.end() : after - 1}) {
+        if (it == trajectory.end()) continue;
+        const double dt = std::abs(it->t - t);
+        if (dt <= bestDt) bestDt = dt, best = std::size_t(it - trajectory.begin());
+    }
+    return best;
+}
+
+}  // namespace gseg::map

@@ -1,0 +1,166 @@
+// kitti2rawlog: real SemanticKITTI sequence 00 frames 0-5 and small synthetic sequences.
+#include <gseg/io/kitti.hpp>
+#include <gseg/map/poses.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/obs/CObservationRobotPose.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct ToolRun {
+    int status = 0;
+    std::string err;
+};
+
+ToolRun runTool(const std::string& args, const std::string& dir) {
+    const std::string errPath = dir + "/stderr.txt";
+    ToolRun r;
+    r.status = std::system((gseg::test::tool("kitti2rawlog") + " " + args + " > /dev/null 2> " + errPath).c_str());
+    std::ifstream in(errPath);
+    r.err.assign(std::istreambuf_iterator<char>(in), {});
+    return r;
+}
+
+std::string tempDir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("gseg_k2r_" + std::to_string(::getpid()) + "_" + name);
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d.string();
+}
+
+struct Entry {
+    mrpt::obs::CObservationRobotPose::Ptr pose;
+    mrpt::obs::CObservationPointCloud::Ptr scan;
+};
+
+std::vector<Entry> readBack(const std::string& rawlog) {
+    std::vector<Entry> out;
+    gseg::mrpt::forEachRawlogEntry(rawlog, [&](std::size_t, const auto& obj) {
+        if (auto p = std::dynamic_pointer_cast<mrpt::obs::CObservationRobotPose>(obj)) out.push_back({p, nullptr});
+        else if (auto s = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(obj)) {
+            if (out.empty() || out.back().scan) out.push_back({nullptr, s});
+            else out.back().scan = s;
+        } else ADD_FAILURE() << "unexpected object " << obj->GetRuntimeClass()->className;
+        return true;
+    });
+    return out;
+}
+
+Eigen::Matrix4d matrixOf(const mrpt::poses::CPose3D& p) {
+    Eigen::Matrix4d m;
+    const auto h = p.getHomogeneousMatrixVal<mrpt::math::CMatrixDouble44>();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) m(r, c) = h(r, c);
+    return m;
+}
+
+/// A tiny sequence: `frames` scans of 3 points, optional poses (identity + 1 m steps).
+std::string syntheticSequence(const std::string& name, int frames, int poseLines, bool times) {
+    const std::string dir = tempDir(name);
+    fs::create_directories(dir + "/velodyne");
+    for (int k = 0; k < frames; ++k) {
+        const float pts[12] = {1, 0, -1.7f, 0.5f, 2, 1, -1.7f, 0.2f, 5, 0, 0, 0.9f};
+        char n[32];
+        std::snprintf(n, sizeof n, "/velodyne/%06d.bin", k);
+        gseg::io::writeFileAtomic(dir + n, pts, sizeof pts);
+    }
+    if (poseLines > 0) {
+        std::ofstream p(dir + "/poses.txt");
+        for (int k = 0; k < poseLines; ++k) p << "1 0 0 0 0 1 0 0 0 0 1 " << k << "\n";
+        std::ofstream(dir + "/calib.txt") << "Tr: 0 -1 0 0 0 0 -1 0 1 0 0 0\n";
+    }
+    if (times) {
+        std::ofstream t(dir + "/times.txt");
+        for (int k = 0; k < frames; ++k) t << 0.5 * k << "\n";
+    }
+    return dir;
+}
+
+TEST(Kitti2Rawlog, Sequence00WithPosesTimesAndSimplemap) {
+    const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    const std::string seqDir = fs::path(seq).parent_path().string(), dir = tempDir("seq00");
+    const ToolRun r = runTool(seqDir + " -o " + dir + "/seq00.rawlog --simplemap " + dir + "/seq00.simplemap", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto entries = readBack(dir + "/seq00.rawlog");
+    ASSERT_EQ(entries.size(), 6u);
+    const auto velo = gseg::map::kittiToVelodyneFrame(gseg::map::readKittiPoses(seqDir + "/poses.txt"),
+                                                      gseg::map::readKittiCalibTr(seqDir + "/calib.txt"));
+    const double times[6] = {0.0, 0.1037359, 0.2073381, 0, 0, 0};
+    for (std::size_t k = 0; k < 6; ++k) {
+        ASSERT_TRUE(entries[k].pose && entries[k].scan) << "frame " << k;
+        char bin[64];
+        std::snprintf(bin, sizeof bin, "/velodyne/%06zu.bin", k);
+        EXPECT_EQ(entries[k].scan->pointcloud->size(), gseg::io::readKittiBin(seqDir + bin).size() / 4);
+        EXPECT_TRUE(matrixOf(entries[k].pose->pose.mean).isApprox(velo[k].matrix(), 1e-6)) << "frame " << k;
+        EXPECT_EQ(entries[k].pose->timestamp, entries[k].scan->timestamp);
+        if (k < 3) {
+            EXPECT_NEAR(mrpt::Clock::toDouble(entries[k].scan->timestamp), times[k], 1e-6);
+        }
+        EXPECT_TRUE(entries[k].scan->sensorPose == mrpt::poses::CPose3D());
+    }
+    mrpt::maps::CSimpleMap sm;
+    mrpt::io::CFileGZInputStream f(dir + "/seq00.simplemap");
+    mrpt::serialization::archiveFrom(f) >> sm;
+    EXPECT_EQ(sm.size(), 6u);
+    fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, FrameRangeStartsTheWorldAtTheFirstScan) {
+    const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    const std::string seqDir = fs::path(seq).parent_path().string(), dir = tempDir("range");
+    const ToolRun r = runTool(seqDir + " -o " + dir + "/r.rawlog --first 2 --last 4", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto entries = readBack(dir + "/r.rawlog");
+    ASSERT_EQ(entries.size(), 3u);
+    const auto velo = gseg::map::kittiToVelodyneFrame(gseg::map::readKittiPoses(seqDir + "/poses.txt"),
+                                                      gseg::map::readKittiCalibTr(seqDir + "/calib.txt"));
+    EXPECT_TRUE(matrixOf(entries[0].pose->pose.mean).isApprox(Eigen::Matrix4d::Identity(), 1e-6));
+    EXPECT_TRUE(matrixOf(entries[2].pose->pose.mean).isApprox((velo[2].inverse() * velo[4]).matrix(), 1e-6));
+    fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, WithoutTimesAndPosesWritesScansAt10Hz) {
+    const std::string seq = syntheticSequence("bare", 3, 0, false), dir = tempDir("bare_out");
+    const ToolRun r = runTool(seq + " -o " + dir + "/b.rawlog", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto entries = readBack(dir + "/b.rawlog");
+    ASSERT_EQ(entries.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_FALSE(entries[k].pose);
+        EXPECT_NEAR(mrpt::Clock::toDouble(entries[k].scan->timestamp), 0.1 * double(k), 1e-6);
+        EXPECT_EQ(entries[k].scan->pointcloud->size(), 3u);
+    }
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, BadInputIsAClearErrorAndNoFile) {
+    const std::string seq = syntheticSequence("few", 4, 2, true), dir = tempDir("few_out");
+    ToolRun r = runTool(seq + " -o " + dir + "/f.rawlog", dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("fewer poses than scans"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir + "/f.rawlog"));
+    r = runTool(dir + "/nowhere -o " + dir + "/g.rawlog", dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("kitti2rawlog: "), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir + "/g.rawlog"));
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_EQ(e.path().filename(), "stderr.txt") << "left behind: " << e.path();
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+}  // namespace

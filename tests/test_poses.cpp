@@ -1,0 +1,75 @@
+// Trajectory readers: TUM, KITTI poses + calib, frame conversion, time matching, bad files.
+#include <gseg/map/poses.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace {
+
+using namespace gseg::map;
+
+std::string writeTemp(const std::string& name, const std::string& text) {
+    const auto path = std::filesystem::temp_directory_path() / ("gseg_poses_" + std::to_string(::getpid()) + "_" + name);
+    std::ofstream(path) << text;
+    return path.string();
+}
+
+TEST(Poses, TumReadsPositionAndQuaternion) {
+    const auto p = writeTemp("a.tum", "# t x y z qx qy qz qw\n1.0 1 2 3 0 0 0 1\n\n1.1 4 5 6 0 0 0.7071068 0.7071068\n");
+    const auto t = readTumTrajectory(p);
+    ASSERT_EQ(t.size(), 2u);
+    EXPECT_DOUBLE_EQ(t[0].t, 1.0);
+    EXPECT_TRUE(t[0].pose.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
+    // 90 degrees about z: x axis goes to y.
+    EXPECT_TRUE((t[1].pose.linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-6));
+    EXPECT_EQ(detectPoseFileFormat(p), PoseFileFormat::Tum);
+}
+
+TEST(Poses, NearestPoseWithinTolerance) {
+    std::vector<StampedPose> t(3);
+    t[0].t = 0.0, t[1].t = 0.1, t[2].t = 0.2;
+    EXPECT_EQ(nearestPose(t, 0.104, 0.01).value(), 1u);
+    EXPECT_EQ(nearestPose(t, 0.196, 0.01).value(), 2u);
+    EXPECT_EQ(nearestPose(t, -0.005, 0.01).value(), 0u);
+    EXPECT_FALSE(nearestPose(t, 0.15, 0.01).has_value());
+    EXPECT_FALSE(nearestPose(t, 0.5, 0.01).has_value());
+}
+
+TEST(Poses, BadFilesNameTheLine) {
+    const auto short_ = writeTemp("b.tum", "1.0 1 2 3 0 0 0 1\n2.0 1 2 3 0 0 1\n");
+    try {
+        readTumTrajectory(short_);
+        FAIL() << "no throw";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(":2:"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(readTumTrajectory(writeTemp("c.tum", "2.0 1 2 3 0 0 0 1\n1.0 1 2 3 0 0 0 1\n")), std::runtime_error);
+    EXPECT_THROW(readTumTrajectory(writeTemp("d.tum", "1.0 1 2 3 0 0 0 0\n")), std::runtime_error);
+    EXPECT_THROW(readKittiPoses(writeTemp("e.txt", "1 0 0 0 0 1 0 0 0 0 1\n")), std::runtime_error);
+    EXPECT_THROW(readKittiCalibTr(writeTemp("f.txt", "P0: 1 2 3\n")), std::runtime_error);
+    EXPECT_THROW(readKittiPoses("/nonexistent/poses.txt"), std::runtime_error);
+    EXPECT_THROW(detectPoseFileFormat(writeTemp("g.txt", "1 2 3\n")), std::runtime_error);
+}
+
+TEST(Poses, KittiSequence00InVelodyneFrame) {
+    const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    const std::string calib = gseg::test::sharedData("semantickitti/sequences/00/calib.txt");
+    if (poses.empty() || calib.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    EXPECT_EQ(detectPoseFileFormat(poses), PoseFileFormat::Kitti);
+    const auto cam = readKittiPoses(poses);
+    ASSERT_EQ(cam.size(), 6u);
+    const auto velo = kittiToVelodyneFrame(cam, readKittiCalibTr(calib));
+    EXPECT_TRUE(velo[0].isApprox(Eigen::Isometry3d::Identity(), 1e-6));
+    // The car drives forward (camera z = velodyne x), about 0.7 m per frame, on a level road.
+    const Eigen::Vector3d t5 = velo[5].translation();
+    EXPECT_NEAR(t5.x(), 3.5, 0.3);
+    EXPECT_LT(std::abs(t5.y()), 0.3);
+    EXPECT_LT(std::abs(t5.z()), 0.15);
+    EXPECT_NEAR(t5.x(), cam[5].translation().z(), 0.1);
+}
+
+}  // namespace
