@@ -64,7 +64,9 @@ std::vector<std::string> mapFiles(const std::string& prefix) {
 mrpt::poses::CPose3D vehiclePose(int k) { return mrpt::poses::CPose3D(3.0 * k, 0, kRoadZ, 0, 0, 0); }
 
 /// Writes 8 scans of a road with a box and a wall; with `poses`, a CObservationRobotPose before each.
-void writeDrive(const std::string& path, bool poses) {
+/// With `presegmented`, each scan is written as rawlog-gseg writes it: a `LIDAR_ground` and a
+/// `LIDAR_obstacles` CObservationPointCloud, split by the simulator's exact truth.
+void writeDrive(const std::string& path, bool poses, bool presegmented = false) {
     mrpt::io::CFileGZOutputStream f(path);
     auto out = mrpt::serialization::archiveFrom(f);
     gseg::test::Lidar lidar;
@@ -86,14 +88,24 @@ void writeDrive(const std::string& path, bool poses) {
             p.timestamp = t;
             out << p;
         }
-        auto pc = mrpt::maps::CSimplePointsMap::Create();
-        for (std::size_t i = 0; i < scan.size(); ++i) pc->insertPoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2]);
-        mrpt::obs::CObservationPointCloud obs;
-        obs.pointcloud = pc;
-        obs.sensorPose = kMount;
-        obs.sensorLabel = "LIDAR";
-        obs.timestamp = t;
-        out << obs;
+        auto write = [&](const std::string& label, int want) {  // want: -1 all, 1 ground, 0 obstacles
+            auto pc = mrpt::maps::CSimplePointsMap::Create();
+            for (std::size_t i = 0; i < scan.size(); ++i)
+                if (want < 0 || (scan.truth[i] == Truth::Ground) == (want == 1))
+                    pc->insertPoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2]);
+            mrpt::obs::CObservationPointCloud obs;
+            obs.pointcloud = pc;
+            obs.sensorPose = kMount;
+            obs.sensorLabel = label;
+            obs.timestamp = t;
+            out << obs;
+        };
+        if (presegmented) {
+            write("LIDAR_ground", 1);
+            write("LIDAR_obstacles", 0);
+        } else {
+            write("LIDAR", -1);
+        }
     }
 }
 
@@ -120,6 +132,18 @@ TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("voxels (0.20 m)"), std::string::npos) << r.out;
+    expectDriveMap(dir + "/m");
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
+    const std::string dir = tempDir("preseg");
+    writeDrive(dir + "/drive.rawlog", true, true);
+    // A wrong sensor height: had the tool segmented these scans again, the road would be lost.
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 9.0\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("8 scans"), std::string::npos) << r.out;
     expectDriveMap(dir + "/m");
     fs::remove_all(dir);
 }
