@@ -80,7 +80,8 @@ TEST(SegmentTool, RealVlp16RawlogGroundLiesBelowTheSensor) {
     ASSERT_EQ(bytes.size(), 11305u);
     std::size_t ground = 0;
     for (auto b : bytes) ground += b;
-    // Measured 2478 (21.9 %): a yard with buildings, vehicles and vegetation close to the sensor.
+    // Measured 2590 (22.9 %, sensor height estimated 2.08 m): a yard with buildings, vehicles and
+    // vegetation close to the sensor.
     EXPECT_GT(ground, 11305u * 15 / 100);
     EXPECT_LT(ground, 11305u * 35 / 100);
 }

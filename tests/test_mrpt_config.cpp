@@ -48,7 +48,7 @@ TEST(Config, ShippedKittiFileHasThePapersValuesAndEveryKey) {
 
 TEST(Config, ShippedVlp16File) {
     const auto cfg = gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/vlp16.yaml");
-    EXPECT_DOUBLE_EQ(cfg.params.distToGround, 2.2);
+    EXPECT_TRUE(cfg.distToGroundAuto);
     EXPECT_DOUBLE_EQ(cfg.params.cellSizeX, gseg::Params().cellSizeX);  // not given: default
 }
 

@@ -19,6 +19,7 @@
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
+#include <gseg/sensor_height.hpp>
 
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
@@ -259,8 +260,18 @@ void assignPoses(const Cli& c, Plan& plan) {
 }
 
 /// Second pass: segment / collect each scan and insert it.
-void buildMap(const Cli& c, const Plan& plan, gseg::map::TraversabilityMap& map, const gseg::Params& params) {
+void buildMap(const Cli& c, const Plan& plan, gseg::map::TraversabilityMap& map, const gseg::Params& params,
+              bool autoHeight) {
     gseg::GroundSegmenter segmenter(params);
+    // distToGround: auto: the sensor height is estimated from each scan before it is segmented.
+    auto adaptHeight = [&](const mrpt::obs::CObservation& obs) {
+        const std::vector<float> pts = gseg::mrpt::levelledPoints(obs);
+        const auto h = gseg::estimateSensorHeight(gseg::PointCloudView(pts.data(), pts.size() / 4, 16));
+        if (!h.valid) throw std::invalid_argument("'" + obs.sensorLabel + "': distToGround: auto found no ground level");
+        gseg::Params p = params;
+        p.distToGround = h.height;
+        segmenter = gseg::GroundSegmenter(p);
+    };
     gseg::map::Progress progress(stderr, "rawlog-octomap", plan.scans.size());
     std::size_t k = 0, m = 0;
     gseg::map::WorldScan pending;
@@ -269,6 +280,7 @@ void buildMap(const Cli& c, const Plan& plan, gseg::map::TraversabilityMap& map,
         const PlannedScan& s = plan.scans[k];
         const Member& want = s.members[m];
         if (want.entry != entry || want.sub != sub) return;
+        if (want.part == ScanPart::Raw && autoHeight) adaptHeight(obs);
         if (want.part == ScanPart::Raw) pending = gseg::map::segmentToWorld(obs, s.robotPose, segmenter);
         else pending.sensorOrigin = gseg::map::appendWorldPoints(obs, s.robotPose,
                                                                  want.part == ScanPart::Ground ? pending.ground : pending.obstacles);
@@ -305,15 +317,13 @@ void printStats(const gseg::map::TraversabilityMap& map, const std::vector<std::
 }
 
 void run(const Cli& c) {
-    const gseg::Params params = c.config.empty() ? gseg::Params() : gseg::mrpt::loadConfig(c.config).params;
-    if (!c.config.empty() && gseg::mrpt::loadConfig(c.config).distToGroundAuto)
-        throw std::invalid_argument(c.config + ": distToGround: auto is not supported here; give the sensor height in metres");
+    const gseg::mrpt::LoadedConfig cfg = c.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(c.config);
     Plan plan = planScans(c.input);
     assignPoses(c, plan);
     std::cerr << "rawlog-octomap: " << plan.scans.size() << " scans, poses from "
               << (c.poses.empty() ? "the rawlog" : c.poses) << "\n";
     gseg::map::TraversabilityMap map(c.options);
-    buildMap(c, plan, map, params);
+    buildMap(c, plan, map, cfg.params, cfg.distToGroundAuto);
     printStats(map, map.write(c.prefix));
 }
 

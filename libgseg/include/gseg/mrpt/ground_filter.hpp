@@ -1,0 +1,77 @@
+#pragma once
+/// \file ground_filter.hpp
+/// GSeg3D as an MRPT observation filter: a LiDAR observation in, a ground and an obstacle point
+/// cloud observation out. Registered with MRPT's RTTI as "gseg::GroundFilter", so
+/// `mrpt::rtti::classFactory("gseg::GroundFilter")` creates one (also from the plugin library).
+
+#include <gseg/ground_segmenter.hpp>
+#include <gseg/mrpt/config.hpp>
+
+#include <mrpt/maps/CPointsMap.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/rtti/CObject.h>
+
+#include <memory>
+#include <string>
+
+// MRPT's RTTI macros name `mrpt::...` unqualified, which inside namespace gseg would find
+// gseg::mrpt: the class lives in gseg_filters, is registered as "gseg::GroundFilter", and is
+// aliased as gseg::GroundFilter below.
+namespace gseg_filters {
+
+/// Splits LiDAR observations (CObservationVelodyneScan, CObservationPointCloud,
+/// CObservation3DRangeScan) and point maps into ground and obstacles.
+///
+/// Frames: segmentation runs in the levelled sensor frame (the rotation of `sensorPose` applied:
+/// pitch and roll of the mounting are undone, so z is up; origin at the sensor, so distToGround is
+/// the sensor's own height). The outputs keep the input's points in the frame chosen by
+/// `outputFrame`: `Sensor` (default) keeps the input's coordinates and its sensorPose; `Vehicle`
+/// transforms the points by the full sensorPose and sets the output's sensorPose to identity.
+class GroundFilter : public ::mrpt::rtti::CObject {
+    DEFINE_MRPT_OBJECT(GroundFilter, gseg_filters)
+
+public:
+    enum class OutputFrame { Sensor, Vehicle };
+
+    /// The two halves of one scan. ground->pointcloud->size() + obstacles->...size() equals the
+    /// input's point count; both keep the input's timestamp, sensorPose (in Sensor frame) and
+    /// intensity, and are labelled "<sensorLabel>_ground" / "<sensorLabel>_obstacles".
+    struct Output {
+        ::mrpt::obs::CObservationPointCloud::Ptr ground, obstacles;
+        double distToGround = 0;  ///< [m] the sensor height used (estimated if `auto`)
+        bool distToGroundEstimated = false;
+        gseg::Result result;      ///< labels, counters and timing of the segmentation
+    };
+
+    GroundFilter();
+    explicit GroundFilter(const gseg::mrpt::LoadedConfig& config, OutputFrame frame = OutputFrame::Sensor);
+
+    /// Configuration from a YAML or INI file (see gseg/mrpt/config.hpp); throws on bad keys.
+    void loadConfig(const std::string& path);
+    const gseg::mrpt::LoadedConfig& config() const { return config_; }
+    OutputFrame outputFrame = OutputFrame::Sensor;
+
+    /// Segments one observation. Throws std::invalid_argument for unsupported kinds (a 2D laser
+    /// scan has no ground to find) and for bad points (NaN, inf: the message names the point).
+    Output filter(const ::mrpt::obs::CObservation& obs);
+
+    /// Segments a point map given in a levelled frame with the sensor at the origin.
+    Output filter(const ::mrpt::maps::CPointsMap& map, const std::string& label = "points");
+
+private:
+    Output split(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& sensorPose,
+                 const ::mrpt::obs::CObservation* source, const std::string& label);
+
+    gseg::mrpt::LoadedConfig config_;
+    std::unique_ptr<gseg::GroundSegmenter> segmenter_;  // rebuilt when the sensor height changes
+};
+
+/// Name under which MRPT's class factory knows GroundFilter.
+constexpr const char* kGroundFilterClassName = "gseg::GroundFilter";
+
+}  // namespace gseg_filters
+
+namespace gseg {
+using GroundFilter = gseg_filters::GroundFilter;
+}  // namespace gseg

@@ -1,0 +1,98 @@
+#include <gseg/mrpt/ground_filter.hpp>
+#include <gseg/mrpt/observation_points.hpp>
+#include <gseg/sensor_height.hpp>
+
+#include <mrpt/core/initializer.h>
+#include <mrpt/maps/CPointsMapXYZI.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include <stdexcept>
+
+INTERNAL_IMPLEMENTS_MRPT_OBJECT(GroundFilter, mrpt::rtti::CObject, gseg_filters, "gseg::GroundFilter")
+
+MRPT_INITIALIZER(gseg_register_ground_filter) {
+    mrpt::rtti::registerClass(CLASS_ID_NAMESPACE(GroundFilter, gseg_filters));
+}
+
+namespace gseg_filters {
+
+using gseg::Params;
+using gseg::PointCloudView;
+using gseg::SensorHeightEstimate;
+namespace gm = gseg::mrpt;
+
+GroundFilter::GroundFilter() : GroundFilter(gm::LoadedConfig()) {}
+
+GroundFilter::GroundFilter(const gm::LoadedConfig& config, OutputFrame frame)
+    : outputFrame(frame), config_(config) {
+    config_.params.validate();
+}
+
+void GroundFilter::loadConfig(const std::string& path) {
+    config_ = gm::loadConfig(path);
+    segmenter_.reset();
+}
+
+GroundFilter::Output GroundFilter::filter(const ::mrpt::obs::CObservation& obs) {
+    ::mrpt::poses::CPose3D sensorPose;
+    obs.getSensorPose(sensorPose);
+    return split(gm::sensorFramePoints(obs), sensorPose, &obs, obs.sensorLabel);
+}
+
+GroundFilter::Output GroundFilter::filter(const ::mrpt::maps::CPointsMap& map, const std::string& label) {
+    std::vector<float> xyzi(4 * map.size(), 0.f);
+    const auto* withI = dynamic_cast<const ::mrpt::maps::CPointsMapXYZI*>(&map);
+    for (std::size_t i = 0; i < map.size(); ++i) {
+        map.getPointFast(i, xyzi[4 * i], xyzi[4 * i + 1], xyzi[4 * i + 2]);
+        if (withI) xyzi[4 * i + 3] = withI->getPointIntensity_fast(i);
+    }
+    return split(xyzi, ::mrpt::poses::CPose3D(), nullptr, label);
+}
+
+GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& sensorPose,
+                                         const ::mrpt::obs::CObservation* source, const std::string& label) {
+    std::vector<float> levelled = sensorXyzi;
+    gm::levelPoints(levelled, sensorPose);
+    const PointCloudView cloud(levelled.data(), levelled.size() / 4, 16);
+
+    Output out;
+    Params params = config_.params;
+    if (config_.distToGroundAuto) {
+        const SensorHeightEstimate h = gseg::estimateSensorHeight(cloud);
+        if (!h.valid)
+            throw std::runtime_error(label + ": distToGround: auto found no ground level around the sensor");
+        params.distToGround = h.height;
+        out.distToGroundEstimated = true;
+    }
+    out.distToGround = params.distToGround;
+    if (!segmenter_ || segmenter_->params().distToGround != params.distToGround)
+        segmenter_ = std::make_unique<gseg::GroundSegmenter>(params);
+    out.result = segmenter_->segment(cloud, false);
+
+    // The two halves, in the frame asked for.
+    const bool vehicle = outputFrame == OutputFrame::Vehicle;
+    auto ground = ::mrpt::maps::CPointsMapXYZI::Create(), obstacles = ::mrpt::maps::CPointsMapXYZI::Create();
+    ground->reserve(out.result.numGround);
+    obstacles->reserve(out.result.numNonGround);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const float* p = &sensorXyzi[4 * i];
+        double x = p[0], y = p[1], z = p[2];
+        if (vehicle) sensorPose.composePoint(p[0], p[1], p[2], x, y, z);
+        auto& dst = out.result.labels[i] ? *ground : *obstacles;
+        dst.insertPointFast(float(x), float(y), float(z));
+        dst.setPointIntensity(dst.size() - 1, p[3]);
+    }
+    auto make = [&](const ::mrpt::maps::CPointsMapXYZI::Ptr& pts, const char* suffix) {
+        auto obs = ::mrpt::obs::CObservationPointCloud::Create();
+        obs->pointcloud = pts;
+        obs->sensorLabel = label + suffix;
+        obs->sensorPose = vehicle ? ::mrpt::poses::CPose3D() : sensorPose;
+        if (source) obs->timestamp = source->timestamp;
+        return obs;
+    };
+    out.ground = make(ground, "_ground");
+    out.obstacles = make(obstacles, "_obstacles");
+    return out;
+}
+
+}  // namespace gseg_filters
