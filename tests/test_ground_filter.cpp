@@ -7,6 +7,8 @@
 
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/maps/CPointsMapXYZI.h>
+#include <mrpt/obs/CObservationVelodyneScan.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CArchive.h>
@@ -214,4 +216,57 @@ TEST(RawlogGseg, CorruptInputNamesTheEntryAndLeavesNoOutput) {
     EXPECT_FALSE(fs::exists(out));
     for (const auto& e : fs::directory_iterator(kDir))
         EXPECT_EQ(e.path().string().find("never.rawlog.tmp"), std::string::npos) << "temporary left behind";
+}
+
+TEST(GroundFilter, VelodyneScanWithPointsButNoPacketsAtATilt) {
+    // A CObservationVelodyneScan whose point_cloud was filled (no packets): the filter must use
+    // those points as they are (generatePointCloud() would wipe them).
+    gseg::test::Scene s;
+    s.addFlatGround(1.2);
+    s.addBox(6, 1, -1.2, 8, 3, 0.3);
+    const auto scan = gseg::test::simulate(s, gseg::test::Lidar::vlp16());
+    const mrpt::poses::CPose3D rotation(0, 0, 0, 0, -12 * M_PI / 180, 5 * M_PI / 180);
+    mrpt::obs::CObservationVelodyneScan velo;
+    velo.sensorLabel = "VLP16";
+    velo.sensorPose = mrpt::poses::CPose3D(0, 0, 1.2, 0, rotation.pitch(), rotation.roll());
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+        double x, y, z;
+        rotation.inverseComposePoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2], x, y, z);
+        velo.point_cloud.x.push_back(float(x));
+        velo.point_cloud.y.push_back(float(y));
+        velo.point_cloud.z.push_back(float(z));
+        velo.point_cloud.intensity.push_back(std::uint8_t(i % 200));
+    }
+    gseg::mrpt::LoadedConfig cfg;
+    cfg.params.distToGround = 1.2;
+    cfg.params.centroidSearchRadius = 8;  // sparse VLP-16 rings
+    const auto out = gseg::GroundFilter(cfg).filter(velo);
+    ASSERT_EQ(out.result.labels.size(), scan.size());
+    const auto pr = gseg::test::groundPR(scan, out.result.labels);
+    EXPECT_GE(pr.precision, 0.99);
+    // Recall within 15 m (tilted, some rings reach far beyond what an 8 m radius can bridge).
+    std::size_t near = 0, nearGround = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i)
+        if (scan.truth[i] == gseg::test::Truth::Ground && std::hypot(scan.xyz[3 * i], scan.xyz[3 * i + 1]) < 15)
+            ++near, nearGround += out.result.labels[i];
+    ASSERT_GT(near, 1000u);
+    EXPECT_GE(double(nearGround) / double(near), 0.95);
+    // Intensity is carried over.
+    const auto* xyzi = dynamic_cast<const mrpt::maps::CPointsMapXYZI*>(out.obstacles->pointcloud.get());
+    ASSERT_NE(xyzi, nullptr);
+    float maxI = 0;
+    for (std::size_t i = 0; i < xyzi->size(); ++i) maxI = std::max(maxI, xyzi->getPointIntensity(i));
+    EXPECT_GT(maxI, 0.f);
+}
+
+TEST(RawlogGseg, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    if (!fs::exists("/usr/bin/rawlog-edit")) GTEST_SKIP() << "rawlog-edit absent (package mrpt-apps)";
+    fs::create_directories(kDir);
+    const std::string out = (kDir / "plugin.rawlog").string();
+    ASSERT_EQ(gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out + "'").status, 0);
+    const auto r = gseg::test::runCommand("rawlog-edit -p '" GSEG_BINARY_DIR "/lib/libgseg_mrpt.so' --info -i '" + out + "'");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("Velodyne1_SCAN_ground"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("Velodyne1_SCAN_obstacles"), std::string::npos) << r.output;
 }
