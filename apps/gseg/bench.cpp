@@ -1,24 +1,32 @@
-// gseg bench: time the segmentation of scans, per phase and step.
+// gseg bench: time the segmentation of scans, per scan, phase and step.
 #include "cli.hpp"
 #include "commands.hpp"
 
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/scan_source.hpp>
+#include <gseg/sensor_height.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <sys/resource.h>
 #include <thread>
 
 namespace gseg::app {
 namespace {
 
-#ifdef NDEBUG
-constexpr const char* kBuild = "optimised (NDEBUG)";
+// The build the numbers come from. GSEG_BUILD_TYPE (e.g. the CMake build type) if the build
+// defines it, else what the compiler knows: optimisation on/off and NDEBUG.
+#if defined(GSEG_BUILD_TYPE)
+constexpr const char* kBuild = GSEG_BUILD_TYPE;
+#elif defined(__OPTIMIZE__) && defined(NDEBUG)
+constexpr const char* kBuild = "optimised, NDEBUG (Release-like)";
+#elif defined(__OPTIMIZE__)
+constexpr const char* kBuild = "optimised, assertions on";
 #else
-constexpr const char* kBuild = "debug (assertions on)";
+constexpr const char* kBuild = "unoptimised, assertions on (Debug): times are not representative";
 #endif
 
 struct Stats {
@@ -26,59 +34,88 @@ struct Stats {
 };
 
 Stats stats(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
     if (v.empty()) return {};
-    return {v[v.size() / 2], v[std::min(v.size() - 1, std::size_t(0.9 * double(v.size())))], v.front()};
+    std::sort(v.begin(), v.end());
+    const auto at = [&](double q) { return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))]; };
+    return {at(0.5), at(0.9), v.front()};
 }
 
 struct Sample {
-    double total = 0;
-    StepTimes p1, p2;
+    double total = 0;  ///< [ms] Result::totalMs
+    StepTimes p1, p2;  ///< [ms] per step of phase I and II
 };
 
-int run(const std::vector<std::string>& scans, const std::string& config, int repeat, int threads) {
-    Params params;
-    if (!config.empty()) {
-        const auto cfg = mrpt::loadConfig(config);
-        if (cfg.distToGroundAuto) throw std::runtime_error(config + ": bench needs a numeric distToGround");
-        params = cfg.params;
-    }
-    std::vector<mrpt::Scan> loaded;
-    std::size_t points = 0;
-    for (const auto& s : scans) {
-        loaded.push_back(mrpt::loadScan(s));
-        points += loaded.back().size();
-    }
-    std::printf("gseg bench: %zu scans, %zu points, %d repeats, %d thread(s); build %s; %u hardware threads\n",
-                loaded.size(), points, repeat, threads, kBuild, std::thread::hardware_concurrency());
+struct Input {
+    std::string name;
+    ::gseg::mrpt::Scan scan;
+    Params params;  ///< with the scan's own distToGround when the config says auto
+};
 
-    // Each thread has its own segmenter and segments every scan `repeat` times after a warm-up.
-    std::vector<std::vector<Sample>> samples(static_cast<std::size_t>(threads));
-    const auto wallStart = std::chrono::steady_clock::now();
+std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config) {
+    ::gseg::mrpt::LoadedConfig cfg;
+    if (!config.empty()) cfg = ::gseg::mrpt::loadConfig(config);
+    std::vector<Input> inputs;
+    for (const auto& path : paths) {
+        Input in{std::filesystem::path(path).filename().string(), ::gseg::mrpt::loadScan(path), cfg.params};
+        if (cfg.distToGroundAuto) {
+            const auto h = estimateSensorHeight(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16));
+            if (!h.valid) throw std::runtime_error(path + ": distToGround: auto: no ground level found");
+            in.params.distToGround = h.height;
+            std::printf("%s: distToGround auto %.3f m\n", in.name.c_str(), h.height);
+        }
+        inputs.push_back(std::move(in));
+    }
+    return inputs;
+}
+
+/// Every thread: its own segmenter(s), one warm-up pass over all scans, then `repeat` timed passes.
+/// Returns the samples per scan (all threads) and the wall time of the whole run [s].
+std::vector<std::vector<Sample>> timeAll(const std::vector<Input>& inputs, int repeat, int threads, bool perScanParams,
+                                         double& wallS) {
+    std::vector<std::vector<std::vector<Sample>>> byThread(std::size_t(threads),
+                                                           std::vector<std::vector<Sample>>(inputs.size()));
+    const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; ++t)
         pool.emplace_back([&, t] {
-            GroundSegmenter seg(params);
-            for (const auto& s : loaded) seg.segment(PointCloudView(s.xyzi.data(), s.size(), 16), false);
+            std::vector<GroundSegmenter> segs;
+            for (std::size_t i = 0; i < (perScanParams ? inputs.size() : 1); ++i) segs.emplace_back(inputs[i].params);
+            auto run = [&](std::size_t i) {
+                const auto& s = inputs[i].scan;
+                return segs[perScanParams ? i : 0].segment(PointCloudView(s.xyzi.data(), s.size(), 16), false);
+            };
+            for (std::size_t i = 0; i < inputs.size(); ++i) run(i);  // warm-up
             for (int r = 0; r < repeat; ++r)
-                for (const auto& s : loaded) {
-                    const Result res = seg.segment(PointCloudView(s.xyzi.data(), s.size(), 16), false);
-                    samples[std::size_t(t)].push_back({res.totalMs, res.phase1.ms, res.phase2.ms});
+                for (std::size_t i = 0; i < inputs.size(); ++i) {
+                    const Result res = run(i);
+                    byThread[std::size_t(t)][i].push_back({res.totalMs, res.phase1.ms, res.phase2.ms});
                 }
         });
     for (auto& th : pool) th.join();
-    const double wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+    wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::vector<std::vector<Sample>> perScan(inputs.size());
+    for (const auto& thread : byThread)
+        for (std::size_t i = 0; i < inputs.size(); ++i) perScan[i].insert(perScan[i].end(), thread[i].begin(), thread[i].end());
+    return perScan;
+}
 
-    std::vector<Sample> all;
-    for (const auto& v : samples) all.insert(all.end(), v.begin(), v.end());
-    auto column = [&](auto get) {
-        std::vector<double> v;
-        for (const Sample& s : all) v.push_back(get(s));
-        return stats(v);
-    };
-    const Stats total = column([](const Sample& s) { return s.total; });
-    std::printf("per scan: median %.2f ms, p90 %.2f ms, min %.2f ms; %.2f M points/s per thread\n", total.median,
-                total.p90, total.min, double(points) / double(loaded.size()) / total.median / 1000.0);
+template <class Get>
+Stats column(const std::vector<Sample>& samples, Get get) {
+    std::vector<double> v;
+    for (const Sample& s : samples) v.push_back(get(s));
+    return stats(v);
+}
+
+void printPerScan(const std::vector<Input>& inputs, const std::vector<std::vector<Sample>>& perScan) {
+    std::printf("\n%-22s %8s %10s %10s %10s %10s\n", "scan", "points", "median ms", "p90 ms", "min ms", "Mpoints/s");
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+        const Stats t = column(perScan[i], [](const Sample& s) { return s.total; });
+        std::printf("%-22s %8zu %10.2f %10.2f %10.2f %10.2f\n", inputs[i].name.c_str(), inputs[i].scan.size(), t.median,
+                    t.p90, t.min, double(inputs[i].scan.size()) / t.median / 1000.0);
+    }
+}
+
+void printSteps(const std::vector<Sample>& all) {
     const struct {
         const char* name;
         double StepTimes::*step;
@@ -87,16 +124,40 @@ int run(const std::vector<std::string>& scans, const std::string& config, int re
                  {"plane fit", &StepTimes::planeFit},
                  {"expansion", &StepTimes::expansion},
                  {"refinement", &StepTimes::refinement}};
-    std::printf("%-16s %12s %12s\n", "median ms", "phase I", "phase II");
+    std::printf("\n%-16s %10s %10s   (median ms over all scans and repeats)\n", "step", "phase I", "phase II");
     for (const auto& st : steps)
-        std::printf("%-16s %12.3f %12.3f\n", st.name, column([&](const Sample& s) { return s.p1.*st.step; }).median,
-                    column([&](const Sample& s) { return s.p2.*st.step; }).median);
-    std::printf("%-16s %12.3f %12.3f\n", "phase total", column([](const Sample& s) { return s.p1.total(); }).median,
-                column([](const Sample& s) { return s.p2.total(); }).median);
-    std::printf("throughput: %.1f scans/s with %d thread(s)\n", double(all.size()) / wallS, threads);
+        std::printf("%-16s %10.3f %10.3f\n", st.name, column(all, [&](const Sample& s) { return s.p1.*st.step; }).median,
+                    column(all, [&](const Sample& s) { return s.p2.*st.step; }).median);
+    std::printf("%-16s %10.3f %10.3f\n", "phase total", column(all, [](const Sample& s) { return s.p1.total(); }).median,
+                column(all, [](const Sample& s) { return s.p2.total(); }).median);
+}
+
+int run(const std::vector<std::string>& paths, const std::string& config, int repeat, int threads) {
+    const std::vector<Input> inputs = loadInputs(paths, config);
+    std::size_t points = 0;
+    for (const auto& in : inputs) points += in.scan.size();
+    const bool perScanParams = std::any_of(inputs.begin(), inputs.end(), [&](const Input& in) {
+        return in.params.distToGround != inputs.front().params.distToGround;
+    });
+    std::printf("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s); build: %s; "
+                "%u hardware threads\n",
+                inputs.size(), points, repeat, threads, kBuild, std::thread::hardware_concurrency());
+
+    double wallS = 0;
+    const auto perScan = timeAll(inputs, repeat, threads, perScanParams, wallS);
+    std::vector<Sample> all;
+    for (const auto& v : perScan) all.insert(all.end(), v.begin(), v.end());
+    printPerScan(inputs, perScan);
+    const Stats t = column(all, [](const Sample& s) { return s.total; });
+    std::printf("%-22s %8zu %10.2f %10.2f %10.2f %10.2f\n", "all scans", points / inputs.size(), t.median, t.p90,
+                t.min, double(points) / double(inputs.size()) / t.median / 1000.0);
+    printSteps(all);
+    const double passes = double(repeat + 1) * threads;  // timed + warm-up passes in the wall time
+    std::printf("\nthroughput: %.1f scans/s, %.2f Mpoints/s aggregate with %d thread(s) (wall %.2f s incl. warm-up)\n",
+                passes * double(inputs.size()) / wallS, passes * double(points) / wallS / 1e6, threads, wallS);
     rusage ru{};
     ::getrusage(RUSAGE_SELF, &ru);
-    std::printf("peak memory: %.1f MB\n", double(ru.ru_maxrss) / 1024.0);
+    std::printf("peak memory (ru_maxrss, scans loaded included): %.1f MB\n", double(ru.ru_maxrss) / 1024.0);
     return 0;
 }
 
@@ -107,12 +168,15 @@ int runBench(int argc, char** argv) {
     std::string config;
     int repeat = 20, threads = 1;
     try {
-        TCLAP::CmdLine cmd("Time GSeg3D on scans: warm-up, then median / p90 / min per scan, per phase and step.", ' ',
-                           "0.1");
+        TCLAP::CmdLine cmd("Time GSeg3D on scans: one warm-up pass, then median / p90 / min of the segment() call per "
+                           "scan over N repeats, per phase and step, points per second, peak memory. Without "
+                           "--config: the library defaults.",
+                           ' ', "0.1");
         TCLAP::UnlabeledMultiArg<std::string> scanArgs("scans", "KITTI .bin, PLY or rawlog files", true, "SCAN", cmd);
         TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file", false, "", "FILE", cmd);
         TCLAP::ValueArg<int> rep("", "repeat", "timed passes over all scans (default 20)", false, 20, "N", cmd);
-        TCLAP::ValueArg<int> thr("", "threads", "independent segmenters on N threads (default 1)", false, 1, "N", cmd);
+        TCLAP::ValueArg<int> thr("", "threads", "N independent segmenters on N threads, each timing every scan "
+                                 "(default 1)", false, 1, "N", cmd);
         if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
         scans = scanArgs.getValue(), config = cfg.getValue(), repeat = rep.getValue(), threads = thr.getValue();
     } catch (const TCLAP::ArgException& e) {

@@ -1,0 +1,93 @@
+// `gseg bench`: one row per scan, distToGround: auto per scan, configuration errors.
+// (Phase / step breakdown, threads and memory lines: test_gseg_bench_tool.)
+#include <support/lidar_sim.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "tool_bench";
+
+std::string runBench(const std::string& args, int& status) {
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' bench " + args);
+    status = r.status;
+    return r.output;
+}
+
+/// A simulated HDL-64 scan of flat ground `height` below the sensor with a box, as a KITTI .bin.
+std::string writeScan(const fs::path& dir, const std::string& name, double height) {
+    gseg::test::Scene s;
+    s.addFlatGround(height);
+    s.addBox(6, -1, -height, 8, 1, -height + 1.5);
+    const auto scan = gseg::test::simulate(s, gseg::test::Lidar::hdl64());
+    std::vector<float> xyzi;
+    for (std::size_t i = 0; i < scan.size(); ++i)
+        xyzi.insert(xyzi.end(), {scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2], 0.f});
+    const fs::path path = dir / name;
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(xyzi.data()), std::streamsize(xyzi.size() * sizeof(float)));
+    return path.string();
+}
+
+/// The line of the per-scan table that starts with `name`, or "".
+std::string rowOf(const std::string& out, const std::string& name) {
+    std::istringstream in(out);
+    for (std::string l; std::getline(in, l);)
+        if (l.rfind(name + " ", 0) == 0) return l;
+    return "";
+}
+
+}  // namespace
+
+TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
+    const fs::path dir = kDir / "rows";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string low = writeScan(dir, "low.bin", 1.73), high = writeScan(dir, "high.bin", 2.5);
+    std::ofstream(dir / "auto.yaml") << "distToGround: auto\n";
+    int status = -1;
+    const std::string out =
+        runBench("'" + low + "' '" + high + "' --repeat 2 --config '" + (dir / "auto.yaml").string() + "'", status);
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("low.bin: distToGround auto 1.7"), std::string::npos) << out;
+    EXPECT_NE(out.find("high.bin: distToGround auto 2.5"), std::string::npos) << out;
+    EXPECT_NE(out.find("warm-up + 2 repeats, 1 thread(s); build: "), std::string::npos) << out;
+    // scan, points, median, p90, min, Mpoints/s with min <= median <= p90.
+    for (const char* name : {"low.bin", "high.bin", "all scans"}) {
+        std::istringstream row(rowOf(out, name).substr(std::string(name).size()));
+        std::size_t points = 0;
+        double median = -1, p90 = -1, min = -1, rate = -1;
+        ASSERT_TRUE(row >> points >> median >> p90 >> min >> rate) << name << " row missing in:\n" << out;
+        EXPECT_GT(points, 10000u);
+        EXPECT_GT(min, 0.0);
+        EXPECT_LE(min, median);
+        EXPECT_LE(median, p90);
+        EXPECT_GT(rate, 0.0);
+    }
+    EXPECT_NE(out.find("throughput: "), std::string::npos) << out;
+}
+
+TEST(BenchPerScan, BadConfigAndArguments) {
+    const fs::path dir = kDir / "bad";
+    fs::create_directories(dir);
+    std::ofstream(dir / "bad.yaml") << "noSuchKey: 3\n";
+    const std::string scan = (dir / "scan.bin").string();
+    const std::vector<float> pts(4 * 10, 1.0f);
+    std::ofstream(scan, std::ios::binary).write(reinterpret_cast<const char*>(pts.data()), 160);
+    int status = -1;
+    std::string out = runBench("'" + scan + "' --config '" + (dir / "bad.yaml").string() + "'", status);
+    EXPECT_EQ(status, 1) << out;
+    EXPECT_NE(out.find("gseg bench: "), std::string::npos) << out;
+    EXPECT_NE(out.find("noSuchKey"), std::string::npos) << out;
+    out = runBench("'" + scan + "' --threads 0", status);
+    EXPECT_EQ(status, 2) << out;
+    out = runBench("", status);
+    EXPECT_EQ(status, 2) << out;
+}
