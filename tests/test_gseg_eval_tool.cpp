@@ -21,12 +21,7 @@ std::string runTool(const std::string& args, int& status) {
     return r.output;
 }
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+std::string slurp(const fs::path& p) { return gseg::test::readText(p.string()); }
 
 // The CSV without its last column (ms), which differs between runs.
 std::string withoutTimes(const std::string& csv) {

@@ -138,12 +138,7 @@ std::string runEval(const std::string& args, int& status) {
     return r.output;
 }
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+std::string slurp(const fs::path& p) { return gseg::test::readText(p.string()); }
 
 std::string withoutLastColumn(const std::string& csv) {
     std::string out;

@@ -1,6 +1,8 @@
 #include <support/paths.hpp>
 
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <sys/stat.h>
 #include <sys/wait.h>
 
@@ -18,6 +20,13 @@ std::string missingDataMessage(const std::string& relative) {
 }
 
 std::string tool(const std::string& name) { return std::string(GSEG_BINARY_DIR) + "/bin/" + name; }
+
+std::string readText(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
 
 CommandResult runCommand(const std::string& shellCommand) {
     CommandResult r;

@@ -15,6 +15,9 @@ std::string missingDataMessage(const std::string& relative);
 /// Path of a built executable (`<build>/bin/<name>`).
 std::string tool(const std::string& name);
 
+/// The whole content of a text file ("" if it cannot be read).
+std::string readText(const std::string& path);
+
 /// Exit status and combined stdout + stderr of a shell command.
 struct CommandResult {
     int status = -1;  ///< exit code, -1 if it did not exit normally
