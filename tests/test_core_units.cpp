@@ -85,6 +85,13 @@ TEST(Params, RejectsUnknownKeysAndBadText) {
     EXPECT_THROW(p.set("ransacSeed", "-1"), std::invalid_argument);
     p.set("cellSizeX", " 2.25 ");
     EXPECT_EQ(p.cellSizeX, 2.25);
+    // Switches take true/false (or 1/0), nothing else.
+    p.set("checkPlaneNormal", "false");
+    EXPECT_FALSE(p.checkPlaneNormal);
+    p.set("recoverNearGround", " 1 ");
+    EXPECT_TRUE(p.recoverNearGround);
+    EXPECT_EQ(p.get("checkPlaneNormal"), "false");
+    EXPECT_THROW(p.set("checkPlaneNormal", "yes"), std::invalid_argument);
 }
 
 TEST(Params, ValidateNamesTheOffendingKey) {
@@ -94,7 +101,9 @@ TEST(Params, ValidateNamesTheOffendingKey) {
     } bad[] = {{"cellSizeX", "-1"},          {"cellSizeZPhase2", "0"},      {"slopeThresholdDegrees", "95"},
                {"groundInlierThreshold", "0"}, {"minPointsPerCell", "2"},     {"ransacConfidence", "1"},
                {"centroidSearchRadius", "nan"}, {"heightGate", "-0.1"},       {"gridGroundLevel", "1"},
-               {"sparsityMedium", "0.0001"},  {"minGroundInlierRatio", "1"}, {"distToGround", "inf"}};
+               {"sparsityMedium", "0.0001"},  {"minGroundInlierRatio", "1"}, {"distToGround", "inf"},
+               {"seedHeightTolerance", "0"},  {"recoveryThreshold", "-1"},   {"stripMinSpread", "nan"},
+               {"belowGroundMargin", "-0.5"}};
     for (const auto& b : bad) {
         gseg::Params p;
         p.set(b.key, b.value);
@@ -201,6 +210,39 @@ TEST(CellClassifier, LinePlaneClutterAndSmallCells) {
     EXPECT_EQ(gseg::classifyCell(smallFlat.data(), 2, p).cellClass, gseg::CellClass::TooFewPoints);
 }
 
+TEST(CellClassifier, UprightSurfacesAreSteepWhateverAPlaneFitWouldFind) {
+    gseg::Params p;
+    // A 0.2 m tall band of a car side (a thin Phase II cell): every point lies within the inlier
+    // distance of a horizontal plane through the band, but its normal is horizontal.
+    std::vector<Eigen::Vector3f> band, strip, ring, flatPatch;
+    for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 4; ++j) band.emplace_back(0.05f * i, 2.0f + 0.002f * (i % 3), -1.2f + 0.06f * j);
+    // Two rings 0.12 m apart on a wall: a "line" 1.5 m long with a clear vertical second extent.
+    for (int i = 0; i < 30; ++i)
+        for (int j = 0; j < 2; ++j) strip.emplace_back(0.05f * i, 3.0f, -1.6f + 0.12f * j);
+    // One ring on the ground, slightly curved: a line without a second extent.
+    for (int i = 0; i < 30; ++i) ring.emplace_back(0.05f * i, 0.0004f * float(i * i) / 30.f, -1.73f);
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) flatPatch.emplace_back(0.15f * i, 0.1f * j, -1.7f + 0.01f * i);
+    const auto b = gseg::classifyCell(band.data(), band.size(), p);
+    EXPECT_EQ(b.cellClass, gseg::CellClass::Plane);
+    EXPECT_TRUE(b.steepNormal);
+    const auto st = gseg::classifyCell(strip.data(), strip.size(), p);
+    EXPECT_EQ(st.cellClass, gseg::CellClass::Line);
+    EXPECT_FALSE(st.groundCandidate);
+    const auto r = gseg::classifyCell(ring.data(), ring.size(), p);
+    EXPECT_EQ(r.cellClass, gseg::CellClass::Line);
+    EXPECT_TRUE(r.groundCandidate);
+    EXPECT_NEAR(r.normal.z(), 1.0f, 1e-3f);  // the least tilted plane containing a level ring
+    const auto f = gseg::classifyCell(flatPatch.data(), flatPatch.size(), p);
+    EXPECT_EQ(f.cellClass, gseg::CellClass::Plane);
+    EXPECT_FALSE(f.steepNormal);
+    // The switch turns both rules off (only the plane fit decides, as before).
+    p.checkPlaneNormal = false;
+    EXPECT_FALSE(gseg::classifyCell(band.data(), band.size(), p).steepNormal);
+    EXPECT_TRUE(gseg::classifyCell(strip.data(), strip.size(), p).groundCandidate);
+}
+
 TEST(Sparsity, Buckets) {
     gseg::Params p;
     EXPECT_EQ(gseg::sparsityBucket(0.0005, p), gseg::Sparsity::Low);
@@ -236,6 +278,39 @@ TEST(RegionGrowing, ChainReachedGapNotGateBlocksRejectedDoNotPropagate) {
     EXPECT_EQ(state, (std::vector<std::uint8_t>{2, 1, 0, 0}));
 }
 
+TEST(RegionGrowing, GateMeasuresStepsAlongTheGroundPlanesSoSlopesStayConnected) {
+    // Centroids 1.5 m apart up a 15 deg slope (0.40 m higher each), and the same rise as a
+    // staircase of level cells (normals vertical): with a 0.1 m gate the slope is connected
+    // because each step lies in both cells' planes; the staircase is not.
+    const float t = float(std::tan(15 * M_PI / 180));
+    std::vector<Eigen::Vector3f> c, slopeNormals, levelNormals;
+    const Eigen::Vector3f n = Eigen::Vector3f(-t, 0, 1).normalized();
+    for (int i = 1; i <= 6; ++i) {
+        c.emplace_back(1.5f * i, 0.f, -1.7f + t * 1.5f * float(i - 1));
+        slopeNormals.push_back(n);
+        levelNormals.push_back(Eigen::Vector3f::UnitZ());
+    }
+    gseg::ExpansionSettings s;
+    s.seed = {0, 0, -1.7f};
+    s.seedRadius = 2;
+    s.radius = 2;
+    s.heightGate = 0.1;
+    auto acceptAll = [](std::uint32_t, const std::vector<std::uint32_t>&) { return true; };
+    s.normals = &slopeNormals;
+    EXPECT_EQ(gseg::expandRegion(c, s, acceptAll), std::vector<std::uint8_t>(6, 2));
+    s.normals = &levelNormals;
+    EXPECT_EQ(gseg::expandRegion(c, s, acceptAll), (std::vector<std::uint8_t>{2, 0, 0, 0, 0, 0}));
+    // The step must lie in both planes: a level cell next to a sloped one is not joined.
+    std::vector<Eigen::Vector3f> mixed = slopeNormals;
+    mixed[3] = Eigen::Vector3f::UnitZ();
+    s.normals = &mixed;
+    EXPECT_EQ(gseg::expandRegion(c, s, acceptAll), (std::vector<std::uint8_t>{2, 2, 2, 0, 0, 0}));
+    // parents: who reached whom (the seed is -1, unreached -2).
+    std::vector<std::int32_t> parents;
+    gseg::expandRegion(c, s, acceptAll, &parents);
+    EXPECT_EQ(parents, (std::vector<std::int32_t>{-1, 0, 1, -2, -2, -2}));
+}
+
 // --- sensor height (distToGround: auto) ---------------------------------------------------------
 
 TEST(SensorHeight, EstimatedFromTheLowestDenseSurface) {
@@ -252,4 +327,60 @@ TEST(SensorHeight, EstimatedFromTheLowestDenseSurface) {
     }
     const std::vector<float> few = {5, 0, -1, 6, 0, -1};
     EXPECT_FALSE(gseg::estimateSensorHeight(gseg::PointCloudView(few.data(), 2)).valid);
+}
+
+TEST(SensorHeight, ReflectionsBelowTheGroundDoNotMoveIt) {
+    gseg::test::Scene s;
+    s.addFlatGround(1.73);
+    auto scan = gseg::test::simulate(s, gseg::test::Lidar::hdl64());
+    // Sparse points 1 to 3 m below the road in every direction (mirror reflections).
+    for (int i = 0; i < 1500; ++i) {
+        const double a = 0.0042 * i * 2 * M_PI, r = 3 + (i % 27);
+        scan.xyz.insert(scan.xyz.end(), {float(r * std::cos(a)), float(r * std::sin(a)), float(-2.73 - (i % 20) * 0.1)});
+        scan.truth.push_back(gseg::test::Truth::NonGround);
+    }
+    const auto e = gseg::estimateSensorHeight(gseg::PointCloudView(scan.xyz.data(), scan.size()));
+    ASSERT_TRUE(e.valid) << e.reason;
+    EXPECT_NEAR(e.height, 1.73, 0.03);
+    EXPECT_LT(e.tiltDegrees, 0.5);
+}
+
+TEST(SensorHeight, TiltOfTheMountIsEstimated) {
+    gseg::test::Scene s;
+    s.addFlatGround(1.2);
+    gseg::test::Lidar l;
+    l.pitchDeg = 4, l.rollDeg = -3;
+    const auto scan = gseg::test::simulate(s, l);
+    const auto e = gseg::estimateSensorHeight(gseg::PointCloudView(scan.xyz.data(), scan.size()));
+    ASSERT_TRUE(e.valid) << e.reason;
+    EXPECT_NEAR(e.height, 1.2, 0.05);
+    EXPECT_NEAR(e.tiltDegrees, 5.0, 0.3);
+    EXPECT_TRUE(e.reason.empty());
+}
+
+TEST(AutoHeight, NeverRefusesAScanFallsBackToThePreviousThenTheDefault) {
+    gseg::Params p;
+    p.distToGround = 1.5;  // the fallback
+    gseg::AutoHeightSegmenter seg(p);
+    const std::vector<float> few = {5, 0, -1, 6, 0, -1, 7, 0, -1};  // no ground level to be found
+    auto r = seg.segment(gseg::PointCloudView(few.data(), 3));
+    EXPECT_EQ(r.labels.size(), 3u);
+    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(seg.lastDecision().height, 1.5);
+    EXPECT_NE(seg.lastDecision().describe().find("no estimate"), std::string::npos) << seg.lastDecision().describe();
+
+    gseg::test::Scene s;
+    s.addFlatGround(0.9);
+    const auto scan = gseg::test::simulate(s, gseg::test::Lidar::vlp16());
+    r = seg.segment(gseg::PointCloudView(scan.xyz.data(), scan.size()));
+    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Estimated);
+    EXPECT_NEAR(seg.lastDecision().height, 0.9, 0.05);
+    EXPECT_GT(r.numGround, scan.size() / 2);
+
+    r = seg.segment(gseg::PointCloudView(few.data(), 3));
+    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::PreviousScan);
+    EXPECT_NEAR(seg.lastDecision().height, 0.9, 0.05);
+    seg.reset();
+    seg.segment(gseg::PointCloudView(few.data(), 3));
+    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Fallback);
 }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -124,4 +125,53 @@ TEST(EvalTool, BadTrees) {
     EXPECT_NE(out.find("no scans"), std::string::npos) << out;
     runTool("", status);
     EXPECT_EQ(status, 2);
+}
+
+TEST(EvalTool, BreakdownCountsAgreeWithTheScoresAndDrawOnePicturePerFrame) {
+    const std::string root = gseg::test::sharedData("semantickitti");
+    if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
+    const fs::path dir = kDir / "breakdown";
+    fs::remove_all(dir);
+    int status = -1;
+    const std::string out = runTool("'" + root + "' --threads 2 --breakdown --report '" + (dir / "r").string() + "'", status);
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("failure breakdown, all frames:"), std::string::npos) << out;
+    EXPECT_NE(out.find("false ground by height above the local labelled ground"), std::string::npos) << out;
+    // Per frame: false ground summed over classes = FP, missed ground over classes = FN.
+    std::map<std::string, std::pair<long, long>> fpfn, fromBreakdown, rangeSums;
+    std::istringstream frames(slurp(dir / "r_frames.csv"));
+    std::string line;
+    std::getline(frames, line);
+    while (std::getline(frames, line)) {
+        std::istringstream f(line);
+        std::string seq, frame, points, tp, fp, fn;
+        std::getline(f, seq, ','), std::getline(f, frame, ','), std::getline(f, points, ',');
+        std::getline(f, tp, ','), std::getline(f, fp, ','), std::getline(f, fn, ',');
+        fpfn[seq + "/" + frame] = {std::stol(fp), std::stol(fn)};
+    }
+    ASSERT_EQ(fpfn.size(), 4u);
+    std::istringstream rows(slurp(dir / "r_breakdown.csv"));
+    std::getline(rows, line);
+    EXPECT_EQ(line, "sequence,frame,kind,bin,points");
+    while (std::getline(rows, line)) {
+        std::istringstream f(line);
+        std::string seq, frame, kind, bin, n;
+        std::getline(f, seq, ','), std::getline(f, frame, ','), std::getline(f, kind, ','), std::getline(f, bin, ',');
+        std::getline(f, n, ',');
+        const std::string key = seq + "/" + frame;
+        if (kind == "false_by_class") fromBreakdown[key].first += std::stol(n);
+        if (kind == "missed_by_class") fromBreakdown[key].second += std::stol(n);
+        if (kind == "false_by_range") rangeSums[key].first += std::stol(n);
+        if (kind == "missed_by_range") rangeSums[key].second += std::stol(n);
+    }
+    long allFp = 0;
+    for (const auto& [key, counts] : fpfn) {
+        EXPECT_EQ(fromBreakdown[key], counts) << key;
+        EXPECT_EQ(rangeSums[key], counts) << key;
+        allFp += counts.first;
+        const fs::path png = dir / "r_breakdown" / (key.substr(0, 2) + "_" + key.substr(3) + ".png");
+        ASSERT_TRUE(fs::exists(png)) << png;
+        EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+    }
+    EXPECT_EQ(fromBreakdown["all/all"].first, allFp);
 }

@@ -26,7 +26,7 @@ std::string errorOf(const std::string& path) {
 
 }  // namespace
 
-TEST(Config, ShippedKittiFileHasThePapersValuesAndEveryKey) {
+TEST(Config, ShippedKittiFileIsTheLibraryDefaultsWithEveryKey) {
     const std::string path = std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml";
     const auto cfg = gseg::mrpt::loadConfig(path);
     EXPECT_FALSE(cfg.distToGroundAuto);
@@ -39,11 +39,17 @@ TEST(Config, ShippedKittiFileHasThePapersValuesAndEveryKey) {
     EXPECT_DOUBLE_EQ(cfg.params.slopeThresholdDegrees, 30.0);
     EXPECT_DOUBLE_EQ(cfg.params.groundInlierThreshold, 0.125);
     EXPECT_DOUBLE_EQ(cfg.params.centroidSearchRadius, 5.0);
-    EXPECT_DOUBLE_EQ(cfg.params.maxGroundHeightDeviation, 0.1);
+    // One source of truth: every key of the file is the library default.
+    const gseg::Params defaults;
+    for (const auto& key : gseg::Params::keys()) EXPECT_EQ(cfg.params.get(key), defaults.get(key)) << key;
     std::ifstream in(path);
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     for (const auto& key : gseg::Params::keys())
         EXPECT_NE(text.find("\n" + key + ":"), std::string::npos) << key << " missing from " << path;
+    // config/auto_height.yaml: the same with distToGround: auto (the numeric value is the fallback).
+    const auto autoCfg = gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/auto_height.yaml");
+    EXPECT_TRUE(autoCfg.distToGroundAuto);
+    for (const auto& key : gseg::Params::keys()) EXPECT_EQ(autoCfg.params.get(key), defaults.get(key)) << key;
 }
 
 TEST(Config, ShippedVlp16File) {

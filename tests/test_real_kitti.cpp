@@ -3,6 +3,7 @@
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/metrics.hpp>
+#include <gseg/sensor_height.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -25,10 +27,53 @@ const Frame kFrames[] = {
     {"semantickitti/sequences/08/velodyne/000000.bin", "semantickitti/sequences/08/labels/000000.label"},
 };
 
-gseg::Params kittiParams() {  // config/kitti_hdl64.yaml: the paper's KITTI setup
-    gseg::Params p;
-    p.maxGroundHeightDeviation = 0.1;
-    return p;
+// Every labelled scan of both shared folders, with floors 1 point under what this version measures
+// (config/kitti_hdl64.yaml = the library defaults; `gseg eval` gives the same figures).
+struct Measured {
+    const char* root;
+    const char* seq;
+    const char* frame;
+    double p, r;  ///< [%] measured precision and recall
+};
+const Measured kAll[] = {
+    {"semantickitti", "00", "000000", 99.3, 94.1},       {"semantickitti", "00", "000001", 99.3, 93.9},
+    {"semantickitti", "00", "000002", 99.0, 94.3},       {"semantickitti", "08", "000000", 98.1, 91.8},
+    {"semantickitti-extra", "02", "000000", 99.0, 94.7}, {"semantickitti-extra", "02", "000009", 98.0, 92.5},
+    {"semantickitti-extra", "03", "000000", 97.3, 91.8}, {"semantickitti-extra", "03", "000009", 97.3, 88.5},
+    {"semantickitti-extra", "04", "000000", 99.5, 92.8}, {"semantickitti-extra", "04", "000009", 99.2, 94.8},
+    {"semantickitti-extra", "05", "000000", 96.2, 96.9}, {"semantickitti-extra", "05", "000009", 96.2, 95.0},
+    {"semantickitti-extra", "06", "000000", 99.5, 94.3}, {"semantickitti-extra", "06", "000009", 99.1, 93.4},
+    {"semantickitti-extra", "07", "000000", 92.3, 98.0}, {"semantickitti-extra", "07", "000009", 91.8, 98.3},
+    {"semantickitti-extra", "09", "000000", 98.7, 91.0}, {"semantickitti-extra", "09", "000009", 95.3, 91.7},
+    {"semantickitti-extra", "10", "000000", 99.9, 85.4}, {"semantickitti-extra", "10", "000009", 99.8, 85.3},
+};
+
+gseg::Params kittiParams() { return gseg::Params(); }  // = config/kitti_hdl64.yaml
+
+struct Scored {
+    double p, r, f1;
+};
+
+/// Scores every frame of kAll with `segment`; false (and a skip message) if a folder is absent.
+template <typename Segment>
+bool scoreAll(Segment&& segment, std::vector<Scored>& out, std::string& missing) {
+    for (const Measured& m : kAll) {
+        const std::string base = std::string(m.root) + "/sequences/" + m.seq;
+        const std::string scan = gseg::test::sharedData(base + "/velodyne/" + m.frame + ".bin");
+        const std::string label = gseg::test::sharedData(base + "/labels/" + m.frame + ".label");
+        if (scan.empty() || label.empty()) {
+            missing = gseg::test::missingDataMessage(base + "/velodyne/" + m.frame + ".bin");
+            return false;
+        }
+        const auto pts = gseg::io::readKittiBin(scan);
+        const gseg::PointCloudView cloud(pts.data(), pts.size() / 4, 16);
+        const auto labels = gseg::io::readKittiLabels(label, cloud.size());
+        const gseg::Result r = segment(cloud);
+        EXPECT_EQ(r.labels.size(), cloud.size()) << "every point labelled";
+        const auto s = gseg::scoreFrame(cloud, labels, r.labels).withVegetation;
+        out.push_back({s.precision(), s.recall(), s.f1()});
+    }
+    return true;
 }
 
 }  // namespace
@@ -71,28 +116,48 @@ TEST(Metrics, HandComputedCounts) {
     EXPECT_EQ(ms.count, 2u);
 }
 
-TEST(RealKitti, PrecisionAndRecallOnTheLabelledScans) {
+TEST(RealKitti, PrecisionAndRecallOnBothSharedFolders) {
     gseg::GroundSegmenter seg(kittiParams());
-    double sumP = 0, sumR = 0;
-    for (const Frame& f : kFrames) {
-        const std::string scanPath = gseg::test::sharedData(f.scan), labelPath = gseg::test::sharedData(f.label);
-        if (scanPath.empty() || labelPath.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(f.scan);
-        const auto pts = gseg::io::readKittiBin(scanPath);
-        const gseg::PointCloudView cloud(pts.data(), pts.size() / 4, 16);
-        const auto labels = gseg::io::readKittiLabels(labelPath, cloud.size());
-        const auto r = seg.segment(cloud, false);
-        ASSERT_EQ(r.labels.size(), cloud.size()) << "every point labelled";
-        const auto s = gseg::scoreFrame(cloud, labels, r.labels);
-        const double p = s.withVegetation.precision(), rc = s.withVegetation.recall();
-        std::printf("%s: P %.2f R %.2f F1 %.2f\n", f.scan, p, rc, s.withVegetation.f1());
-        // Floors a little under what this build measures (P 96.3-98.0, R 90.1-92.3).
-        EXPECT_GE(p, 95.5) << f.scan;
-        EXPECT_GE(rc, 89.0) << f.scan;
-        sumP += p, sumR += rc;
+    std::vector<Scored> got;
+    std::string missing;
+    if (!scoreAll([&](const gseg::PointCloudView& c) { return seg.segment(c, false); }, got, missing))
+        GTEST_SKIP() << missing;
+    double sumP = 0, sumR = 0, sumF = 0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        const Measured& m = kAll[i];
+        std::printf("%s/%s: P %.2f R %.2f F1 %.2f\n", m.seq, m.frame, got[i].p, got[i].r, got[i].f1);
+        EXPECT_GE(got[i].p, m.p - 1.0) << m.seq << "/" << m.frame;
+        EXPECT_GE(got[i].r, m.r - 1.0) << m.seq << "/" << m.frame;
+        sumP += got[i].p, sumR += got[i].r, sumF += got[i].f1;
     }
-    // The paper's averages over SemanticKITTI are P 96.6, R 89.4; measured here P 97.5, R 91.4.
-    EXPECT_GE(sumP / 4, 97.0);
-    EXPECT_GE(sumR / 4, 90.8);
+    const double n = double(got.size());
+    std::printf("mean over %zu scans: P %.2f R %.2f F1 %.2f\n", got.size(), sumP / n, sumR / n, sumF / n);
+    // Issue #8's bar (the authors' code: P 97.3 / F1 94.4, Patchwork++ 95.9 / 94.9); measured
+    // P 97.74 / R 92.92 / F1 95.20.
+    EXPECT_GE(sumP / n, 97.5);
+    EXPECT_GE(sumF / n, 95.0);
+}
+
+TEST(RealKitti, AutoHeightOnBothSharedFoldersNeverRefusesAndStaysPrecise) {
+    gseg::AutoHeightSegmenter seg(kittiParams());  // config/auto_height.yaml
+    std::vector<Scored> got;
+    std::string missing;
+    std::size_t estimated = 0;
+    const auto run = [&](const gseg::PointCloudView& c) {
+        seg.reset();
+        gseg::Result r = seg.segment(c, false);
+        estimated += seg.lastDecision().source == gseg::HeightDecision::Source::Estimated;
+        EXPECT_NEAR(seg.lastDecision().height, 1.76, 0.15) << seg.lastDecision().describe();  // measured 1.69-1.89
+        return r;
+    };
+    if (!scoreAll(run, got, missing)) GTEST_SKIP() << missing;
+    double sumP = 0, sumF = 0;
+    for (const Scored& s : got) sumP += s.p, sumF += s.f1;
+    const double n = double(got.size());
+    std::printf("auto height, mean over %zu scans: P %.2f F1 %.2f\n", got.size(), sumP / n, sumF / n);
+    EXPECT_EQ(estimated, got.size());
+    EXPECT_GE(sumP / n, 97.0);  // measured 97.68
+    EXPECT_GE(sumF / n, 94.5);  // measured 95.19
 }
 
 TEST(RealKitti, ScoresMatchTheIndependentScorer) {

@@ -91,18 +91,43 @@ TEST(Contract, EmptyCloudThrows) {
     EXPECT_THROW(seg.segment(gseg::PointCloudView()), std::invalid_argument);
 }
 
-TEST(Contract, NonFiniteCoordinatesThrowNamingThePoint) {
-    for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
-                            -std::numeric_limits<float>::infinity()}) {
-        std::vector<float> xyz = {1, 0, -1.7, 2, 0, -1.7, 3, bad, -1.7, 4, 0, -1.7};
-        gseg::GroundSegmenter seg;
-        try {
-            seg.segment(gseg::PointCloudView(xyz.data(), 4));
-            ADD_FAILURE() << "no exception for " << bad;
-        } catch (const std::invalid_argument& e) {
-            EXPECT_NE(std::string(e.what()).find("point 2"), std::string::npos) << e.what();
-        }
+TEST(Contract, NonFinitePointsAreNonGroundCountedAndDoNotDisturbTheRest) {
+    // A driver's no-return points (NaN) and infinities spread through a real-looking scan.
+    const auto scan = busyScene();
+    const gseg::Result clean = gseg::GroundSegmenter().segment(view(scan));
+    std::vector<float> xyz = scan.xyz;
+    std::vector<std::size_t> bad;
+    for (std::size_t i = 0; i < scan.size(); i += 97) {
+        const float v = i % 3 == 0 ? std::numeric_limits<float>::quiet_NaN()
+                                   : (i % 3 == 1 ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity());
+        xyz[3 * i + i % 3] = v;
+        bad.push_back(i);
     }
+    const gseg::Result r = gseg::GroundSegmenter().segment(gseg::PointCloudView(xyz.data(), scan.size()));
+    ASSERT_EQ(r.labels.size(), scan.size());
+    EXPECT_EQ(r.numNonFinite, bad.size());
+    for (std::size_t i : bad) EXPECT_EQ(r.labels[i], 0) << i;
+    EXPECT_EQ(r.numGround + r.numNonGround, scan.size());
+    // The other points barely notice (the removed ones are missing from their cells).
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) differ += r.labels[i] != clean.labels[i];
+    EXPECT_LT(differ, scan.size() / 50);
+    // A cloud of nothing but NaN is labelled, not refused.
+    const std::vector<float> nan(3 * 5, std::numeric_limits<float>::quiet_NaN());
+    const gseg::Result allBad = gseg::GroundSegmenter().segment(gseg::PointCloudView(nan.data(), 5));
+    EXPECT_EQ(allBad.numNonFinite, 5u);
+    EXPECT_EQ(allBad.numGround, 0u);
+}
+
+TEST(Contract, AnotherHeightPerCallEqualsASegmenterMadeWithIt) {
+    const auto scan = busyScene();
+    gseg::Params p;
+    p.distToGround = 1.6;
+    const gseg::Result a = gseg::GroundSegmenter(p).segment(view(scan));
+    const gseg::Result b = gseg::GroundSegmenter().segment(view(scan), 1.6);
+    EXPECT_EQ(a.labels, b.labels);
+    EXPECT_THROW(gseg::GroundSegmenter().segment(view(scan), std::numeric_limits<double>::quiet_NaN()),
+                 std::invalid_argument);
 }
 
 TEST(Contract, TinyCloudsAreLabelledNotDropped) {

@@ -169,10 +169,9 @@ TEST(EvalConfig, DefaultEqualsKittiHdl64YamlAndAutoHeightRuns) {
     EXPECT_EQ(def, withoutLastColumn(slurp(dir / "yaml_frames.csv")));
 
     // distToGround: auto is estimated per frame (the KITTI sensor is ~1.73 m up: similar scores).
-    std::ofstream(dir / "auto.yaml") << "distToGround: auto\nmaxGroundHeightDeviation: 0.1\n";
-    out = runEval("'" + root + "' --threads 2 --config '" + (dir / "auto.yaml").string() + "'", status);
+    out = runEval("'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/auto_height.yaml'", status);
     ASSERT_EQ(status, 0) << out;
-    EXPECT_NE(out.find("4 frames evaluated, 3 skipped"), std::string::npos) << out;
+    EXPECT_NE(out.find("4 frames evaluated, 3 skipped, 0 without a height estimate"), std::string::npos) << out;
     EXPECT_NE(out.find("| **mean** | 2 seq. |"), std::string::npos) << out;
 
     // A bad config: one line naming the file, nothing written.

@@ -29,13 +29,16 @@ struct Frame {
 
 struct FrameResult {
     FrameRow row;
-    std::string skipped;  ///< why the frame was not scored ("" if it was)
+    std::string skipped;     ///< why the frame was not scored ("" if it was)
+    std::string heightNote;  ///< distToGround: auto could not estimate: what was used instead
 };
 
 struct Setup {
     Params params;
     bool autoHeight = false;  ///< distToGround: auto, estimated per frame
     std::string predDir;      ///< write each frame's predictions here ("" = not)
+    bool breakdown = false;   ///< count where the errors are
+    std::string pictureDir;   ///< breakdown picture per frame here ("" = none)
 };
 
 std::vector<Frame> findFrames(const fs::path& root, const std::vector<std::string>& only) {
@@ -61,17 +64,25 @@ std::vector<Frame> findFrames(const fs::path& root, const std::vector<std::strin
     return frames;
 }
 
-Result segmentFrame(GroundSegmenter& seg, const PointCloudView& cloud, const Setup& setup) {
-    if (!setup.autoHeight) return seg.segment(cloud, false);
-    const SensorHeightEstimate h = estimateSensorHeight(cloud);
-    if (!h.valid) throw std::runtime_error("distToGround: auto: no ground level found around the sensor");
-    Params p = setup.params;
-    p.distToGround = h.height;
-    return GroundSegmenter(p).segment(cloud, false);
-}
+/// A worker's segmenter: the fixed-height one, or with `distToGround: auto` the estimating one
+/// (frames are independent: each worker's frames get their own estimate, falling back to the
+/// configured height where a frame gives none).
+struct FrameSegmenter {
+    explicit FrameSegmenter(const Setup& setup) : fixed(setup.params), automatic(setup.params), useAuto(setup.autoHeight) {}
+    Result segment(const PointCloudView& cloud, std::string& note) {
+        if (!useAuto) return fixed.segment(cloud, false);
+        automatic.reset();  // frames of a tree are independent: no history (and any thread count agrees)
+        Result r = automatic.segment(cloud, false);
+        if (automatic.lastDecision().source != HeightDecision::Source::Estimated) note = automatic.lastDecision().describe();
+        return r;
+    }
+    GroundSegmenter fixed;
+    AutoHeightSegmenter automatic;
+    bool useAuto;
+};
 
 /// `warmUp`: segment once untimed first (a worker's first frame), so ms is a warm call's time.
-FrameResult evaluate(GroundSegmenter& seg, const Frame& f, const Setup& setup, bool warmUp) {
+FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bool warmUp) {
     FrameResult out;
     out.row.sequence = f.sequence, out.row.name = f.name;
     if (!fs::exists(f.label)) {
@@ -82,11 +93,20 @@ FrameResult evaluate(GroundSegmenter& seg, const Frame& f, const Setup& setup, b
         const std::vector<float> pts = io::readKittiBin(f.scan);
         const PointCloudView cloud(pts.data(), pts.size() / 4, 4 * sizeof(float));
         const std::vector<std::uint32_t> labels = io::readKittiLabels(f.label, cloud.size());
-        if (warmUp) segmentFrame(seg, cloud, setup);
-        const Result r = segmentFrame(seg, cloud, setup);
+        std::string note;
+        if (warmUp) seg.segment(cloud, note);
+        const Result r = seg.segment(cloud, note);
+        out.heightNote = note;
         out.row.points = cloud.size();
         out.row.ms = r.totalMs;
         out.row.score = scoreFrame(cloud, labels, r.labels);
+        if (setup.breakdown) {
+            std::vector<PointOutcome> outcomes;
+            out.row.breakdown = breakdownFrame(cloud, labels, r.labels, BreakdownOptions(), &outcomes);
+            if (!setup.pictureDir.empty())
+                plotOutcomes(setup.pictureDir + "/" + f.sequence + "_" + f.name + ".png", cloud, outcomes,
+                             "sequence " + f.sequence + ", frame " + f.name + ": true / false / missed ground");
+        }
         if (!setup.predDir.empty())
             io::writeFileAtomic(setup.predDir + "/" + f.sequence + "_" + f.name + ".pred", r.labels.data(),
                                 r.labels.size());
@@ -105,7 +125,7 @@ std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const Set
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; ++t)
         pool.emplace_back([&] {
-            GroundSegmenter seg(setup.params);
+            FrameSegmenter seg(setup);
             bool first = true;
             for (std::size_t i; (i = next++) < frames.size();) {
                 results[i] = evaluate(seg, frames[i], setup, first);
@@ -123,16 +143,18 @@ struct Cli {
     std::string root, scan, labels, config, report, predDir;
     std::vector<std::string> sequences;
     int threads = 1;
+    bool breakdown = false;
 };
 
 Setup makeSetup(const Cli& cli) {
-    Setup setup;
-    setup.params.maxGroundHeightDeviation = 0.1;  // = config/kitti_hdl64.yaml (the paper's KITTI setup)
+    Setup setup;  // library defaults = config/kitti_hdl64.yaml
     if (!cli.config.empty()) {
         const auto cfg = mrpt::loadConfig(cli.config);
         setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto;
     }
     setup.predDir = cli.predDir;
+    setup.breakdown = cli.breakdown;
+    if (cli.breakdown && !cli.report.empty()) setup.pictureDir = cli.report + "_breakdown";
     return setup;
 }
 
@@ -146,10 +168,17 @@ int run(const Cli& cli) {
         frames = findFrames(cli.root, cli.sequences);
     }
     if (!cli.predDir.empty()) fs::create_directories(cli.predDir);
+    if (!setup.pictureDir.empty()) fs::create_directories(setup.pictureDir);
     const auto results = evaluateAll(frames, setup, cli.threads);
 
     std::vector<FrameRow> rows;
+    std::size_t fallbacks = 0;
     for (std::size_t i = 0; i < frames.size(); ++i) {
+        if (!results[i].heightNote.empty()) {
+            ++fallbacks;
+            std::fprintf(stderr, "%s/%s: distToGround: auto: %s\n", frames[i].sequence.c_str(), frames[i].name.c_str(),
+                         results[i].heightNote.c_str());
+        }
         if (results[i].skipped.empty()) {
             rows.push_back(results[i].row);
             continue;
@@ -157,11 +186,14 @@ int run(const Cli& cli) {
         std::fprintf(stderr, "skipped %s/%s: %s\n", frames[i].sequence.c_str(), frames[i].name.c_str(),
                      results[i].skipped.c_str());
     }
-    std::printf("%zu frames evaluated, %zu skipped\n", rows.size(), frames.size() - rows.size());
+    std::printf("%zu frames evaluated, %zu skipped", rows.size(), frames.size() - rows.size());
+    if (setup.autoHeight) std::printf(", %zu without a height estimate (fallback used)", fallbacks);
+    std::printf("\n");
     if (rows.empty()) throw std::runtime_error("no frame could be scored (see the skipped frames above)");
     const auto seqs = summarise(rows);
     const std::string table = markdownTable(seqs);
     std::printf("%s\n%s", summaryText(seqs).c_str(), table.c_str());
+    if (cli.breakdown) std::printf("\n%s", breakdownText(seqs).c_str());
     if (!cli.report.empty()) {
         const fs::path dir = fs::path(cli.report).parent_path();
         if (!dir.empty()) fs::create_directories(dir);
@@ -170,6 +202,11 @@ int run(const Cli& cli) {
         writeText(cli.report + "_table.md", table);
         plotRanges(cli.report + "_range.png", seqs);
         std::printf("\nwrote %s_frames.csv, _sequences.csv, _table.md, _range.png\n", cli.report.c_str());
+        if (cli.breakdown) {
+            writeText(cli.report + "_breakdown.csv", breakdownCsv(rows, seqs));
+            std::printf("wrote %s_breakdown.csv and a picture per frame in %s/\n", cli.report.c_str(),
+                        setup.pictureDir.c_str());
+        }
     }
     return 0;
 }
@@ -190,8 +227,7 @@ int runEval(int argc, char** argv) {
         TCLAP::CmdLine cmd(
             "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
             "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped. Without "
-            "--config: the library defaults with maxGroundHeightDeviation 0.1, which is exactly "
-            "config/kitti_hdl64.yaml (the paper's KITTI setup).",
+            "--config: the library defaults, which are exactly config/kitti_hdl64.yaml.",
             ' ', "0.1");
         TCLAP::UnlabeledValueArg<std::string> root("root", "SemanticKITTI root (sequences/NN/velodyne, labels)", false,
                                                    "", "ROOT", cmd);
@@ -207,9 +243,13 @@ int runEval(int argc, char** argv) {
         TCLAP::ValueArg<std::string> labels("", "labels", "label file of --scan", false, "", "X.label", cmd);
         TCLAP::ValueArg<std::string> preds("", "labels-out-dir", "write each frame's predictions (1 byte per point, "
                                            "1 ground) as DIR/SEQ_FRAME.pred", false, "", "DIR", cmd);
+        TCLAP::SwitchArg breakdown("", "breakdown", "failure analysis: false ground by class, height above the local "
+                                   "labelled ground and range, missed ground by class and range, per frame and "
+                                   "sequence; with --report also PREFIX_breakdown.csv and a top-down PNG per frame "
+                                   "(true / false / missed ground) in PREFIX_breakdown/", cmd, false);
         if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
         cli = {root.getValue(), scan.getValue(), labels.getValue(), cfg.getValue(), report.getValue(),
-               preds.getValue(), splitCommas(seqs.getValue()), threads.getValue()};
+               preds.getValue(), splitCommas(seqs.getValue()), threads.getValue(), breakdown.getValue()};
     } catch (const TCLAP::ArgException& e) {
         std::fprintf(stderr, "gseg eval: %s (%s)\n", e.error().c_str(), e.argId().c_str());
         return 2;

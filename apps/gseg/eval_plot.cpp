@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <mutex>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -14,6 +15,16 @@ namespace gseg::app {
 namespace {
 
 using ::mrpt::img::TColor;
+
+void savePng(const ::mrpt::img::CImage& img, const std::string& path) {
+    const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + ".png";
+    if (!img.saveToFile(tmp)) {
+        std::error_code ignored;
+        std::filesystem::remove(tmp, ignored);
+        throw std::runtime_error(path + ": cannot write the PNG");
+    }
+    std::filesystem::rename(tmp, path);
+}
 
 constexpr int kW = 900, kH = 560, kLeft = 70, kRight = 210, kTop = 50, kBottom = 60;
 const TColor kBlack(0, 0, 0), kGrey(210, 210, 210), kWhite(255, 255, 255);
@@ -93,13 +104,52 @@ void plotRanges(const std::string& path, const std::vector<SequenceSummary>& seq
     drawAxes(img, lo, yOf);
     for (std::size_t i = 0; i < seqs.size(); ++i) drawSequence(img, seqs[i], kPalette[i % 8], yOf);
     drawLegend(img, seqs);
-    const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + ".png";
-    if (!img.saveToFile(tmp)) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        throw std::runtime_error(path + ": cannot write the PNG");
+    savePng(img, path);
+}
+
+void plotOutcomes(const std::string& path, const PointCloudView& cloud, const std::vector<PointOutcome>& outcomes,
+                  const std::string& title) {
+    // MRPT 2.5.8's CImage text drawing is not thread-safe (eval's workers crash the heap without this).
+    static std::mutex mutex;
+    const std::lock_guard<std::mutex> lock(mutex);
+    constexpr int kSize = 900, kRange = 50;  // px, m (half-width shown)
+    constexpr double kScale = 0.5 * kSize / kRange;
+    constexpr int c = kSize / 2;
+    const TColor kBack(24, 24, 30), kText(235, 235, 235);
+    const TColor colours[4] = {TColor(95, 95, 105), TColor(40, 170, 70), TColor(255, 40, 40), TColor(60, 140, 255)};
+    const char* names[4] = {"non-ground (correct)", "true ground", "false ground", "missed ground"};
+    ::mrpt::img::CImage img(kSize, kSize, ::mrpt::img::CH_RGB);
+    img.filledRectangle(0, 0, kSize - 1, kSize - 1, kBack);
+    std::size_t counts[4] = {0, 0, 0, 0};
+    // Errors last, so they are drawn over the correct points.
+    for (const PointOutcome kind : {PointOutcome::TrueNonGround, PointOutcome::TrueGround, PointOutcome::MissedGround,
+                                    PointOutcome::FalseGround}) {
+        const int k = int(kind), r = kind == PointOutcome::TrueNonGround || kind == PointOutcome::TrueGround ? 0 : 1;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (outcomes[i] != kind) continue;
+            ++counts[k];
+            const int u = c - int(std::lround(cloud.y(i) * kScale)), v = c - int(std::lround(cloud.x(i) * kScale));
+            if (u < r || v < r || u >= kSize - 1 - r || v >= kSize - 1 - r) continue;
+            img.filledRectangle(u - r, v - r, u + r, v + r, colours[k]);
+        }
     }
-    std::filesystem::rename(tmp, path);
+    // Sensor, forward arrow (x), scale bar.
+    img.line(c, c + 8, c, c - 40, kText, 2);
+    img.line(c, c - 40, c - 6, c - 30, kText, 2);
+    img.line(c, c - 40, c + 6, c - 30, kText, 2);
+    img.textOut(c + 8, c - 44, "x (forward)", kText);
+    const int bar = int(std::lround(10 * kScale));
+    img.filledRectangle(kSize - 30 - bar, kSize - 30, kSize - 30, kSize - 26, kText);
+    img.textOut(kSize - 30 - bar, kSize - 50, "10 m", kText);
+    img.textOut(10, 8, title, kText);
+    img.textOut(10, 26, "top view, sensor at the centre, x forward up, y left; 50 m each side", kText);
+    int y = kSize - 100;
+    for (int k : {1, 2, 3, 0}) {
+        img.filledRectangle(10, y + 3, 26, y + 13, colours[k]);
+        img.textOut(34, y, std::string(names[k]) + ": " + std::to_string(counts[k]), kText);
+        y += 20;
+    }
+    savePng(img, path);
 }
 
 }  // namespace gseg::app

@@ -4,6 +4,9 @@
 
 #include "eval_report.hpp"
 
+#include <gseg/breakdown.hpp>
+#include <gseg/point_cloud.hpp>
+
 #include <string>
 #include <vector>
 
@@ -13,5 +16,11 @@ namespace gseg::app {
 /// sequence against the range limit 10..100 m and writes the PNG atomically (temp + rename).
 /// Throws std::runtime_error if the file cannot be written.
 void plotRanges(const std::string& path, const std::vector<SequenceSummary>& seqs);
+
+/// Top-down picture of one scored frame (sensor at the centre, x forward up, y left to the left, as
+/// `gseg segment` draws): true ground green, false ground red, missed ground blue, other points
+/// grey; title, legend with counts, a scale bar and the forward arrow. Written atomically.
+void plotOutcomes(const std::string& path, const PointCloudView& cloud, const std::vector<PointOutcome>& outcomes,
+                  const std::string& title);
 
 }  // namespace gseg::app

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <algorithm>
 #include <map>
 
 namespace gseg::app {
@@ -39,6 +40,7 @@ SequenceSummary summariseOne(const std::string& name, const std::vector<const Fr
         p.push_back(c.precision()), r.push_back(c.recall()), f.push_back(c.f1());
         pn.push_back(n.precision()), rn.push_back(n.recall()), fn.push_back(n.f1());
         ms += row->ms;
+        s.breakdown += row->breakdown;
     }
     s.p = meanStd(p), s.r = meanStd(r), s.f1 = meanStd(f);
     s.pNoVeg = meanStd(pn), s.rNoVeg = meanStd(rn), s.f1NoVeg = meanStd(fn);
@@ -127,6 +129,76 @@ std::string summaryText(const std::vector<SequenceSummary>& seqs) {
                     num(s.rNoVeg.mean).c_str(), pm(s.rangePStats).c_str(), pm(s.rangeRStats).c_str(),
                     pm(s.rangeF1Stats).c_str(), s.ms);
     return o;
+}
+
+namespace {
+
+/// Visits every (kind, bin, points) of a breakdown, in a fixed order.
+template <typename Fn>
+void forEachBin(const Breakdown& b, Fn&& fn) {
+    for (const auto& [id, n] : b.falseByClass) fn("false_by_class", semanticClassName(id), n);
+    for (int k = 0; k < HeightBins::kCount; ++k) fn("false_by_height", HeightBins::name(k), b.falseByHeight[std::size_t(k)]);
+    for (int k = 0; k < RangeBins::kCount; ++k) fn("false_by_range", RangeBins::name(k), b.falseByRange[std::size_t(k)]);
+    for (const auto& [id, n] : b.missedByClass) fn("missed_by_class", semanticClassName(id), n);
+    for (int k = 0; k < RangeBins::kCount; ++k) fn("missed_by_range", RangeBins::name(k), b.missedByRange[std::size_t(k)]);
+}
+
+std::string breakdownRows(const std::string& seq, const std::string& frame, const Breakdown& b) {
+    std::string o;
+    forEachBin(b, [&](const char* kind, const std::string& bin, std::uint64_t n) {
+        o += format("%s,%s,%s,%s,%llu\n", seq.c_str(), frame.c_str(), kind, bin.c_str(), ull(n));
+    });
+    return o;
+}
+
+std::string shareTable(const char* title, std::uint64_t total,
+                       const std::vector<std::pair<std::string, std::uint64_t>>& rows) {
+    std::string o = format("  %s (%llu points):\n", title, ull(total));
+    for (const auto& [name, n] : rows)
+        if (n > 0)
+            o += format("    %-22s %9llu  %5.1f %%\n", name.c_str(), ull(n), total ? 100.0 * double(n) / double(total) : 0.0);
+    return o;
+}
+
+std::string describe(const std::string& title, const Breakdown& b) {
+    std::vector<std::pair<std::string, std::uint64_t>> fc, fh, fr, mc, mr;
+    for (const auto& [id, n] : b.falseByClass) fc.emplace_back(semanticClassName(id), n);
+    for (const auto& [id, n] : b.missedByClass) mc.emplace_back(semanticClassName(id), n);
+    auto byCount = [](const auto& a, const auto& c) { return a.second > c.second; };
+    std::stable_sort(fc.begin(), fc.end(), byCount);
+    std::stable_sort(mc.begin(), mc.end(), byCount);
+    for (int k = 0; k < HeightBins::kCount; ++k) fh.emplace_back(HeightBins::name(k), b.falseByHeight[std::size_t(k)]);
+    for (int k = 0; k < RangeBins::kCount; ++k) {
+        fr.emplace_back(RangeBins::name(k), b.falseByRange[std::size_t(k)]);
+        mr.emplace_back(RangeBins::name(k), b.missedByRange[std::size_t(k)]);
+    }
+    return title + "\n" + shareTable("false ground by class", b.falseGround, fc) +
+           shareTable("false ground by height above the local labelled ground", b.falseGround, fh) +
+           shareTable("false ground by range", b.falseGround, fr) +
+           shareTable("missed ground by class", b.missedGround, mc) +
+           shareTable("missed ground by range", b.missedGround, mr);
+}
+
+Breakdown total(const std::vector<SequenceSummary>& seqs) {
+    Breakdown all;
+    for (const SequenceSummary& s : seqs) all += s.breakdown;
+    return all;
+}
+
+}  // namespace
+
+std::string breakdownCsv(const std::vector<FrameRow>& frames, const std::vector<SequenceSummary>& seqs) {
+    std::string o = "sequence,frame,kind,bin,points\n";
+    for (const FrameRow& f : frames) o += breakdownRows(f.sequence, f.name, f.breakdown);
+    for (const SequenceSummary& s : seqs) o += breakdownRows(s.sequence, "all", s.breakdown);
+    return o + breakdownRows("all", "all", total(seqs));
+}
+
+std::string breakdownText(const std::vector<SequenceSummary>& seqs) {
+    std::string o;
+    if (seqs.size() > 1)
+        for (const SequenceSummary& s : seqs) o += describe("failure breakdown, sequence " + s.sequence + ":", s.breakdown);
+    return o + describe("failure breakdown, all frames:", total(seqs));
 }
 
 }  // namespace gseg::app

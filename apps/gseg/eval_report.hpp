@@ -3,6 +3,7 @@
 /// `gseg eval`: aggregation of scored frames per sequence and the report texts (CSV, Markdown,
 /// printed summary). Core-only (no MRPT), so the tests compile it with hand-made scores.
 
+#include <gseg/breakdown.hpp>
 #include <gseg/metrics.hpp>
 
 #include <array>
@@ -19,6 +20,7 @@ struct FrameRow {
     std::size_t points = 0;
     FrameScore score;      ///< from gseg::scoreFrame (GSB protocol)
     double ms = 0;         ///< [ms] time of the segment() call
+    Breakdown breakdown;   ///< where the errors are (filled with --breakdown)
 };
 
 /// One sequence. Precision / recall / F1 are in %, averaged over frames as GSB does (per-frame
@@ -33,6 +35,7 @@ struct SequenceSummary {
     std::array<double, 10> rangeP{}, rangeR{}, rangeF1{};  ///< at each range limit: mean over frames (F1 of those two)
     MeanStd rangePStats, rangeRStats, rangeF1Stats;        ///< over the ten limits: the paper's Table II figures
     double ms = 0;                       ///< [ms] mean time per frame
+    Breakdown breakdown;                 ///< summed over the frames
 };
 
 /// Groups `frames` by sequence (sorted by name) and aggregates each group.
@@ -51,5 +54,14 @@ std::string markdownTable(const std::vector<SequenceSummary>& seqs);
 
 /// One printed line per sequence.
 std::string summaryText(const std::vector<SequenceSummary>& seqs);
+
+/// Failure breakdown CSV, long format: sequence,frame,kind,bin,points. kind is false_by_class,
+/// false_by_height (above the local labelled ground), false_by_range, missed_by_class or
+/// missed_by_range; a sequence's sum has frame "all", the run's sum sequence "all".
+std::string breakdownCsv(const std::vector<FrameRow>& frames, const std::vector<SequenceSummary>& seqs);
+
+/// The run's breakdown as a printed table (points and share of the false / missed ground), per
+/// sequence and for all frames.
+std::string breakdownText(const std::vector<SequenceSummary>& seqs);
 
 }  // namespace gseg::app

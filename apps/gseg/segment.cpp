@@ -34,17 +34,14 @@ int run(const Cli& cli) {
     Params params = cfg.params;
     const mrpt::Scan scan = mrpt::loadScan(cli.scan, cli.index);
     const PointCloudView cloud(scan.xyzi.data(), scan.size(), 4 * sizeof(float));
+    Result r;
     if (cfg.distToGroundAuto) {
-        const SensorHeightEstimate h = estimateSensorHeight(cloud);
-        if (!h.valid)
-            throw std::runtime_error("distToGround: auto: no ground level found around the sensor (" +
-                                     std::to_string(h.columns) + " usable columns); give the height in metres");
-        params.distToGround = h.height;
-        std::printf("distToGround auto: %.3f m (lowest points of %d columns, spread %.2f m)\n", h.height, h.columns,
-                    h.spread);
+        AutoHeightSegmenter segmenter(params);  // never refuses: falls back to distToGround's default
+        r = segmenter.segment(cloud, false);
+        std::printf("distToGround auto: %s\n", segmenter.lastDecision().describe().c_str());
+    } else {
+        r = GroundSegmenter(params).segment(cloud, false);
     }
-    GroundSegmenter segmenter(params);
-    const Result r = segmenter.segment(cloud, false);
 
     std::printf("%s\n", scan.description.c_str());
     std::printf("points %zu, ground %zu (%.1f %%), non-ground %zu; segmentation %.2f ms\n", cloud.size(), r.numGround,
@@ -73,7 +70,7 @@ int runSegment(int argc, char** argv) {
         TCLAP::UnlabeledValueArg<std::string> scan("scan", "KITTI .bin (float32 x,y,z,intensity), PLY, or MRPT rawlog",
                                                    true, "", "SCAN", cmd);
         TCLAP::ValueArg<std::string> config("c", "config", "YAML or INI parameter file (default: library defaults, "
-                                            "the paper's KITTI HDL-64 setup)", false, "", "FILE", cmd);
+                                            "identical to config/kitti_hdl64.yaml)", false, "", "FILE", cmd);
         TCLAP::ValueArg<std::string> labels("", "labels-out", "write one byte per input point, in input order: "
                                             "1 ground, 0 non-ground", false, "", "FILE", cmd);
         TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud coloured by label (green ground, red "

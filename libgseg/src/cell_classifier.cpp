@@ -37,14 +37,29 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     const double ratio = sum > 1e-12 ? l(2) / sum : 0.0;  // identical points: treated as clutter
 
     const double sinSlope = std::sin(params.slopeThresholdDegrees * M_PI / 180.0);
+    const double cosSlope = std::cos(params.slopeThresholdDegrees * M_PI / 180.0);
     if (ratio > params.lineRatioThreshold) {
         out.cellClass = CellClass::Line;
         const double verticalComponent = std::abs(eig.eigenvectors().col(2).z());  // sin(line elevation)
-        out.groundCandidate = verticalComponent <= sinSlope;
+        // A "line" with a clear second extent is a strip; if that strip stands upright (its normal
+        // steeper than the limit) it is the foot of a wall or a fence seen by a few rings.
+        const bool strip = l(1) >= params.stripMinSpread * params.stripMinSpread;
+        const bool uprightStrip = params.checkPlaneNormal && strip && std::abs(eig.eigenvectors().col(0).z()) < cosSlope;
+        out.groundCandidate = verticalComponent <= sinSlope && !uprightStrip;
         out.rejection = out.groundCandidate ? CellOutcome::Ground : CellOutcome::Steep;
+        const Eigen::Vector3d axis = eig.eigenvectors().col(2);
+        const Eigen::Vector3d across = Eigen::Vector3d::UnitZ().cross(axis);
+        if (across.squaredNorm() > 1e-12) {
+            Eigen::Vector3d n = axis.cross(across).normalized();
+            out.normal = (n.z() < 0 ? -n : n).cast<float>();
+        }
     } else if (ratio > params.planeRatioThreshold) {
         out.cellClass = CellClass::Plane;
-        out.groundCandidate = true;  // the plane fit decides the slope
+        // A normal steeper than the limit is a wall, a car side or a hedge face; in a 0.2 m slab the
+        // plane fit could not tell (a horizontal plane through the slab holds every point of it).
+        const bool steep = std::abs(eig.eigenvectors().col(0).z()) < cosSlope;
+        out.steepNormal = params.checkPlaneNormal && steep;
+        out.groundCandidate = true;
         out.rejection = CellOutcome::Ground;
     } else {
         out.cellClass = CellClass::NonPlanar;

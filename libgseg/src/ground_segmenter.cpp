@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <tuple>
 #include <stdexcept>
 
 namespace gseg {
@@ -29,16 +30,9 @@ void checkCloud(const PointCloudView& cloud) {
         throw std::invalid_argument("gseg: point stride must be at least 12 bytes (x, y, z floats)");
     if (cloud.size() > std::numeric_limits<std::uint32_t>::max())
         throw std::invalid_argument("gseg: more than 2^32-1 points in one cloud");
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const float* p = cloud.point(i);
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-            std::ostringstream msg;
-            msg << "gseg: point " << i << " has a non-finite coordinate (" << p[0] << ", " << p[1] << ", " << p[2]
-                << ")";
-            throw std::invalid_argument(msg.str());
-        }
-    }
 }
+
+bool finitePoint(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
 std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
     std::uint64_t s = base ^ (std::uint64_t(std::uint32_t(c.ix)) * 0x9E3779B97F4A7C15ull);
@@ -67,7 +61,11 @@ struct CellState {
     CellOutcome outcome = CellOutcome::TooFewPoints;
     std::uint32_t inliers = 0;
     bool ambiguous = false;
+    bool recovered = false;
+    bool steepNormal = false;  // planar cell whose PCA normal is steeper than the slope limit
+    std::int32_t candidate = -1;  // index among the expansion's candidates (-1: not a candidate)  // Phase I: not ground, but `inliers` of its points lie on a neighbour's ground plane
     Eigen::Vector3f ground = Eigen::Vector3f::Zero();  // centroid of the ground candidates
+    Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();  // ground-plane normal (z > 0): the height gate's direction
 };
 
 }  // namespace
@@ -85,6 +83,9 @@ struct detail::Workspace {
     // cells too small to classify excepted). Phase II sees only Phase I's ground, so this is how it
     // knows what stands below its cells.
     std::vector<std::pair<std::uint64_t, float>> lowestRejected;
+    std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
+    std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
+    std::vector<std::pair<std::uint64_t, float>> columnGround;  // flagBelowGround: lowest ground per column
 };
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
@@ -139,11 +140,13 @@ private:
             CellState& s = ws.cells[c];
             s.cellClass = cls.cellClass;
             s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
+            s.steepNormal = cls.steepNormal;
             if (cls.groundCandidate && cls.cellClass != CellClass::Plane) {
                 // Line and small cells have no plane: all their points are ground candidates.
                 std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 1);
                 s.inliers = g.size();
                 s.ground = cls.mean;
+                s.normal = cls.normal;
             }
         }
     }
@@ -155,6 +158,10 @@ private:
             CellState& s = ws.cells[c];
             if (s.cellClass != CellClass::Plane) continue;
             const GridCell& g = ws.grid.cells()[c];
+            if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
+                s.outcome = CellOutcome::Steep;
+                continue;
+            }
             const PlaneFitResult fit = fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, number_),
                                                 ws.mask, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
             if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
@@ -168,12 +175,14 @@ private:
             }
             s.inliers = std::uint32_t(fit.numInliers);
             s.ground = sum / float(fit.numInliers);
+            s.normal = fit.normal;
         }
     }
 
     void markAmbiguous(detail::Workspace& ws) const {
         ws.candidateCell.clear();
         ws.centroids.clear();
+        ws.normals.clear();
         for (std::size_t c = 0; c < ws.cells.size(); ++c) {
             CellState& s = ws.cells[c];
             if (s.outcome != CellOutcome::NotReached) continue;
@@ -185,8 +194,10 @@ private:
                 const Sparsity out = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
                 s.ambiguous = in == out;
             }
+            s.candidate = std::int32_t(ws.candidateCell.size());
             ws.candidateCell.push_back(std::uint32_t(c));
             ws.centroids.push_back(s.ground);
+            ws.normals.push_back(s.normal);
         }
     }
 
@@ -214,6 +225,8 @@ private:
         es.seedRadius = p_.robotRadius + p_.centroidSearchRadius;
         es.radius = p_.centroidSearchRadius;
         es.heightGate = gate_;
+        es.normals = &ws.normals;
+        es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
             const std::size_t c = ws.candidateCell[cand];
@@ -233,7 +246,7 @@ private:
             s.outcome = CellOutcome::Ground;
             return true;
         };
-        expandRegion(ws.centroids, es, accept);
+        expandRegion(ws.centroids, es, accept, &ws.parents);
     }
 
     void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, PhaseReport& r,
@@ -247,9 +260,13 @@ private:
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
+            if (number_ == 1 && s.outcome != CellOutcome::Ground && p_.recoverNearGround) recover(ws, c);
             if (number_ == 1 && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
-            if (s.outcome == CellOutcome::Ground) {
-                ++r.groundCells;
+            if (s.outcome == CellOutcome::Ground || s.recovered) {
+                if (s.outcome == CellOutcome::Ground)
+                    ++r.groundCells;
+                else
+                    r.recoveredPoints += s.inliers;
                 for (std::uint32_t k = g.begin; k < g.end; ++k)
                     if (ws.inlier[k]) ground.push_back(order[k]);
             } else if (s.outcome == CellOutcome::TooFewPoints) {
@@ -258,12 +275,64 @@ private:
                 r.unreachedCellPoints += g.size();
             }
             if (keepCells)
-                r.cells.push_back({g.ix, g.iy, g.iz, g.size(), s.inliers, s.cellClass, s.outcome, s.ground.z()});
+                r.cells.push_back({g.ix, g.iy, g.iz, g.size(), s.inliers, s.cellClass, s.outcome, s.ground.z(),
+                                   s.candidate < 0 ? -2 : reachedFromCell(ws, std::size_t(s.candidate))});
         }
         r.groundPoints = ground.size();
     }
 
-    // Phase I: lowest non-ground point of cell c's column (cells arrive column by column).
+    // Phase I, a cell that is not ground: its points that lie on the ground plane of a ground cell
+    // beside it or one level below (within recoveryThreshold) go on to Phase II after all, as in
+    // the authors' implementation: the road at the foot of a wall, the grass between bushes, the
+    // sidewalk in a cell that a pedestrian made steep. Phase II judges them like any other point.
+    void recover(detail::Workspace& ws, std::size_t c) const {
+        const auto& cells = ws.grid.cells();
+        const GridCell& g = cells[c];
+        std::uint32_t nb[17];
+        int count = 0;
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 0; ++dz) {
+                    if (!dx && !dy && !dz) continue;
+                    const GridCell key{g.ix + dx, g.iy + dy, g.iz + dz, 0, 0};
+                    const auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
+                        return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
+                    });
+                    if (it != cells.end() && it->ix == key.ix && it->iy == key.iy && it->iz == key.iz &&
+                        ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
+                        nb[count++] = std::uint32_t(it - cells.begin());
+                }
+        CellState& s = ws.cells[c];
+        std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 0);
+        s.inliers = 0;
+        if (count == 0) return;
+        const float thr = float(p_.recoveryThreshold);
+        for (std::uint32_t k = g.begin; k < g.end; ++k) {
+            const Eigen::Vector3f& q = ws.pts[k];
+            // The plane of the neighbour whose ground centroid is horizontally nearest.
+            const CellState* best = nullptr;
+            float bestD = std::numeric_limits<float>::infinity();
+            for (int j = 0; j < count; ++j) {
+                const CellState& n = ws.cells[nb[j]];
+                const float d = (n.ground - q).head<2>().squaredNorm();
+                if (d < bestD) bestD = d, best = &n;
+            }
+            if (std::abs(best->normal.dot(q - best->ground)) <= thr) {
+                ws.inlier[k] = 1, ++s.inliers;
+                s.normal = best->normal, s.ground = q;
+            }
+        }
+        s.recovered = s.inliers > 0;
+    }
+
+    std::int32_t reachedFromCell(const detail::Workspace& ws, std::size_t candidate) const {
+        const std::int32_t parent = ws.parents[candidate];
+        return parent < 0 ? parent : std::int32_t(ws.candidateCell[std::size_t(parent)]);
+    }
+
+    // Phase I: lowest point of cell c's column that Phase I did not accept (cells arrive column by
+    // column). Recovered points count too: they sit in a cell Phase I rejected, so what Phase II
+    // finds above them is not ground either.
     void recordRejected(detail::Workspace& ws, std::size_t c) const {
         const GridCell& g = ws.grid.cells()[c];
         const bool ground = ws.cells[c].outcome == CellOutcome::Ground;
@@ -286,29 +355,85 @@ private:
 }  // namespace
 
 Result GroundSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics) {
+    return run(cloud, params_, keepCellDiagnostics);
+}
+
+Result GroundSegmenter::segment(const PointCloudView& cloud, double distToGround, bool keepCellDiagnostics) {
+    if (!std::isfinite(distToGround))
+        throw std::invalid_argument("gseg: distToGround must be finite, not " + std::to_string(distToGround));
+    Params p = params_;
+    p.distToGround = distToGround;
+    return run(cloud, p, keepCellDiagnostics);
+}
+
+Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, bool keepCellDiagnostics) {
     const auto start = Clock::now();
     checkCloud(cloud);
     detail::Workspace& ws = *ws_;
     Result r;
 
-    ws.input.resize(cloud.size());
-    for (std::uint32_t i = 0; i < ws.input.size(); ++i) ws.input[i] = i;
+    // Points with a NaN or infinite coordinate (no return) take no part; they are non-ground.
+    ws.input.clear();
+    for (std::uint32_t i = 0; i < cloud.size(); ++i)
+        if (finitePoint(cloud.point(i))) ws.input.push_back(i);
+    r.numNonFinite = cloud.size() - ws.input.size();
     ws.phase1Ground.clear();
     ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
-    Phase(params_, 1, params_.cellSizeZPhase1, std::numeric_limits<double>::infinity())
+    Phase(params, 1, params.cellSizeZPhase1, std::numeric_limits<double>::infinity())
         .run(cloud, ws.input, ws.phase1Ground, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
-    Phase(params_, 2, params_.cellSizeZPhase2, params_.heightGate)
+    Phase(params, 2, params.cellSizeZPhase2, params.heightGate)
         .run(cloud, ws.phase1Ground, ws.phase2Ground, ws, r.phase2, keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
     for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
     r.numGround = ws.phase2Ground.size();
     r.numNonGround = cloud.size() - r.numGround;
+    flagBelowGround(cloud, params, ws, r);
     r.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return r;
+}
+
+// Non-ground points more than belowGroundMargin below the ground of their column (or, without
+// ground there, of the nearest ring of columns around it that has some): mirror reflections and
+// multipath. Columns without ground within two rings flag nothing.
+void GroundSegmenter::flagBelowGround(const PointCloudView& cloud, const Params& params, detail::Workspace& ws,
+                                      Result& r) const {
+    if (!(params.belowGroundMargin > 0) || ws.phase2Ground.empty()) return;
+    auto key = [&](float x, float y) {
+        return (std::uint64_t(std::uint32_t(cellCoord(x, params.cellSizeX))) << 32) |
+               std::uint32_t(cellCoord(y, params.cellSizeY));
+    };
+    auto& lowest = ws.columnGround;  // (column, lowest ground z), sorted
+    lowest.clear();
+    for (std::uint32_t i : ws.phase2Ground) lowest.emplace_back(key(cloud.x(i), cloud.y(i)), cloud.z(i));
+    std::sort(lowest.begin(), lowest.end());
+    lowest.erase(std::unique(lowest.begin(), lowest.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+                 lowest.end());
+    auto groundAt = [&](std::int32_t ix, std::int32_t iy, float& z) {
+        const std::uint64_t k = (std::uint64_t(std::uint32_t(ix)) << 32) | std::uint32_t(iy);
+        const auto it = std::lower_bound(lowest.begin(), lowest.end(), std::make_pair(k, -std::numeric_limits<float>::infinity()));
+        if (it == lowest.end() || it->first != k) return false;
+        z = it->second;
+        return true;
+    };
+    for (std::uint32_t i : ws.input) {
+        if (r.labels[i]) continue;
+        const std::int32_t ix = cellCoord(cloud.x(i), params.cellSizeX), iy = cellCoord(cloud.y(i), params.cellSizeY);
+        float ground = std::numeric_limits<float>::infinity();
+        for (int ring = 0; ring <= 2 && ground == std::numeric_limits<float>::infinity(); ++ring)
+            for (int dx = -ring; dx <= ring; ++dx)
+                for (int dy = -ring; dy <= ring; ++dy) {
+                    float z;
+                    if (std::max(std::abs(dx), std::abs(dy)) == ring && groundAt(ix + dx, iy + dy, z))
+                        ground = std::min(ground, z);
+                }
+        if (ground != std::numeric_limits<float>::infinity() &&
+            double(cloud.z(i)) < double(ground) - params.belowGroundMargin)
+            r.belowGround.push_back(i);
+    }
 }
 
 const char* toString(CellClass c) {

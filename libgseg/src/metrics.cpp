@@ -9,7 +9,6 @@ namespace gseg {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 double ratio(std::uint64_t a, std::uint64_t b) { return b == 0 ? kNaN : 100.0 * double(a) / double(b); }
-bool isOutlierClass(std::uint32_t id) { return id == 0 || id == 1; }
 constexpr std::uint32_t kVegetation = 70;
 }  // namespace
 
@@ -28,15 +27,30 @@ bool isGroundClass(std::uint32_t id) {
     return id == 40 || id == 44 || id == 48 || id == 49 || id == 60 || id == 72;
 }
 
-FrameScore scoreFrame(const PointCloudView& cloud, const std::vector<std::uint32_t>& labels,
-                      const std::vector<std::uint8_t>& pred, const ProtocolOptions& opt) {
-    const std::size_t n = cloud.size();
-    if (labels.size() != n || pred.size() != n) {
+bool isGroundTruth(std::uint32_t id, float z, const ProtocolOptions& opt) {
+    return id == kVegetation ? z < opt.vegetationZ : isGroundClass(id);
+}
+
+void checkScoringInputs(std::size_t points, const std::vector<std::uint32_t>& labels,
+                        const std::vector<std::uint8_t>& pred) {
+    if (labels.size() != points || pred.size() != points) {
         std::ostringstream msg;
-        msg << "scoreFrame: size mismatch: " << n << " points, " << labels.size() << " labels, " << pred.size()
+        msg << "scoring: size mismatch: " << points << " points, " << labels.size() << " labels, " << pred.size()
             << " predictions";
         throw std::invalid_argument(msg.str());
     }
+    for (std::size_t i = 0; i < points; ++i)
+        if (pred[i] > 1) {
+            std::ostringstream msg;
+            msg << "scoring: prediction " << i << " is " << int(pred[i]) << " (must be 0 or 1)";
+            throw std::invalid_argument(msg.str());
+        }
+}
+
+FrameScore scoreFrame(const PointCloudView& cloud, const std::vector<std::uint32_t>& labels,
+                      const std::vector<std::uint8_t>& pred, const ProtocolOptions& opt) {
+    checkScoringInputs(cloud.size(), labels, pred);
+    const std::size_t n = cloud.size();
     // Counters per range bin k (rangeLimits[k-1] <= r < rangeLimits[k]); bin 10 = beyond the last limit.
     struct Bin {
         std::uint64_t predicted = 0, truth = 0, hit = 0, outlierHit = 0;
@@ -44,15 +58,10 @@ FrameScore scoreFrame(const PointCloudView& cloud, const std::vector<std::uint32
     std::array<Bin, 11> bins{};
     std::uint64_t truthNoVeg = 0, hitNoVeg = 0, dontCareHit = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        if (pred[i] > 1) {
-            std::ostringstream msg;
-            msg << "scoreFrame: prediction " << i << " is " << int(pred[i]) << " (must be 0 or 1)";
-            throw std::invalid_argument(msg.str());
-        }
         const std::uint32_t id = labels[i] & 0xFFFFu;
         const bool p = pred[i] == 1;
         const bool veg = id == kVegetation;
-        const bool truth = veg ? cloud.z(i) < opt.vegetationZ : isGroundClass(id);
+        const bool truth = isGroundTruth(id, cloud.z(i), opt);
         const bool outlier = isOutlierClass(id);
         const double r = std::hypot(double(cloud.x(i)), double(cloud.y(i)));
         std::size_t k = 0;

@@ -11,7 +11,7 @@
 namespace gseg {
 namespace {
 
-using Field = std::variant<double Params::*, int Params::*, std::uint64_t Params::*>;
+using Field = std::variant<double Params::*, int Params::*, std::uint64_t Params::*, bool Params::*>;
 struct Entry {
     const char* name;
     Field field;
@@ -32,16 +32,22 @@ const std::vector<Entry>& table() {
         {"lineRatioThreshold", &Params::lineRatioThreshold},
         {"planeRatioThreshold", &Params::planeRatioThreshold},
         {"slopeThresholdDegrees", &Params::slopeThresholdDegrees},
+        {"checkPlaneNormal", &Params::checkPlaneNormal},
+        {"stripMinSpread", &Params::stripMinSpread},
         {"groundInlierThreshold", &Params::groundInlierThreshold},
         {"minGroundInlierRatio", &Params::minGroundInlierRatio},
         {"ransacMaxIterations", &Params::ransacMaxIterations},
         {"ransacConfidence", &Params::ransacConfidence},
         {"ransacSeed", &Params::ransacSeed},
+        {"seedHeightTolerance", &Params::seedHeightTolerance},
         {"centroidSearchRadius", &Params::centroidSearchRadius},
         {"heightGate", &Params::heightGate},
+        {"recoverNearGround", &Params::recoverNearGround},
+        {"recoveryThreshold", &Params::recoveryThreshold},
         {"sparsityLow", &Params::sparsityLow},
         {"sparsityMedium", &Params::sparsityMedium},
         {"maxGroundHeightDeviation", &Params::maxGroundHeightDeviation},
+        {"belowGroundMargin", &Params::belowGroundMargin},
     };
     return t;
 }
@@ -69,6 +75,16 @@ T parse(const std::string& key, const std::string& text) {
         throw std::invalid_argument("parameter '" + key + "': cannot read '" + text + "' as a " +
                                     (std::is_floating_point_v<T> ? "number" : "whole number"));
     return v;
+}
+
+template <>
+bool parse<bool>(const std::string& key, const std::string& text) {
+    const std::size_t b = text.find_first_not_of(" \t");
+    const std::size_t e = text.find_last_not_of(" \t");
+    const std::string t = b == std::string::npos ? "" : text.substr(b, e - b + 1);
+    if (t == "true" || t == "1") return true;
+    if (t == "false" || t == "0") return false;
+    throw std::invalid_argument("parameter '" + key + "': cannot read '" + text + "' as true or false");
 }
 
 void require(bool ok, const char* key, double value, const char* what) {
@@ -104,7 +120,7 @@ std::string Params::get(const std::string& key) const {
     std::ostringstream out;
     out.imbue(std::locale::classic());
     out.precision(std::numeric_limits<double>::max_digits10);
-    std::visit([&](auto member) { out << this->*member; }, e.field);
+    std::visit([&](auto member) { out << std::boolalpha << this->*member; }, e.field);
     return out.str();
 }
 
@@ -135,9 +151,16 @@ void Params::validate() const {
     require(finite(centroidSearchRadius) && centroidSearchRadius > 0, "centroidSearchRadius",
             centroidSearchRadius, "must be > 0");
     require(!std::isnan(heightGate) && heightGate > 0, "heightGate", heightGate, "must be > 0");
+    require(finite(seedHeightTolerance) && seedHeightTolerance > 0, "seedHeightTolerance", seedHeightTolerance,
+            "must be > 0");
+    require(finite(stripMinSpread) && stripMinSpread >= 0, "stripMinSpread", stripMinSpread, "must be >= 0");
+    require(finite(recoveryThreshold) && recoveryThreshold >= 0, "recoveryThreshold", recoveryThreshold,
+            "must be >= 0");
     require(finite(sparsityLow) && sparsityLow >= 0, "sparsityLow", sparsityLow, "must be >= 0");
     require(finite(sparsityMedium) && sparsityMedium >= sparsityLow, "sparsityMedium", sparsityMedium,
             "must be >= sparsityLow");
+    require(finite(belowGroundMargin) && belowGroundMargin >= 0, "belowGroundMargin", belowGroundMargin,
+            "must be >= 0");
     require(finite(maxGroundHeightDeviation) && maxGroundHeightDeviation >= 0, "maxGroundHeightDeviation",
             maxGroundHeightDeviation, "must be >= 0");
 }

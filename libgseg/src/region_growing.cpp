@@ -38,8 +38,10 @@ struct IndexCollector {
 }  // namespace
 
 std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centroids,
-                                       const ExpansionSettings& s, const AcceptFn& accept) {
+                                       const ExpansionSettings& s, const AcceptFn& accept,
+                                       std::vector<std::int32_t>* parents) {
     std::vector<std::uint8_t> state(centroids.size(), 0);
+    if (parents) parents->assign(centroids.size(), -2);
     if (centroids.empty()) return state;
     const CentroidSet set{centroids};
     const Tree tree(3, set, nanoflann::KDTreeSingleIndexAdaptorParams(16));
@@ -52,8 +54,13 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         // deterministic too: no sort needed.
         tree.radiusSearchCustomCallback(q.data(), collector);
     };
-    auto gated = [&](const Eigen::Vector3f& from, std::uint32_t j) {
-        return std::abs(centroids[j].z() - from.z()) <= s.heightGate;
+    // The step between two centroids, measured along the ground-plane normal of each (or along z):
+    // a neighbour is taken only if the step lies in both planes within the gate.
+    auto gated = [&](std::uint32_t from, std::uint32_t j) {
+        const Eigen::Vector3f d = centroids[j] - centroids[from];
+        const float step = s.normals ? std::max(std::abs((*s.normals)[from].dot(d)), std::abs((*s.normals)[j].dot(d)))
+                                     : std::abs(d.z());
+        return step <= s.heightGate;
     };
 
     // Seed: the candidates near the robot within the height gate of the synthetic ground point. If
@@ -64,9 +71,10 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     for (const double slope : {0.0, s.seedSlope}) {
         for (std::uint32_t j : found) {
             const float horizontal = (centroids[j] - s.seed).head<2>().norm();
-            if (std::abs(centroids[j].z() - s.seed.z()) <= s.heightGate + slope * horizontal) {
+            if (std::abs(centroids[j].z() - s.seed.z()) <= s.seedGate + slope * horizontal) {
                 state[j] = 1;
                 queue.push_back(j);
+                if (parents) (*parents)[j] = -1;
             }
         }
         if (!queue.empty()) break;
@@ -78,13 +86,14 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         search(centroids[c], s.radius, found);
         neighbours.clear();
         for (std::uint32_t j : found)
-            if (j != c && gated(centroids[c], j)) neighbours.push_back(j);
+            if (j != c && gated(c, j)) neighbours.push_back(j);
         if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
         state[c] = 2;
         for (std::uint32_t j : neighbours)
             if (state[j] == 0) {
                 state[j] = 1;
                 queue.push_back(j);
+                if (parents) (*parents)[j] = std::int32_t(c);
             }
     }
     return state;

@@ -1,20 +1,34 @@
 #include <gseg/grid.hpp>
+#include <gseg/plane_fit.hpp>
 #include <gseg/sensor_height.hpp>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
-#include <unordered_map>
 #include <vector>
 
 namespace gseg {
+namespace {
 
-SensorHeightEstimate estimateSensorHeight(const PointCloudView& cloud, const SensorHeightOptions& o) {
-    struct Column {
-        float lowest = std::numeric_limits<float>::infinity();
-        int count = 0;
+struct Vote {
+    Eigen::Vector3d p;  // column centre (x, y) and its floor (z)
+    double weight;      // nearer columns weigh more
+};
+
+/// Per column, the lowest run of minColumnPoints points within floorThickness: the mean of those
+/// points (their own x, y: on a tilted ground the column centre would not lie on the plane).
+std::vector<Vote> columnFloors(const PointCloudView& cloud, const SensorHeightOptions& o) {
+    struct Keyed {
+        std::uint64_t key;
+        float z, x, y;
+        bool operator<(const Keyed& b) const { return key != b.key ? key < b.key : z < b.z; }
     };
-    std::unordered_map<std::uint64_t, Column> columns;
+    std::vector<Keyed> keyed;
+    keyed.reserve(cloud.size() / 2);
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const float x = cloud.x(i), y = cloud.y(i), z = cloud.z(i);
         if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) continue;
@@ -22,27 +36,162 @@ SensorHeightEstimate estimateSensorHeight(const PointCloudView& cloud, const Sen
         if (r < o.minRange || r > o.maxRange) continue;
         const std::uint64_t key = (std::uint64_t(std::uint32_t(cellCoord(x, o.columnSize))) << 32) |
                                   std::uint32_t(cellCoord(y, o.columnSize));
-        Column& c = columns[key];
-        c.lowest = std::min(c.lowest, z);
-        ++c.count;
+        keyed.push_back({key, z, x, y});
     }
-    std::vector<double> votes;
-    for (const auto& [key, c] : columns)
-        if (c.count >= o.minColumnPoints) votes.push_back(c.lowest);
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<Vote> votes;
+    const std::size_t m = std::size_t(std::max(1, o.minColumnPoints));
+    for (std::size_t s = 0; s < keyed.size();) {
+        std::size_t e = s;
+        while (e < keyed.size() && keyed[e].key == keyed[s].key) ++e;
+        for (std::size_t k = s; k + m <= e; ++k)
+            if (keyed[k + m - 1].z - keyed[k].z <= o.floorThickness) {
+                Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+                for (std::size_t j = k; j < k + m; ++j) mean += Eigen::Vector3d(keyed[j].x, keyed[j].y, keyed[j].z);
+                mean /= double(m);
+                votes.push_back({mean, 1.0 / std::max(3.0, mean.head<2>().norm())});
+                break;
+            }
+        s = e;
+    }
+    return votes;
+}
+
+/// Weighted least-squares plane through the votes flagged in `use`; false if degenerate.
+bool fitVotes(const std::vector<Vote>& votes, const std::vector<std::uint8_t>& use, Eigen::Vector3d& n, double& d) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    double w = 0;
+    for (std::size_t i = 0; i < votes.size(); ++i)
+        if (use[i]) mean += votes[i].weight * votes[i].p, w += votes[i].weight;
+    if (w <= 0) return false;
+    mean /= w;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < votes.size(); ++i)
+        if (use[i]) {
+            const Eigen::Vector3d q = votes[i].p - mean;
+            cov += votes[i].weight * q * q.transpose();
+        }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    if (!(eig.eigenvalues()(1) > 1e-9)) return false;  // votes on one line: no plane
+    n = eig.eigenvectors().col(0).normalized();
+    if (n.z() < 0) n = -n;
+    d = -n.dot(mean);
+    return true;
+}
+
+}  // namespace
+
+SensorHeightEstimate estimateSensorHeight(const PointCloudView& cloud, const SensorHeightOptions& o) {
     SensorHeightEstimate e;
+    const std::vector<Vote> votes = columnFloors(cloud, o);
     e.columns = int(votes.size());
-    if (e.columns < o.minColumns) return e;
-    auto median = [](std::vector<double> v) {
-        std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-        return v[v.size() / 2];
-    };
-    const double ground = median(votes);
-    std::vector<double> dev;
-    for (double v : votes) dev.push_back(std::abs(v - ground));
-    e.valid = ground < 0;  // ground above the sensor: not a ground vehicle's scan
-    e.height = -ground;
-    e.spread = median(dev);
+    if (e.columns < o.minColumns) {
+        e.reason = "only " + std::to_string(e.columns) + " columns with a ground floor within " +
+                   std::to_string(int(o.maxRange)) + " m (need " + std::to_string(o.minColumns) + ")";
+        return e;
+    }
+    // RANSAC over the votes for the best-supported plane no steeper than maxTiltDegrees; nearer
+    // votes weigh more. Deterministic: a fixed seed.
+    const double minNz = std::cos(o.maxTiltDegrees * M_PI / 180.0);
+    std::uint64_t state = 0x5eed;
+    double bestScore = -1;
+    Eigen::Vector3d bestN = Eigen::Vector3d::UnitZ();
+    double bestD = 0;
+    const std::size_t n = votes.size();
+    for (int it = 0; it < 300; ++it) {
+        const std::size_t a = splitmix64(state) % n, b = splitmix64(state) % n, c = splitmix64(state) % n;
+        if (a == b || b == c || a == c) continue;
+        Eigen::Vector3d nrm = (votes[b].p - votes[a].p).cross(votes[c].p - votes[a].p);
+        if (nrm.norm() < 1e-6) continue;
+        nrm.normalize();
+        if (nrm.z() < 0) nrm = -nrm;
+        if (nrm.z() < minNz) continue;
+        const double d = -nrm.dot(votes[a].p);
+        double score = 0;
+        for (const Vote& v : votes)
+            if (std::abs(nrm.dot(v.p) + d) <= o.planeTolerance) score += v.weight;
+        if (score > bestScore) bestScore = score, bestN = nrm, bestD = d;
+    }
+    if (bestScore < 0) {
+        e.reason = "no plane within " + std::to_string(int(o.maxTiltDegrees)) + " deg of level through the floors";
+        return e;
+    }
+    std::vector<std::uint8_t> use(n);
+    for (std::size_t i = 0; i < n; ++i) use[i] = std::abs(bestN.dot(votes[i].p) + bestD) <= o.planeTolerance;
+    Eigen::Vector3d refN;
+    double refD;
+    if (fitVotes(votes, use, refN, refD) && refN.z() >= minNz) {
+        bestN = refN, bestD = refD;
+        for (std::size_t i = 0; i < n; ++i) use[i] = std::abs(bestN.dot(votes[i].p) + bestD) <= o.planeTolerance;
+    }
+    std::vector<double> residuals;
+    for (std::size_t i = 0; i < n; ++i)
+        if (use[i]) residuals.push_back(std::abs(bestN.dot(votes[i].p) + bestD));
+    e.inliers = int(residuals.size());
+    if (e.inliers < o.minColumns) {
+        e.reason = "only " + std::to_string(e.inliers) + " column floors agree on one ground plane (need " +
+                   std::to_string(o.minColumns) + ")";
+        return e;
+    }
+    std::nth_element(residuals.begin(), residuals.begin() + long(residuals.size() / 2), residuals.end());
+    e.spread = residuals[residuals.size() / 2];
+    e.normal = bestN;
+    e.height = bestD;  // n . 0 + d: the origin's signed distance above the plane
+    e.tiltDegrees = std::acos(std::min(1.0, bestN.z())) * 180.0 / M_PI;
+    e.valid = e.height > 0;
+    if (!e.valid) e.reason = "the ground plane found lies above the sensor";
     return e;
+}
+
+std::string HeightDecision::describe() const {
+    char buf[160];
+    const char* what = source == Source::Estimated ? "estimated" : source == Source::PreviousScan ? "previous scan's" : "fallback";
+    std::snprintf(buf, sizeof buf, "%.2f m (%s%s", height, what, tiltDegrees > 0 ? ", levelled " : "");
+    std::string s = buf;
+    if (tiltDegrees > 0) {
+        std::snprintf(buf, sizeof buf, "%.1f deg", tiltDegrees);
+        s += buf;
+    }
+    if (source != Source::Estimated && !estimate.reason.empty()) s += "; no estimate: " + estimate.reason;
+    return s + ")";
+}
+
+AutoHeightSegmenter::AutoHeightSegmenter(const Params& params, const SensorHeightOptions& options)
+    : segmenter_(params), options_(options), fallback_(params.distToGround) {}
+
+Result AutoHeightSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics) {
+    HeightDecision d;
+    d.estimate = estimateSensorHeight(cloud, options_);
+    if (d.estimate.valid) {
+        d.source = HeightDecision::Source::Estimated;
+        d.height = d.estimate.height;
+        d.tiltDegrees = d.estimate.tiltDegrees;
+        previous_ = d, havePrevious_ = true;
+    } else if (havePrevious_) {
+        d.source = HeightDecision::Source::PreviousScan;
+        d.height = previous_.height, d.tiltDegrees = previous_.tiltDegrees;
+    } else {
+        d.source = HeightDecision::Source::Fallback;
+        d.height = fallback_;
+    }
+    last_ = d;
+    // A tilt below a quarter of a degree is not worth a copy of the cloud.
+    const Eigen::Vector3d normal = d.source == HeightDecision::Source::PreviousScan ? previous_.estimate.normal : d.estimate.normal;
+    if (d.tiltDegrees < options_.minLevelTiltDegrees || d.tiltDegrees > options_.maxLevelTiltDegrees) {
+        // Level enough, or terrain rather than a mounting tilt: keep the frame and use the plane's
+        // height straight under the sensor.
+        last_.height = d.height / std::max(0.1, normal.z());
+        last_.tiltDegrees = 0;
+        return segmenter_.segment(cloud, last_.height, keepCellDiagnostics);
+    }
+    const Eigen::Matrix3f R = Eigen::Quaterniond::FromTwoVectors(normal, Eigen::Vector3d::UnitZ()).toRotationMatrix().cast<float>();
+    levelled_.resize(3 * cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const float* p = cloud.point(i);
+        Eigen::Map<Eigen::Vector3f> out(&levelled_[3 * i]);
+        out = R * Eigen::Vector3f(p[0], p[1], p[2]);
+    }
+    return segmenter_.segment(PointCloudView(levelled_.data(), cloud.size()), d.height, keepCellDiagnostics);
 }
 
 }  // namespace gseg

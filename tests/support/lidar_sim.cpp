@@ -1,5 +1,6 @@
 #include <support/lidar_sim.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -35,6 +36,13 @@ void Scene::addRamp(double height, double x0, double degrees, Truth slopeTruth) 
     planes.push_back(ramp);
 }
 
+void Scene::addCar(double x0, double y0, double ground) {
+    addBox(x0, y0, ground + 0.3, x0 + 4.4, y0 + 1.8, ground + 1.0);
+    addBox(x0 + 1.0, y0 + 0.1, ground + 1.0, x0 + 3.4, y0 + 1.7, ground + 1.5);
+    for (double x : {x0 + 0.5, x0 + 3.3})
+        for (double y : {y0 + 0.05, y0 + 1.5}) addBox(x, y, ground, x + 0.6, y + 0.25, ground + 0.3);
+}
+
 void Scene::addBox(double x0, double y0, double z0, double x1, double y1, double z1, Truth t) {
     Box b;
     b.lo[0] = x0, b.lo[1] = y0, b.lo[2] = z0, b.hi[0] = x1, b.hi[1] = y1, b.hi[2] = z1;
@@ -42,10 +50,41 @@ void Scene::addBox(double x0, double y0, double z0, double x1, double y1, double
     boxes.push_back(b);
 }
 
+namespace {
+
+// First crossing of a height field along the beam d within (0.1, best): marches with a step that
+// grows with range, then bisects.
+bool hitTerrain(const Terrain& t, const double* d, double best, double& at) {
+    auto above = [&](double r) { return r * d[2] > t.height(r * d[0], r * d[1]); };
+    double r0 = 0.1;
+    if (!above(r0)) return false;
+    while (r0 < best) {
+        const double r1 = std::min(best, r0 + std::max(0.05, 0.01 * r0));
+        if (!above(r1)) {
+            double a = r0, b = r1;
+            for (int i = 0; i < 30; ++i) {
+                const double m = 0.5 * (a + b);
+                (above(m) ? a : b) = m;
+            }
+            at = 0.5 * (a + b);
+            return true;
+        }
+        r0 = r1;
+    }
+    return false;
+}
+
+}  // namespace
+
 SimScan simulate(const Scene& scene, const Lidar& lidar) {
     SimScan out;
     std::mt19937 rng(lidar.seed);
     std::normal_distribution<double> noise(0.0, lidar.noiseSigma);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    // Sensor-to-world rotation of the mounting tilt: roll about x, then pitch about y.
+    const double cr = std::cos(lidar.rollDeg * kDeg), sr = std::sin(lidar.rollDeg * kDeg);
+    const double cp = std::cos(lidar.pitchDeg * kDeg), sp = std::sin(lidar.pitchDeg * kDeg);
+    const double R[3][3] = {{cp, sp * sr, sp * cr}, {0, cr, -sr}, {-sp, cp * sr, cp * cr}};
     const int steps = int(std::lround(360.0 / lidar.azimuthStepDeg));
     for (int b = 0; b < lidar.beams; ++b) {
         const double el = (lidar.minElevationDeg +
@@ -53,7 +92,9 @@ SimScan simulate(const Scene& scene, const Lidar& lidar) {
                           kDeg;
         for (int s = 0; s < steps; ++s) {
             const double az = s * lidar.azimuthStepDeg * kDeg;
-            const double d[3] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+            const double ds[3] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+            double d[3];
+            for (int a = 0; a < 3; ++a) d[a] = R[a][0] * ds[0] + R[a][1] * ds[1] + R[a][2] * ds[2];
             double best = lidar.maxRange;
             Truth truth = Truth::DontCare;
             bool hit = false;
@@ -63,6 +104,10 @@ SimScan simulate(const Scene& scene, const Lidar& lidar) {
                 const double t = p.offset / denom;
                 const double q[3] = {t * d[0], t * d[1], t * d[2]};
                 if (t > 0.1 && t < best && inside(q, p.lo, p.hi)) best = t, truth = p.truth, hit = true;
+            }
+            for (const Terrain& tr : scene.terrains) {
+                double t = 0;
+                if (hitTerrain(tr, d, best, t)) best = t, truth = tr.truth, hit = true;
             }
             for (const Box& bx : scene.boxes) {
                 double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
@@ -75,11 +120,18 @@ SimScan simulate(const Scene& scene, const Lidar& lidar) {
                     if (ta > tb) std::swap(ta, tb);
                     t0 = std::max(t0, ta), t1 = std::min(t1, tb);
                 }
-                if (t0 <= t1 && t0 > 0.1 && t0 < best) best = t0, truth = bx.truth, hit = true;
+                if (t0 <= t1 && t0 > 0.1 && t0 < best) {
+                    const double behind = bx.scatter > 0 ? std::min({t1, best, t0 + bx.scatter * uniform(rng)}) : t0;
+                    best = behind, truth = bx.truth, hit = true;
+                }
             }
             if (!hit) continue;
             const double r = best + noise(rng);
-            out.xyz.insert(out.xyz.end(), {float(r * d[0]), float(r * d[1]), float(r * d[2])});
+            // Back into the sensor frame (transpose of R).
+            const double w[3] = {r * d[0], r * d[1], r * d[2]};
+            out.xyz.insert(out.xyz.end(), {float(R[0][0] * w[0] + R[1][0] * w[1] + R[2][0] * w[2]),
+                                           float(R[0][1] * w[0] + R[1][1] * w[1] + R[2][1] * w[2]),
+                                           float(R[0][2] * w[0] + R[1][2] * w[1] + R[2][2] * w[2])});
             out.truth.push_back(truth);
         }
     }

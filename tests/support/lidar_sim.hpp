@@ -4,6 +4,7 @@
 /// of primitives, each with an exact ground truth.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace gseg::test {
@@ -19,16 +20,25 @@ struct Plane {
     Truth truth = Truth::Ground;
 };
 
-/// An axis-aligned box.
+/// An axis-aligned box. With `scatter` > 0 a hit lands up to that far behind the box's surface
+/// along the beam (uniformly, inside the box): foliage, hedges, bushes.
 struct Box {
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     Truth truth = Truth::NonGround;
+    double scatter = 0;  ///< [m]
+};
+
+/// Ground given as a height field z = height(x, y), hit by marching along the beam.
+struct Terrain {
+    std::function<double(double, double)> height;
+    Truth truth = Truth::Ground;
 };
 
 /// The scene: what the beams can hit.
 struct Scene {
     std::vector<Plane> planes;
     std::vector<Box> boxes;
+    std::vector<Terrain> terrains;
 
     /// Level ground at z = -height, everywhere.
     void addFlatGround(double height);
@@ -36,6 +46,9 @@ struct Scene {
     /// Truth of the sloped part: `slopeTruth`.
     void addRamp(double height, double x0, double degrees, Truth slopeTruth);
     void addBox(double x0, double y0, double z0, double x1, double y1, double z1, Truth t = Truth::NonGround);
+    /// A car standing on the ground at z = ground: lower body from 0.3 to 1.0 m over [x0, x0 + 4.4] x
+    /// [y0, y0 + 1.8], cabin from 1.0 to 1.5 m over the middle 2.4 m, four wheels under the body.
+    void addCar(double x0, double y0, double ground);
 };
 
 /// The sensor: `beams` rings evenly spread over [minElevation, maxElevation] degrees, one shot
@@ -47,6 +60,7 @@ struct Lidar {
     double maxRange = 80.0;
     double noiseSigma = 0.01;  ///< [m] Gaussian range noise
     std::uint32_t seed = 7;
+    double rollDeg = 0, pitchDeg = 0;  ///< mounting tilt: rays and points are in the tilted sensor frame
 
     static Lidar hdl64() { return Lidar(); }
     static Lidar vlp16() {

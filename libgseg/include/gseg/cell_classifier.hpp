@@ -16,6 +16,8 @@ struct CellClassification {
     bool groundCandidate = false;  ///< tentative ground (Line/Small), or Plane to be confirmed by the plane fit
     CellOutcome rejection = CellOutcome::TooFewPoints;  ///< reason when not a candidate
     Eigen::Vector3f mean = Eigen::Vector3f::Zero();      ///< centroid of the points
+    bool steepNormal = false;  ///< Plane: its PCA normal is steeper than the slope limit (checkPlaneNormal)
+    Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();   ///< ground-plane normal (z >= 0) of a Line cell: the least tilted plane containing its axis; UnitZ otherwise
 };
 
 /// Classifies a cell from its points `pts[0..n)` given relative to any origin (the mean is

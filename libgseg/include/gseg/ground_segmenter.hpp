@@ -47,6 +47,7 @@ struct CellDiagnostics {
     CellClass cellClass = CellClass::TooFewPoints;
     CellOutcome outcome = CellOutcome::TooFewPoints;
     float groundHeight = 0.f;  ///< [m] mean z of the ground candidates (valid where numInliers > 0)
+    std::int32_t reachedFrom = -2;  ///< index (in this phase's cells) of the ground cell the expansion reached this one from; -1 the seed, -2 not reached
 };
 
 /// Wall-clock time of each step of one phase, in milliseconds.
@@ -68,6 +69,7 @@ struct PhaseReport {
     std::size_t groundCells = 0;     ///< cells accepted as ground
     std::size_t unlabelledCellPoints = 0;  ///< points in cells with too few points (labelled non-ground)
     std::size_t unreachedCellPoints = 0;   ///< points in candidate cells the expansion never reached (non-ground)
+    std::size_t recoveredPoints = 0;       ///< Phase I: points of non-ground cells on an adjacent ground cell's plane (passed to Phase II)
     StepTimes ms;                          ///< time per step
     std::vector<CellDiagnostics> cells;    ///< one entry per occupied cell, sorted by (ix, iy, iz)
 };
@@ -79,6 +81,11 @@ struct Result {
     std::vector<std::uint8_t> labels;
     std::size_t numGround = 0;     ///< points labelled ground
     std::size_t numNonGround = 0;  ///< points labelled non-ground
+    std::size_t numNonFinite = 0;  ///< points with a NaN or infinite coordinate (no return): non-ground, not segmented
+    /// Non-ground points lying more than Params::belowGroundMargin below the local ground (mirror
+    /// reflections, multipath), ascending indices. They are neither ground nor obstacles: map
+    /// building should leave them out.
+    std::vector<std::uint32_t> belowGround;
     PhaseReport phase1;            ///< Phase I (tall cells, whole cloud)
     PhaseReport phase2;            ///< Phase II (thin cells, Phase I ground only)
     double totalMs = 0;            ///< wall-clock time of segment()
@@ -99,12 +106,19 @@ public:
 
     const Params& params() const { return params_; }
 
-    /// Labels every point of `cloud`. Throws std::invalid_argument for an empty cloud or a point
-    /// with a NaN or infinite coordinate (the message names its index). With
+    /// Labels every point of `cloud`; points with a NaN or infinite coordinate are non-ground (and
+    /// counted). Throws std::invalid_argument for an empty cloud or a stride below 12 bytes. With
     /// `keepCellDiagnostics` false, PhaseReport::cells stays empty (saves a little time).
     Result segment(const PointCloudView& cloud, bool keepCellDiagnostics = true);
 
+    /// The same with another sensor height than Params::distToGround (e.g. estimated per scan).
+    /// Throws std::invalid_argument if `distToGround` is not finite.
+    Result segment(const PointCloudView& cloud, double distToGround, bool keepCellDiagnostics = true);
+
 private:
+    Result run(const PointCloudView& cloud, const Params& params, bool keepCellDiagnostics);
+    void flagBelowGround(const PointCloudView& cloud, const Params& params, detail::Workspace& ws, Result& r) const;
+
     Params params_;
     std::unique_ptr<detail::Workspace> ws_;
 };

@@ -38,6 +38,17 @@ struct FrameScore {
 /// SemanticKITTI classes that count as ground (semantic id = raw label & 0xFFFF).
 bool isGroundClass(std::uint32_t semanticId);
 
+/// Ground under the protocol with vegetation: a ground class, or vegetation below vegetationZ.
+bool isGroundTruth(std::uint32_t semanticId, float z, const ProtocolOptions& options);
+
+/// Unlabelled (0) or outlier (1): predicted ground counts as true positive, never as false negative.
+inline bool isOutlierClass(std::uint32_t semanticId) { return semanticId == 0 || semanticId == 1; }
+
+/// Throws std::invalid_argument unless labels and predictions have `points` entries each and every
+/// prediction is 0 or 1.
+void checkScoringInputs(std::size_t points, const std::vector<std::uint32_t>& labels,
+                        const std::vector<std::uint8_t>& pred);
+
 /// Scores predictions `pred` (1 ground, 0 non-ground) against SemanticKITTI labels `labels`
 /// (raw uint32, instance in the upper 16 bits) for the points of `cloud`. Unlabelled (0) and
 /// outlier (1) points predicted ground count as true positives, never as false negatives.

@@ -30,6 +30,8 @@ struct Params {
     double lineRatioThreshold = 0.95;    ///< [-] l1/(l1+l2+l3) above this: line cell
     double planeRatioThreshold = 0.4;    ///< [-] l1/(l1+l2+l3) above this (and not a line): planar cell; else non-planar
     double slopeThresholdDegrees = 30.0; ///< [deg] steepest line or plane still taken as ground
+    bool checkPlaneNormal = true;        ///< a planar cell whose PCA normal is steeper than slopeThresholdDegrees is steep before any plane fit (the authors' rule; false: only the fit decides); so is a line cell that is an upright strip (see stripMinSpread)
+    double stripMinSpread = 0.03;        ///< [m] a line cell whose points spread more than this (standard deviation) across its axis is a strip, whose PCA normal counts like a planar cell's
 
     // --- surface gradient analysis (RANSAC plane fit) ----------------------------------------------
     double groundInlierThreshold = 0.125;  ///< [m] point-to-plane distance of a plane inlier
@@ -39,13 +41,17 @@ struct Params {
     std::uint64_t ransacSeed = 42;         ///< [-] seed of the per-cell random generators (mixed with the cell index: results never depend on call order)
 
     // --- ground region expansion ------------------------------------------------------------------
+    double seedHeightTolerance = 0.3;   ///< [m] expansion starts from the candidates within robotRadius + centroidSearchRadius whose ground lies within this of -distToGround (both phases; if none does, the tolerance widens at slopeThresholdDegrees with the distance: the robot stands on a slope)
     double centroidSearchRadius = 5.0;  ///< [m] radius of the KD-tree search between ground-candidate centroids
-    double heightGate = 0.5;            ///< [m] Phase II: a neighbour is taken only if its ground height differs by at most this (tau)
+    double heightGate = 0.1;            ///< [m] Phase II (tau): a neighbour is taken only if the step between the two ground centroids, measured along both cells' ground-plane normals, is at most this
+    bool recoverNearGround = true;      ///< Phase I: points of non-ground cells that lie on the ground plane of a ground cell beside them (or one level below) go on to Phase II
+    double recoveryThreshold = 0.1;     ///< [m] point-to-plane distance of such a recovered point
 
     // --- per-cell refinement ----------------------------------------------------------------------
     double sparsityLow = 0.001;              ///< [m^3/point] bounding-box volume per point below this: Low sparsity
     double sparsityMedium = 0.01;            ///< [m^3/point] below this (and not Low): Medium; otherwise High
-    double maxGroundHeightDeviation = 0.3;   ///< [m] ambiguous cell rejected if its ground is higher than this above the lowest neighbour
+    double belowGroundMargin = 0.5;          ///< [m] non-ground points this far below the local ground are flagged as reflections (Result::belowGround; 0: never)
+    double maxGroundHeightDeviation = 0.3;   ///< [m] ambiguous cell rejected if its ground is higher than this above the lowest neighbour (above a curb)
 
     /// Throws std::invalid_argument naming the first invalid key and its value.
     void validate() const;

@@ -15,7 +15,12 @@ struct ExpansionSettings {
     Eigen::Vector3f seed = Eigen::Vector3f::Zero();  ///< [m] synthetic seed under the robot
     double seedRadius = 7.7;    ///< [m] candidates within this distance of the seed start the expansion
     double radius = 5.0;        ///< [m] neighbour search radius between centroids
-    double heightGate = std::numeric_limits<double>::infinity();  ///< [m] max |dz| to a neighbour (Phase II)
+    double heightGate = std::numeric_limits<double>::infinity();  ///< [m] max step to a neighbour (Phase II)
+    double seedGate = std::numeric_limits<double>::infinity();    ///< [m] max |dz| of a starting candidate to the seed
+    /// Optional ground-plane normal per centroid (unit, z > 0). When given, the step to a neighbour
+    /// is measured along both cells' normals (the larger of the two), so ground that slopes stays
+    /// connected and a step up onto another surface does not; otherwise it is |dz|.
+    const std::vector<Eigen::Vector3f>* normals = nullptr;
     double seedSlope = 0.0;  ///< [-] if no candidate passes the seed's gate, it widens by this much per metre of horizontal distance (the robot stands on a slope)
 };
 
@@ -25,8 +30,10 @@ using AcceptFn = std::function<bool(std::uint32_t candidate, const std::vector<s
 
 /// Breadth-first expansion from the seed. Each candidate reached is passed to `accept` exactly
 /// once, in a deterministic order; only accepted candidates propagate. Returns, per candidate,
-/// 0 not reached, 1 reached and rejected, 2 accepted.
+/// 0 not reached, 1 reached and rejected, 2 accepted. `parents`, if given, receives per candidate
+/// the accepted candidate it was first reached from (-1: from the seed, -2: never reached).
 std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centroids,
-                                       const ExpansionSettings& settings, const AcceptFn& accept);
+                                       const ExpansionSettings& settings, const AcceptFn& accept,
+                                       std::vector<std::int32_t>* parents = nullptr);
 
 }  // namespace gseg

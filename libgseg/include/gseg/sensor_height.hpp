@@ -1,32 +1,80 @@
 #pragma once
 /// \file sensor_height.hpp
-/// Estimation of the sensor's height above the ground from one scan (`distToGround: auto`).
+/// `distToGround: auto`: the ground plane under the sensor estimated from the scan itself (height
+/// and tilt), and a segmenter that uses it per scan and never refuses one.
 
+#include <gseg/ground_segmenter.hpp>
 #include <gseg/point_cloud.hpp>
+
+#include <Eigen/Core>
+
+#include <string>
 
 namespace gseg {
 
 /// Options of estimateSensorHeight().
 struct SensorHeightOptions {
-    double minRange = 2.0;     ///< [m] ignore points closer than this horizontally (the vehicle itself)
-    double maxRange = 30.0;    ///< [m] and farther than this
-    double columnSize = 2.0;   ///< [m] side of the square columns
-    int minColumnPoints = 5;   ///< [points] columns with fewer points are ignored
-    int minColumns = 8;        ///< [columns] fewer usable columns: no estimate
+    double minRange = 1.5;       ///< [m] ignore points closer than this horizontally (the vehicle itself)
+    double maxRange = 30.0;      ///< [m] and farther than this
+    double columnSize = 2.0;     ///< [m] side of the square columns
+    int minColumnPoints = 5;     ///< [points] a column's floor is the lowest run of this many points within floorThickness
+    double floorThickness = 0.25;  ///< [m] (sparse points below a dense floor, such as reflections, are skipped)
+    int minColumns = 8;          ///< [columns] fewer columns with a floor: no estimate
+    double maxTiltDegrees = 15;  ///< [deg] steepest ground plane (sensor tilt plus terrain slope) considered
+    double planeTolerance = 0.2; ///< [m] a column floor within this of the plane supports it
+    double minLevelTiltDegrees = 3;   ///< [deg] AutoHeightSegmenter levels out tilts from this (a mounting tilt) ...
+    double maxLevelTiltDegrees = 10;  ///< [deg] ... up to this; otherwise it keeps the frame and only uses the ground's height under the sensor
 };
 
 /// Result of estimateSensorHeight().
 struct SensorHeightEstimate {
     bool valid = false;
-    double height = 0;      ///< [m] estimated height of the sensor above the ground (> 0: ground below)
-    int columns = 0;        ///< columns that voted
-    double spread = 0;      ///< [m] median absolute deviation of the column votes (small: one clear ground level)
+    double height = 0;      ///< [m] distance of the sensor above the ground plane (> 0: ground below)
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< ground-plane normal in the cloud's frame (z > 0)
+    double tiltDegrees = 0; ///< [deg] angle between that normal and the cloud's z axis
+    int columns = 0;        ///< columns with a floor (votes)
+    int inliers = 0;        ///< votes within planeTolerance of the plane
+    double spread = 0;      ///< [m] median absolute distance of the supporting votes from the plane
+    std::string reason;     ///< why there is no estimate (empty when valid)
 };
 
-/// The lowest dense surface around the sensor: in each occupied column (levelled frame, sensor at
-/// the origin) the lowest point is a vote for the ground level, and the median vote wins, so
-/// columns holding only a wall or a car roof do not move it. The cloud must be levelled (z up).
+/// The ground plane around the sensor: in each column (the sensor at the origin) the lowest dense
+/// layer of points votes for the ground level there, and a plane through the votes (robust fit,
+/// nearer columns weigh more, at most maxTiltDegrees) gives the sensor's height and tilt. Columns
+/// holding only a wall or a car roof, and stray points below the ground, do not move it.
 SensorHeightEstimate estimateSensorHeight(const PointCloudView& cloud,
                                           const SensorHeightOptions& options = SensorHeightOptions());
+
+/// What AutoHeightSegmenter used for one scan.
+struct HeightDecision {
+    enum class Source { Estimated, PreviousScan, Fallback };
+    Source source = Source::Fallback;
+    double height = 0;          ///< [m] the distToGround used
+    double tiltDegrees = 0;     ///< [deg] tilt taken out before segmenting (0: none)
+    SensorHeightEstimate estimate;  ///< what the estimator said about this scan
+    std::string describe() const;   ///< one line for reports, e.g. "1.78 m (estimated, tilt 4.9 deg)"
+};
+
+/// Segments scans with `distToGround: auto`: the height (and a mounting tilt between
+/// minLevelTiltDegrees and maxLevelTiltDegrees, which is levelled out) is estimated per scan; where a scan gives no estimate, the previous scan's is
+/// used, and before any estimate the fallback height (Params::distToGround). Never refuses a scan.
+/// Labels come back in input order, as from GroundSegmenter. One object per stream and thread.
+class AutoHeightSegmenter {
+public:
+    explicit AutoHeightSegmenter(const Params& params, const SensorHeightOptions& options = SensorHeightOptions());
+
+    Result segment(const PointCloudView& cloud, bool keepCellDiagnostics = true);
+    const HeightDecision& lastDecision() const { return last_; }
+    /// Forgets the previous scan's estimate (the next scan without one gets the fallback height).
+    void reset() { havePrevious_ = false; }
+
+private:
+    GroundSegmenter segmenter_;
+    SensorHeightOptions options_;
+    double fallback_;
+    bool havePrevious_ = false;
+    HeightDecision previous_, last_;
+    std::vector<float> levelled_;
+};
 
 }  // namespace gseg

@@ -31,6 +31,7 @@ GroundFilter::GroundFilter(const gm::LoadedConfig& config, OutputFrame frame)
 void GroundFilter::loadConfig(const std::string& path) {
     config_ = gm::loadConfig(path);
     segmenter_.reset();
+    autoSegmenter_.reset();
 }
 
 GroundFilter::Output GroundFilter::filter(const ::mrpt::obs::CObservation& obs) {
@@ -56,18 +57,17 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 16);
 
     Output out;
-    Params params = config_.params;
     if (config_.distToGroundAuto) {
-        const SensorHeightEstimate h = gseg::estimateSensorHeight(cloud);
-        if (!h.valid)
-            throw std::runtime_error(label + ": distToGround: auto found no ground level around the sensor");
-        params.distToGround = h.height;
-        out.distToGroundEstimated = true;
+        // Never refuses a scan: without an estimate, the previous scan's height or the fallback.
+        if (!autoSegmenter_) autoSegmenter_ = std::make_unique<gseg::AutoHeightSegmenter>(config_.params);
+        out.result = autoSegmenter_->segment(cloud, false);
+        out.distToGround = autoSegmenter_->lastDecision().height;
+        out.distToGroundEstimated = autoSegmenter_->lastDecision().source == gseg::HeightDecision::Source::Estimated;
+    } else {
+        if (!segmenter_) segmenter_ = std::make_unique<gseg::GroundSegmenter>(config_.params);
+        out.distToGround = config_.params.distToGround;
+        out.result = segmenter_->segment(cloud, false);
     }
-    out.distToGround = params.distToGround;
-    if (!segmenter_ || segmenter_->params().distToGround != params.distToGround)
-        segmenter_ = std::make_unique<gseg::GroundSegmenter>(params);
-    out.result = segmenter_->segment(cloud, false);
 
     // The two halves, in the frame asked for.
     const bool vehicle = outputFrame == OutputFrame::Vehicle;

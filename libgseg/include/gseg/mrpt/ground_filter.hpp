@@ -5,6 +5,7 @@
 /// `mrpt::rtti::classFactory("gseg::GroundFilter")` creates one (also from the plugin library).
 
 #include <gseg/ground_segmenter.hpp>
+#include <gseg/sensor_height.hpp>
 #include <gseg/mrpt/config.hpp>
 
 #include <mrpt/maps/CPointsMap.h>
@@ -64,7 +65,8 @@ private:
                  const ::mrpt::obs::CObservation* source, const std::string& label);
 
     gseg::mrpt::LoadedConfig config_;
-    std::unique_ptr<gseg::GroundSegmenter> segmenter_;  // rebuilt when the sensor height changes
+    std::unique_ptr<gseg::GroundSegmenter> segmenter_;        // fixed distToGround
+    std::unique_ptr<gseg::AutoHeightSegmenter> autoSegmenter_;  // distToGround: auto (keeps the previous scan's height)
 };
 
 /// Name under which MRPT's class factory knows GroundFilter.

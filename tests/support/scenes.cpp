@@ -1,0 +1,164 @@
+#include <support/scenes.hpp>
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <random>
+#include <stdexcept>
+
+namespace gseg::test {
+namespace {
+
+constexpr double kH = 1.73;  // KITTI-like mounting height
+
+Scene flat(double h = kH) {
+    Scene s;
+    s.addFlatGround(h);
+    return s;
+}
+
+// Rolling terrain: sum of two sines, amplitude `a` metres, wavelengths 40 and 55 m (slopes up to
+// about atan(2 pi a / 40)). The sensor stands on it at z = -h (the terrain is shifted so).
+Scene hills(double a, double h = kH) {
+    Scene s;
+    Terrain t;
+    const auto f = [a](double x, double y) { return a * std::sin(2 * M_PI * x / 40.0) + 0.6 * a * std::sin(2 * M_PI * y / 55.0 + 1.0); };
+    const double z0 = f(0, 0);
+    t.height = [f, z0, h](double x, double y) { return -h + f(x, y) - z0; };
+    s.terrains.push_back(t);
+    return s;
+}
+
+using Builder = std::function<NamedScan()>;
+
+NamedScan make(const std::string& name, const Scene& s, double h = kH, const Lidar& l = Lidar::hdl64(),
+               double radius = 5.0) {
+    return {name, simulate(s, l), h, radius};
+}
+
+const std::map<std::string, Builder>& builders() {
+    static const std::map<std::string, Builder> b = {
+        {"flat", [] { return make("flat", flat()); }},
+        {"ramp_up_10", [] { Scene s; s.addRamp(kH, 6, 10, Truth::Ground); return make("ramp_up_10", s); }},
+        {"ramp_up_20", [] { Scene s; s.addRamp(kH, 6, 20, Truth::Ground); return make("ramp_up_20", s); }},
+        {"ramp_down_10", [] { Scene s; s.addRamp(kH, 6, -10, Truth::Ground); return make("ramp_down_10", s); }},
+        {"ramp_up_45", [] { Scene s; s.addRamp(kH, 6, 45, Truth::NonGround); return make("ramp_up_45", s); }},
+        {"hills_gentle", [] { return make("hills_gentle", hills(1.0)); }},
+        {"hills_steep", [] { return make("hills_steep", hills(2.5)); }},
+        {"car_beside",
+         [] {
+             // A car parked 1.6 m to the right of the sensor, another 2.2 m to the left, slightly ahead.
+             Scene s = flat();
+             s.addCar(-2.0, -3.4, -kH);
+             s.addCar(0.5, 2.2, -kH);
+             return make("car_beside", s);
+         }},
+        {"traffic_jam",
+         [] {
+             // Cars bumper to bumper in three lanes all around the sensor, 3 to 8 m away: the road
+             // shows only in the gaps.
+             Scene s = flat();
+             for (double x = -22; x <= 22; x += 5.4) {
+                 if (std::abs(x) > 3) s.addCar(x - 2.2, -0.9, -kH);  // own lane, ahead and behind
+                 s.addCar(x - 1.0, 2.6, -kH);                        // left lane
+                 s.addCar(x + 1.3, -4.4, -kH);                       // right lane
+             }
+             return make("traffic_jam", s);
+         }},
+        {"flatbed_truck",
+         [] {
+             // A flat-bed truck beside the sensor: bed 1.2 m up, 2.5 m wide, 7 m long; cab 3 m tall.
+             Scene s = flat();
+             s.addBox(-3, 2.0, -kH + 0.5, 4, 4.5, -kH + 1.2);
+             s.addBox(4, 2.0, -kH + 0.5, 6, 4.5, -kH + 3.0);
+             for (double x : {-2.5, 2.5, 4.5})
+                 for (double y : {2.0, 4.1}) s.addBox(x, y, -kH, x + 1.0, y + 0.4, -kH + 0.5);
+             return make("flatbed_truck", s);
+         }},
+        {"wall_ledge",
+         [] {
+             // A wall 4 m to the left with a 0.6 m deep ledge 1 m up, then the wall goes on to 3 m.
+             Scene s = flat();
+             s.addBox(-15, 4.0, -kH, 15, 4.6, -kH + 1.0);
+             s.addBox(-15, 4.6, -kH, 15, 5.5, -kH + 3.0);
+             return make("wall_ledge", s);
+         }},
+        {"hedge",
+         [] {
+             // A 1.4 m hedge 3.5 m to the right along the road, and a bush ahead-left.
+             Scene s = flat();
+             Box hedge;
+             hedge.lo[0] = -20, hedge.lo[1] = -5.0, hedge.lo[2] = -kH;
+             hedge.hi[0] = 20, hedge.hi[1] = -3.5, hedge.hi[2] = -kH + 1.4;
+             hedge.scatter = 0.4;
+             s.boxes.push_back(hedge);
+             Box bush = hedge;
+             bush.lo[0] = 8, bush.lo[1] = 3, bush.hi[0] = 10, bush.hi[1] = 5, bush.hi[2] = -kH + 1.0;
+             s.boxes.push_back(bush);
+             return make("hedge", s);
+         }},
+        {"curb_near",
+         [] {
+             // A 0.15 m curb 2.5 m to the left of the sensor, sidewalk beyond; the curb face is don't-care.
+             Scene s;
+             Plane road, walk, face;
+             road.offset = -kH, road.hi[1] = 2.5;
+             walk.offset = -kH + 0.15, walk.lo[1] = 2.5;
+             face.n[0] = 0, face.n[1] = 1, face.n[2] = 0, face.offset = 2.5;
+             face.lo[2] = -kH, face.hi[2] = -kH + 0.15, face.truth = Truth::DontCare;
+             s.planes = {road, walk, face};
+             return make("curb_near", s);
+         }},
+        {"vlp16_low",
+         [] {
+             // A VLP-16 0.5 m above flat ground with a box ahead: rings far apart, big search radius.
+             Scene s = flat(0.5);
+             s.addBox(5, -1, -0.5, 6, 1, 0.5);
+             return make("vlp16_low", s, 0.5, Lidar::vlp16(), 10.0);
+         }},
+        {"tilted_5deg",
+         [] {
+             // An HDL-64 pitched 5 deg forward and rolled 2 deg, over flat ground with a car ahead.
+             Scene s = flat();
+             s.addCar(7, -1, -kH);
+             Lidar l = Lidar::hdl64();
+             l.pitchDeg = 5, l.rollDeg = 2;
+             return make("tilted_5deg", s, kH, l);
+         }},
+        {"reflections",
+         [] {
+             NamedScan n = make("reflections", flat());
+             addReflections(n.scan, kH, 2000, 1.0, 3.0, 30.0, 11);
+             return n;
+         }},
+    };
+    return b;
+}
+
+}  // namespace
+
+void addReflections(SimScan& scan, double height, std::size_t count, double minDepth, double maxDepth,
+                    double range, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (std::size_t i = 0; i < count; ++i) {
+        const double r = 3.0 + (range - 3.0) * u(rng), a = 2 * M_PI * u(rng);
+        const double z = -height - (minDepth + (maxDepth - minDepth) * u(rng));
+        scan.xyz.insert(scan.xyz.end(), {float(r * std::cos(a)), float(r * std::sin(a)), float(z)});
+        scan.truth.push_back(Truth::NonGround);
+    }
+}
+
+std::vector<NamedScan> allScenes() {
+    std::vector<NamedScan> out;
+    for (const auto& [name, build] : builders()) out.push_back(build());
+    return out;
+}
+
+NamedScan scene(const std::string& name) {
+    const auto it = builders().find(name);
+    if (it == builders().end()) throw std::invalid_argument("no scene named " + name);
+    return it->second();
+}
+
+}  // namespace gseg::test
