@@ -85,7 +85,7 @@ struct detail::Workspace {
     std::vector<std::pair<std::uint64_t, float>> lowestRejected;
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
-    std::vector<std::pair<std::uint64_t, float>> columnGround;  // flagBelowGround: lowest ground per column
+    std::vector<float> columnGround, columnScratch;  // flagBelowGround: lowest ground per column (dense)
 };
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
@@ -396,43 +396,57 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     return r;
 }
 
-// Non-ground points more than belowGroundMargin below the ground of their column (or, without
-// ground there, of the nearest ring of columns around it that has some): mirror reflections and
-// multipath. Columns without ground within two rings flag nothing.
+// Non-ground points more than belowGroundMargin below the lowest ground of their column (or,
+// without ground there, of the columns around it, up to two away): mirror reflections and
+// multipath. Columns with no ground that close flag nothing. Uses Phase II's grid, which is still
+// in the workspace, and a dense map of its columns.
 void GroundSegmenter::flagBelowGround(const PointCloudView& cloud, const Params& params, detail::Workspace& ws,
                                       Result& r) const {
     if (!(params.belowGroundMargin > 0) || ws.phase2Ground.empty()) return;
-    auto key = [&](float x, float y) {
-        return (std::uint64_t(std::uint32_t(cellCoord(x, params.cellSizeX))) << 32) |
-               std::uint32_t(cellCoord(y, params.cellSizeY));
-    };
-    auto& lowest = ws.columnGround;  // (column, lowest ground z), sorted
-    lowest.clear();
-    for (std::uint32_t i : ws.phase2Ground) lowest.emplace_back(key(cloud.x(i), cloud.y(i)), cloud.z(i));
-    std::sort(lowest.begin(), lowest.end());
-    lowest.erase(std::unique(lowest.begin(), lowest.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
-                 lowest.end());
-    auto groundAt = [&](std::int32_t ix, std::int32_t iy, float& z) {
-        const std::uint64_t k = (std::uint64_t(std::uint32_t(ix)) << 32) | std::uint32_t(iy);
-        const auto it = std::lower_bound(lowest.begin(), lowest.end(), std::make_pair(k, -std::numeric_limits<float>::infinity()));
-        if (it == lowest.end() || it->first != k) return false;
-        z = it->second;
-        return true;
-    };
+    constexpr float kNone = std::numeric_limits<float>::infinity();
+    constexpr int kPad = 2;
+    const auto& cells = ws.grid.cells();
+    std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
+    std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
+    for (std::size_t c = 0; c < cells.size(); ++c)
+        if (ws.cells[c].outcome == CellOutcome::Ground) {
+            lo[0] = std::min(lo[0], cells[c].ix), hi[0] = std::max(hi[0], cells[c].ix);
+            lo[1] = std::min(lo[1], cells[c].iy), hi[1] = std::max(hi[1], cells[c].iy);
+        }
+    const std::int64_t w = std::int64_t(hi[0]) - lo[0] + 1 + 2 * kPad, h = std::int64_t(hi[1]) - lo[1] + 1 + 2 * kPad;
+    if (w * h > std::int64_t(16) << 20) return;  // absurdly spread ground: no reference worth a map
+    auto& ground = ws.columnGround;
+    ground.assign(std::size_t(w * h), kNone);
+    auto at = [&](std::int64_t ix, std::int64_t iy) { return std::size_t((ix - lo[0] + kPad) * h + (iy - lo[1] + kPad)); };
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+        if (ws.cells[c].outcome != CellOutcome::Ground) continue;
+        float& g = ground[at(cells[c].ix, cells[c].iy)];
+        for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
+            if (ws.inlier[k]) g = std::min(g, ws.pts[k].z());
+    }
+    float highest = -kNone;  // no point above the highest ground minus the margin can be flagged
+    for (float g : ground)
+        if (g != kNone) highest = std::max(highest, g);
+    // Columns without ground take the lowest ground one ring out, then two rings out.
+    auto& next = ws.columnScratch;
+    for (int ring = 0; ring < kPad; ++ring) {
+        next = ground;
+        for (std::int64_t x = 1; x + 1 < w; ++x)
+            for (std::int64_t y = 1; y + 1 < h; ++y) {
+                float& v = next[std::size_t(x * h + y)];
+                if (v != kNone) continue;
+                for (int dx = -1; dx <= 1; ++dx)
+                    for (int dy = -1; dy <= 1; ++dy) v = std::min(v, ground[std::size_t((x + dx) * h + y + dy)]);
+            }
+        ground.swap(next);
+    }
+    const double below = double(highest) - params.belowGroundMargin;
     for (std::uint32_t i : ws.input) {
-        if (r.labels[i]) continue;
-        const std::int32_t ix = cellCoord(cloud.x(i), params.cellSizeX), iy = cellCoord(cloud.y(i), params.cellSizeY);
-        float ground = std::numeric_limits<float>::infinity();
-        for (int ring = 0; ring <= 2 && ground == std::numeric_limits<float>::infinity(); ++ring)
-            for (int dx = -ring; dx <= ring; ++dx)
-                for (int dy = -ring; dy <= ring; ++dy) {
-                    float z;
-                    if (std::max(std::abs(dx), std::abs(dy)) == ring && groundAt(ix + dx, iy + dy, z))
-                        ground = std::min(ground, z);
-                }
-        if (ground != std::numeric_limits<float>::infinity() &&
-            double(cloud.z(i)) < double(ground) - params.belowGroundMargin)
-            r.belowGround.push_back(i);
+        if (r.labels[i] || double(cloud.z(i)) >= below) continue;
+        const std::int64_t ix = cellCoord(cloud.x(i), params.cellSizeX), iy = cellCoord(cloud.y(i), params.cellSizeY);
+        if (ix < lo[0] - kPad || ix > hi[0] + kPad || iy < lo[1] - kPad || iy > hi[1] + kPad) continue;
+        const float g = ground[at(ix, iy)];
+        if (g != kNone && double(cloud.z(i)) < double(g) - params.belowGroundMargin) r.belowGround.push_back(i);
     }
 }
 
