@@ -307,3 +307,35 @@ TEST(Scenes, AutoHeightOnEveryScene) {
         EXPECT_GE(a.o.all.recall, fixed.all.recall - 0.03) << n.name;
     }
 }
+
+TEST(Scenes, NothingHalfAMetreAboveFlatGroundIsEverGround) {
+    // Every scene on level ground: no obstacle point 0.5 m or more above the road is ground, with the
+    // true height or with distToGround: auto.
+    for (const char* name : {"flat", "car_beside", "traffic_jam", "flatbed_truck", "wall_ledge", "hedge", "curb_near",
+                             "hdl32_street", "reflections", "vlp16_low"}) {
+        const auto n = gseg::test::scene(name);
+        const Outcome fixed = runScene(n);
+        const AutoOutcome a = runAuto(n);
+        std::size_t high = 0, highAuto = 0;
+        for (std::size_t i = 0; i < n.scan.size(); ++i) {
+            const bool raised = n.scan.truth[i] == Truth::NonGround && n.scan.xyz[3 * i + 2] > -n.sensorHeight + 0.5;
+            high += raised && fixed.result.labels[i];
+            highAuto += raised && a.o.result.labels[i];
+        }
+        EXPECT_EQ(high, 0u) << name;
+        EXPECT_EQ(highAuto, 0u) << name;
+    }
+}
+
+TEST(Scenes, OtherSensorsA32BeamStreetAndAForwardLookingSolidStateOnVegetatedHills) {
+    const auto street = gseg::test::scene("hdl32_street");  // 1.84 m up
+    const AutoOutcome s = runAuto(street);
+    EXPECT_NEAR(s.decision.height, 1.84, 0.05);
+    EXPECT_GE(s.o.all.precision, 0.96);  // measured 97.3 %: wheels and the hedge's foot
+    EXPECT_GE(s.o.all.recall, 0.85);
+    const auto hills = gseg::test::scene("solid_state_hills");  // 1 m up, 120 deg field of view
+    const AutoOutcome h = runAuto(hills);
+    EXPECT_EQ(h.decision.source, gseg::HeightDecision::Source::Estimated);
+    EXPECT_GE(h.o.all.precision, 0.975);  // measured 98.5 %
+    EXPECT_GE(h.o.all.recall, 0.9);       // measured 94.1 %
+}

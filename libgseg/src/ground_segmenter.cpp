@@ -197,7 +197,9 @@ private:
             s.candidate = std::int32_t(ws.candidateCell.size());
             ws.candidateCell.push_back(std::uint32_t(c));
             ws.centroids.push_back(s.ground);
-            ws.normals.push_back(s.normal);
+            // The gate follows fitted planes only: a line cell is gated by height (a ring on a wall
+            // near the sensor is a tilted line, and its least tilted plane would lead up the wall).
+            ws.normals.push_back(s.cellClass == CellClass::Plane ? s.normal : Eigen::Vector3f::UnitZ());
         }
     }
 

@@ -92,6 +92,8 @@ SimScan simulate(const Scene& scene, const Lidar& lidar) {
                           kDeg;
         for (int s = 0; s < steps; ++s) {
             const double az = s * lidar.azimuthStepDeg * kDeg;
+            const double fromForward = std::remainder(az, 2 * M_PI);
+            if (std::abs(fromForward) > 0.5 * lidar.fieldOfViewDeg * kDeg + 1e-9) continue;
             const double ds[3] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
             double d[3];
             for (int a = 0; a < 3; ++a) d[a] = R[a][0] * ds[0] + R[a][1] * ds[1] + R[a][2] * ds[2];

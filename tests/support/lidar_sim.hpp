@@ -61,8 +61,22 @@ struct Lidar {
     double noiseSigma = 0.01;  ///< [m] Gaussian range noise
     std::uint32_t seed = 7;
     double rollDeg = 0, pitchDeg = 0;  ///< mounting tilt: rays and points are in the tilted sensor frame
+    double fieldOfViewDeg = 360;       ///< horizontal field of view, centred on x (forward-looking sensors: less)
 
     static Lidar hdl64() { return Lidar(); }
+    /// A 32-beam spinning sensor (-25..+15 deg).
+    static Lidar hdl32() {
+        Lidar l;
+        l.beams = 32, l.minElevationDeg = -25, l.maxElevationDeg = 15, l.azimuthStepDeg = 0.2;
+        return l;
+    }
+    /// A forward-looking solid-state sensor: 120 x 25 deg, 64 rows.
+    static Lidar solidState() {
+        Lidar l;
+        l.beams = 64, l.minElevationDeg = -12.5, l.maxElevationDeg = 12.5, l.azimuthStepDeg = 0.2;
+        l.fieldOfViewDeg = 120;
+        return l;
+    }
     static Lidar vlp16() {
         Lidar l;
         l.beams = 16, l.minElevationDeg = -15, l.maxElevationDeg = 15, l.azimuthStepDeg = 0.2;

@@ -125,6 +125,32 @@ const std::map<std::string, Builder>& builders() {
              l.pitchDeg = 5, l.rollDeg = 2;
              return make("tilted_5deg", s, kH, l);
          }},
+        {"hdl32_street",
+         [] {
+             // A 32-beam sensor 1.84 m up in a street: parked cars on both sides, a hedge, a wall.
+             Scene s = flat(1.84);
+             for (double x = -18; x <= 18; x += 6) s.addCar(x, 3.0, -1.84), s.addCar(x + 2, -4.8, -1.84);
+             Box hedge;
+             hedge.lo[0] = -25, hedge.lo[1] = 6.0, hedge.lo[2] = -1.84, hedge.hi[0] = 25, hedge.hi[1] = 7.0;
+             hedge.hi[2] = -0.6, hedge.scatter = 0.4;
+             s.boxes.push_back(hedge);
+             s.addBox(-25, -9, -1.84, 25, -8.5, 2.0);
+             return make("hdl32_street", s, 1.84, Lidar::hdl32(), 5.0);
+         }},
+        {"solid_state_hills",
+         [] {
+             // A forward-looking solid-state sensor 1 m up on rolling vegetated ground: bushes ahead.
+             Scene s = hills(0.8, 1.0);
+             for (int i = 0; i < 8; ++i) {
+                 const double x = 6 + 3.5 * i, y = ((i * 37) % 11) - 5.0;
+                 const double z = s.terrains[0].height(x + 0.5, y + 0.5);
+                 Box bush;
+                 bush.lo[0] = x, bush.lo[1] = y, bush.lo[2] = z - 0.1, bush.hi[0] = x + 1.2, bush.hi[1] = y + 1.2;
+                 bush.hi[2] = z + 0.9, bush.scatter = 0.5;
+                 s.boxes.push_back(bush);
+             }
+             return make("solid_state_hills", s, 1.0, Lidar::solidState(), 5.0);
+         }},
         {"reflections",
          [] {
              NamedScan n = make("reflections", flat());
