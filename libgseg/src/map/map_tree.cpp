@@ -3,6 +3,7 @@
 #include "voxel_keys.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <string>
 
 namespace gseg::map::detail {
@@ -90,13 +91,27 @@ void MapTree::applySorted(const std::vector<std::uint64_t>& codes, VoxelUpdate h
         if (how == VoxelUpdate::MissUnlessOccupied && isNodeOccupied(n)) return true;
         return delta >= 0 ? n->getLogOdds() >= clamping_thres_max : n->getLogOdds() <= clamping_thres_min;
     };
-    // Children done: the node takes their maximum, and is pruned if they are eight equal leaves.
+    // Children done: the node takes their maximum (OcTreeNode::updateOccupancyChildren()), and is
+    // pruned if they are eight equal leaves at a clamping bound. Only there: values in between
+    // change with the next scan, and a pruned node would be expanded again at once.
     auto settle = [&](octomap::OcTreeNode* n) {
-        if (!nodeHasChildren(n)) return;
-        n->updateOccupancyChildren();
-        pruneNode(n);
+        float maxChild = -std::numeric_limits<float>::max();
+        bool equalLeaves = true;
+        float first = 0;
+        for (unsigned i = 0; i < 8; ++i) {
+            if (!nodeChildExists(n, i)) {
+                equalLeaves = false;
+                continue;
+            }
+            const octomap::OcTreeNode* c = getNodeChild(n, i);
+            const float v = c->getLogOdds();
+            maxChild = std::max(maxChild, v);
+            if (i == 0) first = v;
+            equalLeaves = equalLeaves && v == first && !nodeHasChildren(c);
+        }
+        n->setLogOdds(maxChild);
+        if (equalLeaves && (first == clamping_thres_min || first == clamping_thres_max)) pruneNode(n);
     };
-
     octomap::OcTreeNode* path[kTreeDepth + 1];
     bool fresh = false;  // path[depth] was created by this walk (so it is not a pruned leaf)
     if (!root) {
@@ -111,7 +126,8 @@ void MapTree::applySorted(const std::vector<std::uint64_t>& codes, VoxelUpdate h
         const std::uint64_t code = codes[i];
         if (i > 0) {
             const int keep = std::min(depth, sharedDepth(codes[i - 1], code));
-            for (; depth > keep; --depth) settle(path[depth]);
+            for (; depth > keep; --depth)
+                if (nodeHasChildren(path[depth])) settle(path[depth]);
             fresh = false;
         }
         bool skipped = false;
@@ -132,10 +148,15 @@ void MapTree::applySorted(const std::vector<std::uint64_t>& codes, VoxelUpdate h
         }
         if (skipped) continue;
         octomap::OcTreeNode* leaf = path[kTreeDepth];
-        if (!(how == VoxelUpdate::MissUnlessOccupied && !fresh && isNodeOccupied(leaf))) updateNodeLogOdds(leaf, delta);
+        if (!(how == VoxelUpdate::MissUnlessOccupied && !fresh && isNodeOccupied(leaf))) {
+            // OccupancyOcTreeBase::updateNodeLogOdds(): add, then clamp
+            const float v = leaf->getLogOdds() + delta;
+            leaf->setLogOdds(v < clamping_thres_min ? clamping_thres_min : v > clamping_thres_max ? clamping_thres_max : v);
+        }
         ++i;
     }
-    for (; depth >= 0; --depth) settle(path[depth]);
+    for (; depth >= 0; --depth)
+        if (nodeHasChildren(path[depth])) settle(path[depth]);
 }
 
 std::uint64_t MapTree::unprunedSize() const { return root ? countUnpruned(*this, root, 0) : 0; }

@@ -6,6 +6,9 @@
 
 #include <cmath>
 #include <cstring>
+#include <iomanip>
+#include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -15,22 +18,34 @@ namespace {
 using detail::BrickSet;
 using detail::mortonCode;
 
-/// Ray casting of one scan against an empty tree of the map's geometry (OctoMap's own ray
-/// traversal, so the voxels are exactly those OcTree::insertPointCloud would touch).
+constexpr std::uint64_t kAxisMask[3] = {0x249249249249ULL, 0x249249249249ULL << 1, 0x249249249249ULL << 2};
+
+/// Ray casting of one scan. The voxels are exactly those OcTree::computeRayKeys() gives (the same
+/// traversal with the same floating-point operations), so the maps are OctoMap's; but the keys go
+/// straight into the brick sets as Morton codes. Buffers are kept between scans (one per thread).
 class Caster {
 public:
-    Caster(const TraversabilityOptions& o, const Eigen::Vector3d& sensorOrigin)
-        : geometry_(o.resolution), maxRange_(o.maxRange), limit_(2 * o.extent()),
-          origin_(float(sensorOrigin.x()), float(sensorOrigin.y()), float(sensorOrigin.z())) {
-        octomap::OcTreeKey k;
-        if (!keyOf(origin_, k)) {
+    /// Prepares a scan: throws std::out_of_range if the origin lies outside the map's extent.
+    void begin(const TraversabilityOptions& o, const Eigen::Vector3d& sensorOrigin) {
+        if (!geometry_ || geometry_->getResolution() != o.resolution) geometry_ = std::make_unique<octomap::OcTree>(o.resolution);
+        maxRange_ = o.maxRange, limit_ = 2 * o.extent();
+        origin_ = octomap::point3d(float(sensorOrigin.x()), float(sensorOrigin.y()), float(sensorOrigin.z()));
+        if (!keyOf(origin_, originKey_)) {
             std::ostringstream s;
             s.precision(3);
             s << std::fixed << "sensor position (" << sensorOrigin.x() << ", " << sensorOrigin.y() << ", " << sensorOrigin.z()
-              << ") m lies outside the map's extent of +-" << o.extent() << " m (" << o.resolution << " m voxels)";
+              << ") m lies outside the map's extent of +-" << std::setprecision(1) << o.extent() << " m ("
+              << std::setprecision(2) << o.resolution << " m voxels)";
             throw std::out_of_range(s.str());
         }
+        originCode_ = mortonCode(originKey_);
+        for (BrickSet* b : {&ends_, &groundHits_, &obstacleHits_, &crossed_}) b->clear();
+        endPoints_.clear();
+        endCodes_.clear();
     }
+
+    BrickSet& groundHits() { return groundHits_; }
+    BrickSet& obstacleHits() { return obstacleHits_; }
 
     /// Hits and ray ends of a point set (the first point of each endpoint voxel ends a ray).
     void collect(const PointCloudView& pts, BrickSet& hits, ScanUpdate& u) {
@@ -47,31 +62,78 @@ public:
             }
             const std::uint64_t code = mortonCode(key);
             if (hit) hits.insert(code);
-            if (ends_.insert(code)) endPoints_.push_back(p);
+            if (ends_.insert(code)) endPoints_.push_back(p), endCodes_.push_back(code);
         }
     }
 
     /// Every voxel from the origin's up to (not including) each ray end's.
-    void castRays(BrickSet& crossed) {
-        octomap::KeyRay ray;
-        for (const auto& end : endPoints_) {
-            geometry_.computeRayKeys(origin_, end, ray);
-            for (const auto& k : ray) crossed.insert(mortonCode(k));
-        }
+    void castRays() {
+        for (std::size_t r = 0; r < endPoints_.size(); ++r) castRay(endPoints_[r], endCodes_[r]);
     }
     std::size_t rays() const { return endPoints_.size(); }
+    const BrickSet& crossed() const { return crossed_; }
 
 private:
-    octomap::OcTree geometry_;
-    double maxRange_, limit_;
+    std::unique_ptr<octomap::OcTree> geometry_;  ///< an empty tree: key arithmetic only
+    double maxRange_ = 0, limit_ = 0;
     octomap::point3d origin_;
-    BrickSet ends_;
+    octomap::OcTreeKey originKey_;
+    std::uint64_t originCode_ = 0;
+    BrickSet ends_, groundHits_, obstacleHits_, crossed_;
     std::vector<octomap::point3d> endPoints_;
+    std::vector<std::uint64_t> endCodes_;
 
     bool keyOf(const octomap::point3d& p, octomap::OcTreeKey& key) const {
         for (int a = 0; a < 3; ++a)  // far outside: rejected before OctoMap's int conversion can overflow
             if (!(std::abs(double(p(a))) < limit_)) return false;
-        return geometry_.coordToKeyChecked(p, key);
+        return geometry_->coordToKeyChecked(p, key);
+    }
+
+    /// OcTree::computeRayKeys(origin, end) (OctoMap 1.9.7), marking each key in crossed_.
+    void castRay(const octomap::point3d& end, std::uint64_t endCode) {
+        if (endCode == originCode_) return;
+        crossed_.insert(originCode_);
+        octomap::point3d direction = (end - origin_);
+        const float length = float(direction.norm());
+        direction /= length;
+        int step[3];
+        double tMax[3], tDelta[3];
+        const double resolution = geometry_->getResolution();
+        for (int i = 0; i < 3; ++i) {
+            step[i] = direction(i) > 0.0 ? 1 : direction(i) < 0.0 ? -1 : 0;
+            if (step[i] != 0) {
+                double voxelBorder = geometry_->keyToCoord(originKey_[unsigned(i)]);
+                voxelBorder += float(step[i] * resolution * 0.5);
+                tMax[i] = (voxelBorder - origin_(i)) / direction(i);
+                tDelta[i] = resolution / std::fabs(direction(i));
+            } else {
+                tMax[i] = tDelta[i] = std::numeric_limits<double>::max();
+            }
+        }
+        // The same choices as OctoMap's loop, without branches on the axis (they mispredict):
+        // the smallest tMax picks the axis (ties as in OctoMap), adding 0.0 leaves the others exact.
+        // One voxel along axis a: the axis bits of the code counted up or down, the others kept.
+        std::uint64_t pick[3], fill[3], add[3];
+        for (int a = 0; a < 3; ++a) {
+            pick[a] = step[a] > 0 ? ~0ULL : kAxisMask[a];  // up: carry through the other bits (filled)
+            fill[a] = step[a] > 0 ? ~kAxisMask[a] : 0;     // down: borrow within the axis bits only
+            add[a] = step[a] > 0 ? 1 : ~0ULL;
+        }
+        std::uint64_t code = originCode_;
+        double t0 = tMax[0], t1 = tMax[1], t2 = tMax[2];
+        while (true) {
+            const bool first = t0 < t1;
+            const int near01 = first ? 0 : 1;
+            const int dim = (first ? t0 : t1) < t2 ? near01 : 2;
+            const std::uint64_t m = kAxisMask[dim];
+            code = ((((code & pick[dim]) | fill[dim]) + add[dim]) & m) | (code & ~m);
+            t0 += dim == 0 ? tDelta[0] : 0.0;
+            t1 += dim == 1 ? tDelta[1] : 0.0;
+            t2 += dim == 2 ? tDelta[2] : 0.0;
+            if (code == endCode) return;
+            if (std::min(std::min(t0, t1), t2) > length) return;
+            crossed_.insert(code);
+        }
     }
 };
 
@@ -136,19 +198,20 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
                     const TraversabilityOptions& options) {
     options.validate();
     if (!sensorOrigin.allFinite()) throw std::invalid_argument("castScan: sensor origin is not finite");
-    Caster caster(options, sensorOrigin);
+    thread_local Caster buffers;  // reused scan after scan
+    Caster& caster = buffers;       // one TLS lookup
+    caster.begin(options, sensorOrigin);
     ScanUpdate u;
     u.origin = sensorOrigin;
     u.groundPoints = ground.size();
     u.obstaclePoints = obstacles.size();
-    BrickSet groundHits, obstacleHits, crossed;
-    caster.collect(ground, groundHits, u);
-    caster.collect(obstacles, obstacleHits, u);
-    caster.castRays(crossed);
+    caster.collect(ground, caster.groundHits(), u);
+    caster.collect(obstacles, caster.obstacleHits(), u);
+    caster.castRays();
     u.rays = caster.rays();
-    u.free = crossed.sortedCodes({&groundHits, &obstacleHits});
-    u.groundHits = groundHits.sortedCodes();
-    u.obstacleHits = obstacleHits.sortedCodes();
+    u.free = caster.crossed().sortedCodes({&caster.groundHits(), &caster.obstacleHits()});
+    u.groundHits = caster.groundHits().sortedCodes();
+    u.obstacleHits = caster.obstacleHits().sortedCodes();
     return u;
 }
 

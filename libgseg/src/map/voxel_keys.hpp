@@ -109,6 +109,12 @@ public:
         }
     }
     std::size_t size() const { return size_; }
+    /// Empties the index, keeping its memory.
+    void clear() {
+        if (size_ == 0) return;
+        std::fill(slots_.begin(), slots_.end(), Slot());
+        size_ = 0;
+    }
 
 private:
     struct Slot {
@@ -148,6 +154,13 @@ public:
         const long b = index_.find(code >> 9);
         return b >= 0 && (masks_[std::size_t(b)][(code >> 6) & 7] >> (code & 63) & 1);
     }
+    /// Empties the set, keeping its memory.
+    void clear() {
+        index_.clear();
+        bricks_.clear();
+        masks_.clear();
+        cachedBrick_ = CodeIndex::kEmpty;
+    }
     /// Every voxel of `other` into this set.
     void merge(const BrickSet& other) {
         for (std::size_t b = 0; b < other.bricks_.size(); ++b) {
@@ -160,14 +173,22 @@ public:
         std::vector<std::uint32_t> order(bricks_.size());
         for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
         std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bricks_[a] < bricks_[b]; });
-        std::vector<std::uint64_t> out;
-        for (std::uint32_t b : order) {
-            std::array<std::uint64_t, 8> m = masks_[b];
+        std::vector<std::array<std::uint64_t, 8>> kept(order.size());
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < order.size(); ++i) {
+            std::array<std::uint64_t, 8>& m = kept[i] = masks_[order[i]];
             for (const BrickSet* other : minus) {
-                const long o = other->index_.find(bricks_[b]);
+                const long o = other->index_.find(bricks_[order[i]]);
                 if (o < 0) continue;
                 for (int w = 0; w < 8; ++w) m[std::size_t(w)] &= ~other->masks_[std::size_t(o)][std::size_t(w)];
             }
+            for (std::uint64_t w : m) count += std::size_t(__builtin_popcountll(w));
+        }
+        std::vector<std::uint64_t> out;
+        out.reserve(count);
+        for (std::size_t i = 0; i < order.size(); ++i) {
+            const std::uint32_t b = order[i];
+            const std::array<std::uint64_t, 8>& m = kept[i];
             for (std::uint64_t w = 0; w < 8; ++w)
                 for (std::uint64_t bits = m[w]; bits; bits &= bits - 1)
                     out.push_back((bricks_[b] << 9) | (w << 6) | std::uint64_t(__builtin_ctzll(bits)));
