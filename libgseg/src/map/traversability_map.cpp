@@ -3,6 +3,7 @@
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/scan_update.hpp>
 
+#include "brick_map.hpp"
 #include "map_tree.hpp"
 #include "voxel_keys.hpp"
 
@@ -48,45 +49,14 @@ std::unique_ptr<detail::MapTree> makeTree(const TraversabilityOptions& o) {
     return t;
 }
 
-/// Calls f(x, y, z) for the centre of every finest voxel of every occupied leaf (pruned leaves
-/// stand for several voxels).
-template <class Tree, class F>
-void forEachOccupiedVoxel(const Tree& tree, F&& f) {
-    const double res = tree.getResolution();
-    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-        if (!tree.isNodeOccupied(*it)) continue;
-        const double size = it.getSize();
-        const int n = std::max(1, int(std::lround(size / res)));
-        const double x0 = it.getX() - size / 2 + res / 2, y0 = it.getY() - size / 2 + res / 2,
-                     z0 = it.getZ() - size / 2 + res / 2;
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j < n; ++j)
-                for (int k = 0; k < n; ++k) f(x0 + i * res, y0 + j * res, z0 + k * res);
-    }
-}
-
-/// Voxels (finest resolution) in occupied or in free leaves.
-std::size_t countVoxels(const octomap::OcTree& tree, bool occupied) {
-    const double res = tree.getResolution();
-    std::size_t n = 0;
-    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-        if (tree.isNodeOccupied(*it) != occupied) continue;
-        const std::size_t side = std::size_t(std::max(1L, std::lround(it.getSize() / res)));
-        n += side * side * side;
-    }
-    return n;
-}
-
-bool occupiedAt(const octomap::OcTree& tree, double x, double y, double z) {
-    const octomap::OcTreeNode* node = tree.search(x, y, z);
-    return node && tree.isNodeOccupied(node);
-}
-
 /// Lowest ground and obstacle voxel of a column, for the top-down grid.
 struct Column {
     float minGround = std::numeric_limits<float>::infinity();
     float minObstacle = std::numeric_limits<float>::infinity();
 };
+
+using detail::kGround;
+using detail::kObstacles;
 
 }  // namespace
 
@@ -116,16 +86,27 @@ Rgb colourOf(CellClass c) {
 TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
     : options_(options), everObstacle_(std::make_unique<detail::KeyMemory>()) {
     options_.validate();
-    ground_ = makeTree(options_);
-    obstacles_ = makeTree(options_);
+    configured_ = makeTree(options_);
+    detail::LogOdds l;
+    l.hit = configured_->getProbHitLog(), l.miss = configured_->getProbMissLog();
+    l.clampMin = configured_->getClampingThresMinLog(), l.clampMax = configured_->getClampingThresMaxLog();
+    l.occupied = configured_->getOccupancyThresLog();
+    voxels_ = std::make_unique<detail::BrickMap>(l);
 }
 
 TraversabilityMap::~TraversabilityMap() = default;
 TraversabilityMap::TraversabilityMap(TraversabilityMap&&) noexcept = default;
 TraversabilityMap& TraversabilityMap::operator=(TraversabilityMap&&) noexcept = default;
 
-const octomap::OcTree& TraversabilityMap::groundTree() const { return *ground_; }
-const octomap::OcTree& TraversabilityMap::obstacleTree() const { return *obstacles_; }
+const octomap::OcTree& TraversabilityMap::groundTree() const {
+    if (!groundTree_) groundTree_ = voxels_->toTree(kGround, *configured_);
+    return *groundTree_;
+}
+
+const octomap::OcTree& TraversabilityMap::obstacleTree() const {
+    if (!obstacleTree_) obstacleTree_ = voxels_->toTree(kObstacles, *configured_);
+    return *obstacleTree_;
+}
 
 void TraversabilityMap::insertScan(const PointCloudView& ground, const PointCloudView& obstacles,
                                    const Eigen::Vector3d& sensorOrigin) {
@@ -134,13 +115,11 @@ void TraversabilityMap::insertScan(const PointCloudView& ground, const PointClou
 
 void TraversabilityMap::apply(const ScanUpdate& u) {
     if (!u.origin.allFinite()) throw std::invalid_argument("TraversabilityMap::apply: sensor origin is not finite");
-    // Free first: hits of the same scan are never in `free`, so the order within a scan does not
-    // matter; ground does not move, so misses never lower an occupied ground voxel (rays to
-    // distant ground graze the road near their end and would erode it scan after scan).
-    ground_->applySorted(u.free, detail::VoxelUpdate::MissUnlessOccupied);
-    obstacles_->applySorted(u.free, detail::VoxelUpdate::Miss);
-    ground_->applySorted(u.groundHits, detail::VoxelUpdate::Hit);
-    obstacles_->applySorted(u.obstacleHits, detail::VoxelUpdate::Hit);
+    // Hits of a scan are never in its `free` list, so the order within a scan does not matter;
+    // ground does not move, so misses never lower an occupied ground voxel (rays to distant
+    // ground graze the road near their end and would erode it scan after scan).
+    voxels_->applyScan(u.free, u.groundHits, u.obstacleHits);
+    groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
     for (std::uint64_t c : u.obstacleHits) {
         bool inserted = false;
         everObstacle_->codes.insert(c, inserted);
@@ -158,32 +137,38 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
 std::unique_ptr<octomap::ColorOcTree> TraversabilityMap::colouredTree() const {
     auto tree = std::make_unique<octomap::ColorOcTree>(options_.resolution);
     tree->setOccupancyThres(options_.occupancyThreshold);
-    auto add = [&](double x, double y, double z, Rgb c) {
-        const octomap::OcTreeKey key = tree->coordToKey(x, y, z);
+    auto add = [&](std::uint64_t code, Rgb c) {
+        const octomap::OcTreeKey key = detail::keyOfCode(code);
         tree->updateNode(key, true, true);
         tree->setNodeColor(key, c.r, c.g, c.b);
     };
-    forEachOccupiedVoxel(*obstacles_, [&](double x, double y, double z) { add(x, y, z, colourOf(CellClass::Obstacle)); });
-    forEachOccupiedVoxel(*ground_, [&](double x, double y, double z) {
-        if (!occupiedAt(*obstacles_, x, y, z)) add(x, y, z, colourOf(CellClass::Traversable));
+    const float occupied = configured_->getOccupancyThresLog();
+    voxels_->forEachVoxel(kObstacles, [&](std::uint64_t code, float v) {
+        if (v >= occupied) add(code, colourOf(CellClass::Obstacle));
+    });
+    voxels_->forEachVoxel(kGround, [&](std::uint64_t code, float v) {
+        if (v >= occupied && !voxels_->occupied(kObstacles, code)) add(code, colourOf(CellClass::Traversable));
     });
     if (tree->size() > 0) tree->updateInnerOccupancy();  // ColorOcTree's crashes on an empty tree
     return tree;
 }
 
 TopDownGrid TraversabilityMap::topDown() const {
-    const double res = options_.resolution;
+    if (topDown_) return *topDown_;
     std::unordered_map<std::uint64_t, Column> columns;
-    TopDownGrid g(res);
-    auto column = [&](double x, double y) -> Column& { return columns[detail::pairKey(g.cellIndex(x), g.cellIndex(y))]; };
-    forEachOccupiedVoxel(*ground_, [&](double x, double y, double z) {
-        Column& c = column(x, y);
-        c.minGround = std::min(c.minGround, float(z));
-    });
-    forEachOccupiedVoxel(*obstacles_, [&](double x, double y, double z) {
-        Column& c = column(x, y);
-        c.minObstacle = std::min(c.minObstacle, float(z));
-    });
+    const float occupied = configured_->getOccupancyThresLog();
+    auto lowest = [&](detail::MapIndex m, float Column::*field) {
+        voxels_->forEachVoxel(m, [&](std::uint64_t code, float v) {
+            if (v < occupied) return;
+            const octomap::OcTreeKey k = detail::keyOfCode(code);
+            const std::int64_t ix = std::int64_t(k[0]) - 32768, iy = std::int64_t(k[1]) - 32768;
+            float& z = columns[detail::pairKey(ix, iy)].*field;
+            z = std::min(z, float(configured_->keyToCoord(k[2])));
+        });
+    };
+    lowest(kGround, &Column::minGround);
+    lowest(kObstacles, &Column::minObstacle);
+    TopDownGrid g(options_.resolution);
     for (const auto& [key, c] : columns) {
         const auto [ix, iy] = detail::splitPairKey(key);
         const bool hasGround = std::isfinite(c.minGround);
@@ -191,21 +176,21 @@ TopDownGrid TraversabilityMap::topDown() const {
         const bool blocked = c.minObstacle <= reference + float(options_.clearance);
         g.set(ix, iy, blocked ? CellClass::Obstacle : CellClass::Traversable);
     }
+    topDown_ = std::make_unique<TopDownGrid>(g);
     return g;
 }
 
 MapStats TraversabilityMap::stats() const {
     MapStats s = stats_;
-    s.groundVoxels = countVoxels(*ground_, true);
-    s.obstacleVoxels = countVoxels(*obstacles_, true);
-    s.freeVoxels = countVoxels(*obstacles_, false);
-    s.clearedObstacleVoxels = 0;
-    for (std::uint64_t c : everObstacle_->list) {
-        const octomap::OcTreeNode* n = obstacles_->search(detail::keyOfCode(c));
-        if (n && !obstacles_->isNodeOccupied(n)) ++s.clearedObstacleVoxels;
-    }
-    forEachOccupiedVoxel(*ground_, [&](double x, double y, double z) {
-        if (occupiedAt(*obstacles_, x, y, z)) ++s.groundUnderObstacle;
+    s.groundVoxels = voxels_->count(kGround, true);
+    s.obstacleVoxels = voxels_->count(kObstacles, true);
+    s.freeVoxels = voxels_->count(kObstacles, false);
+    float v = 0;
+    for (std::uint64_t c : everObstacle_->list)
+        s.clearedObstacleVoxels += voxels_->value(kObstacles, c, v) && !voxels_->occupied(kObstacles, c);
+    const float occupied = configured_->getOccupancyThresLog();
+    voxels_->forEachVoxel(kGround, [&](std::uint64_t code, float g) {
+        s.groundUnderObstacle += g >= occupied && voxels_->occupied(kObstacles, code);
     });
     const TopDownGrid g = topDown();
     s.cellsTraversable = g.count(CellClass::Traversable);
@@ -222,8 +207,8 @@ std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefi
 std::vector<std::string> TraversabilityMap::write(const std::string& prefix) const {
     if (empty()) throw std::logic_error("TraversabilityMap::write: no scan was inserted");
     std::ostringstream groundBt, obstaclesBt, colouredOt;
-    ground_->writeUnprunedBinary(groundBt);
-    obstacles_->writeUnprunedBinary(obstaclesBt);
+    voxels_->writeBinary(kGround, groundBt, configured_->getResolution());
+    voxels_->writeBinary(kObstacles, obstaclesBt, configured_->getResolution());
     if (!colouredTree()->write(colouredOt)) throw std::runtime_error(prefix + ": OctoMap serialisation failed");
     const std::string blobs[4] = {groundBt.str(), obstaclesBt.str(), colouredOt.str(), encodeTopDownPng(topDown(), path_)};
     AtomicFiles files(outputPaths(prefix));

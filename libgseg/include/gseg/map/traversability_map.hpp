@@ -28,7 +28,8 @@ namespace gseg::map {
 
 namespace detail {
 struct KeyMemory;  // voxel keys ever occupied as obstacle (implementation detail)
-class MapTree;     // an OcTree updated in sorted batches (implementation detail)
+class MapTree;     // an OcTree built in sorted order (implementation detail)
+class BrickMap;    // the voxels while a drive is integrated (implementation detail)
 }
 
 struct ScanUpdate;
@@ -141,9 +142,10 @@ struct MapStats {
 /// trees counts as obstacle). Misses never lower an occupied ground voxel: rays to distant ground
 /// graze the road just before their end and would erode it (ground does not move).
 ///
-/// The trees are pruned as they are built (eight equal sibling leaves become their parent), which
-/// keeps every voxel's value and saves memory; the `.bt` files are written unpruned, exactly as
-/// OcTree::writeBinaryConst() writes a tree updated voxel by voxel with OcTree::updateNode().
+/// Every voxel gets exactly the value OctoMap's OcTree::updateNode() calls would give it, and the
+/// `.bt` files are byte for byte what OcTree::writeBinaryConst() writes for those trees; while
+/// the drive is integrated the voxels are kept in bricks of 8 x 8 x 8 (a brick whose voxels all
+/// sit at one clamping bound keeps one value), which makes a scan's update cheap.
 class TraversabilityMap {
 public:
     /// Throws std::invalid_argument on invalid options.
@@ -163,6 +165,8 @@ public:
     void apply(const ScanUpdate& update);
 
     bool empty() const { return stats_.scans == 0; }
+    /// The maps as OctoMap trees (built when first asked for after a scan; pruned where eight
+    /// leaves hold the same clamped value).
     const octomap::OcTree& groundTree() const;
     const octomap::OcTree& obstacleTree() const;
     const std::vector<Eigen::Vector3d>& path() const { return path_; }  ///< sensor origins, in order
@@ -185,7 +189,10 @@ public:
 
 private:
     TraversabilityOptions options_;
-    std::unique_ptr<detail::MapTree> ground_, obstacles_;
+    std::unique_ptr<detail::MapTree> configured_;  ///< an empty tree with the options: OctoMap's own log-odds
+    std::unique_ptr<detail::BrickMap> voxels_;
+    mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
+    mutable std::unique_ptr<TopDownGrid> topDown_;
     std::unique_ptr<detail::KeyMemory> everObstacle_;
     std::vector<Eigen::Vector3d> path_;
     MapStats stats_;

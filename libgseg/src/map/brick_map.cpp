@@ -1,0 +1,216 @@
+#include "brick_map.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <string>
+
+namespace gseg::map::detail {
+
+BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
+    bool inserted = false;
+    const std::uint32_t i = index_.insert(brickCode, inserted);
+    if (inserted) codes_.push_back(brickCode), bricks_.emplace_back();
+    return bricks_[i];
+}
+
+void BrickMap::materialise(TreeBrick& t) {
+    if (freeBlocks_.empty()) {
+        if (blockCount_ % kBlocksPerChunk == 0) chunks_.emplace_back(new float[kBlocksPerChunk * 512]);
+        freeBlocks_.push_back(std::int32_t(blockCount_++));
+    }
+    t.block = freeBlocks_.back();
+    freeBlocks_.pop_back();
+    std::fill(block(t.block), block(t.block) + 512, t.uniform);
+}
+
+void BrickMap::collapseIfUniform(TreeBrick& t) {
+    if (t.block < 0) return;
+    int n = 0;
+    for (std::uint64_t w : t.exists) n += __builtin_popcountll(w);
+    if (t.atMin != n && t.atMax != n) return;
+    t.uniform = t.atMin == n ? l_.clampMin : l_.clampMax;
+    freeBlocks_.push_back(t.block);
+    t.block = -1;
+}
+
+void BrickMap::update(TreeBrick& t, unsigned local, float delta, bool skipOccupied) {
+    const std::uint64_t bit = 1ULL << (local & 63);
+    std::uint64_t& word = t.exists[local >> 6];
+    const bool exists = word & bit;
+    const float old = !exists ? 0.f : t.block >= 0 ? block(t.block)[local] : t.uniform;
+    if (skipOccupied && exists && old >= l_.occupied) return;  // ground does not move
+    float v = old + delta;  // OcTreeNode::addValue(), then the clamping of updateNodeLogOdds()
+    if (v < l_.clampMin) v = l_.clampMin;
+    else if (v > l_.clampMax) v = l_.clampMax;
+    if (exists && v == old) return;  // at the bound already
+    if (t.block < 0) materialise(t);
+    if (exists) {
+        t.atMin -= old == l_.clampMin;
+        t.atMax -= old == l_.clampMax;
+    }
+    word |= bit;
+    block(t.block)[local] = v;
+    t.atMin += v == l_.clampMin;
+    t.atMax += v == l_.clampMax;
+}
+
+void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
+                         const std::vector<std::uint64_t>& obstacleHits) {
+    // Brick by brick: the codes of one brick are consecutive in a sorted list.
+    auto forEachBrick = [&](const std::vector<std::uint64_t>& codes, auto&& perBrick) {
+        for (std::size_t i = 0; i < codes.size();) {
+            const std::uint64_t brick = codes[i] >> 9;
+            std::size_t j = i;
+            while (j < codes.size() && codes[j] >> 9 == brick) ++j;
+            perBrick(brickOf(brick), &codes[i], &codes[j]);
+            i = j;
+        }
+    };
+    forEachBrick(free, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
+        for (const std::uint64_t* c = from; c != to; ++c) {
+            update(b.map[kGround], unsigned(*c & 511), l_.miss, true);
+            update(b.map[kObstacles], unsigned(*c & 511), l_.miss, false);
+        }
+        collapseIfUniform(b.map[kGround]);
+        collapseIfUniform(b.map[kObstacles]);
+    });
+    for (const MapIndex m : {kGround, kObstacles})
+        forEachBrick(m == kGround ? groundHits : obstacleHits, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
+            for (const std::uint64_t* c = from; c != to; ++c) update(b.map[m], unsigned(*c & 511), l_.hit, false);
+            collapseIfUniform(b.map[m]);
+        });
+}
+
+bool BrickMap::value(MapIndex m, std::uint64_t code, float& logOdds) const {
+    const long b = index_.find(code >> 9);
+    if (b < 0) return false;
+    const TreeBrick& t = bricks_[std::size_t(b)].map[m];
+    const unsigned local = unsigned(code & 511);
+    if (!(t.exists[local >> 6] >> (local & 63) & 1)) return false;
+    logOdds = t.block >= 0 ? block(t.block)[local] : t.uniform;
+    return true;
+}
+
+std::size_t BrickMap::count(MapIndex m, bool occupiedVoxels) const {
+    std::size_t n = 0;
+    for (const Brick& b : bricks_) {
+        const TreeBrick& t = b.map[m];
+        if (t.block < 0) {
+            if ((t.uniform >= l_.occupied) == occupiedVoxels)
+                for (std::uint64_t w : t.exists) n += std::size_t(__builtin_popcountll(w));
+            continue;
+        }
+        const float* v = block(t.block);
+        for (unsigned w = 0; w < 8; ++w)
+            for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1)
+                n += (v[(w << 6) | unsigned(__builtin_ctzll(bits))] >= l_.occupied) == occupiedVoxels;
+    }
+    return n;
+}
+
+std::vector<std::size_t> BrickMap::sortedBricks() const {
+    std::vector<std::size_t> order(bricks_.size());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return codes_[a] < codes_[b]; });
+    return order;
+}
+
+namespace {
+
+/// OctoMap's binary encoding (OccupancyOcTreeBase::writeBinaryNode()): per inner node two bytes,
+/// two bits per child i at bits 2i, 2i+1 of byte i / 4: 01 free leaf, 10 occupied leaf (as the
+/// bit pair reads low to high), 11 inner node, 00 absent.
+struct NodeBytes {
+    std::uint8_t b[2] = {0, 0};
+    void set(unsigned child, unsigned code) { b[child / 4] |= std::uint8_t(code << (2 * (child % 4))); }
+};
+constexpr unsigned kInner = 3, kOccupiedLeaf = 2, kFreeLeaf = 1;
+
+}  // namespace
+
+void BrickMap::writeBinary(MapIndex m, std::ostream& out, double resolution) const {
+    std::vector<std::size_t> order;
+    for (std::size_t b : sortedBricks()) {
+        const auto& e = bricks_[b].map[m].exists;
+        if (std::any_of(std::begin(e), std::end(e), [](std::uint64_t w) { return w != 0; })) order.push_back(b);
+    }
+    std::string data;
+    std::uint64_t nodes = order.empty() ? 0 : 1;
+    auto put = [&](const NodeBytes& n) { data.append(reinterpret_cast<const char*>(n.b), 2); };
+    // The node at depth 13 that a brick is: words (depth 14), bytes (depth 15), voxels (leaves).
+    auto writeBrick = [&](const TreeBrick& t) {
+        NodeBytes words;
+        for (unsigned w = 0; w < 8; ++w)
+            if (t.exists[w]) words.set(w, kInner), ++nodes;
+        put(words);
+        for (unsigned w = 0; w < 8; ++w) {
+            if (!t.exists[w]) continue;
+            NodeBytes bytes;
+            for (unsigned j = 0; j < 8; ++j)
+                if (t.exists[w] >> (8 * j) & 0xff) bytes.set(j, kInner), ++nodes;
+            put(bytes);
+            for (unsigned j = 0; j < 8; ++j) {
+                const unsigned bits = unsigned(t.exists[w] >> (8 * j) & 0xff);
+                if (!bits) continue;
+                NodeBytes leaves;
+                for (unsigned k = 0; k < 8; ++k) {
+                    if (!(bits >> k & 1)) continue;
+                    const unsigned local = (w << 6) | (j << 3) | k;
+                    const float v = t.block >= 0 ? block(t.block)[local] : t.uniform;
+                    leaves.set(k, v >= l_.occupied ? kOccupiedLeaf : kFreeLeaf), ++nodes;
+                }
+                put(leaves);
+            }
+        }
+    };
+    // A node above the bricks (depth < 13) holding order[lo, hi).
+    auto writeInner = [&](auto&& self, std::size_t lo, std::size_t hi, int depth) -> void {
+        NodeBytes children;
+        std::size_t bounds[9];
+        unsigned groups = 0;
+        for (std::size_t i = lo; i < hi;) {
+            const unsigned c = childIndex(codes_[order[i]] << 9, depth);
+            std::size_t j = i;
+            while (j < hi && childIndex(codes_[order[j]] << 9, depth) == c) ++j;
+            children.set(c, kInner), ++nodes;
+            bounds[groups++] = i;
+            i = j;
+        }
+        bounds[groups] = hi;
+        put(children);
+        for (unsigned g = 0; g < groups; ++g) {
+            if (depth + 1 < kTreeDepth - 3) self(self, bounds[g], bounds[g + 1], depth + 1);
+            else writeBrick(bricks_[order[bounds[g]]].map[m]);
+        }
+    };
+    if (!order.empty()) writeInner(writeInner, 0, order.size(), 0);
+    out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+    out << "id OcTree" << std::endl;
+    out << "size " << nodes << std::endl;
+    out << "res " << resolution << std::endl;
+    out << "data" << std::endl;
+    out.write(data.data(), std::streamsize(data.size()));
+}
+
+std::unique_ptr<MapTree> BrickMap::toTree(MapIndex m, const MapTree& configured) const {
+    auto tree = std::make_unique<MapTree>(configured.getResolution());
+    tree->setProbHit(configured.getProbHit()), tree->setProbMiss(configured.getProbMiss());
+    tree->setClampingThresMin(configured.getClampingThresMin()), tree->setClampingThresMax(configured.getClampingThresMax());
+    tree->setOccupancyThres(configured.getOccupancyThres());
+    std::vector<std::uint64_t> codes;
+    std::vector<float> values;
+    for (std::size_t b : sortedBricks()) {
+        const TreeBrick& t = bricks_[b].map[m];
+        codes.clear(), values.clear();
+        for (std::uint64_t w = 0; w < 8; ++w)
+            for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1) {
+                const std::uint64_t local = (w << 6) | std::uint64_t(__builtin_ctzll(bits));
+                codes.push_back((codes_[b] << 9) | local);
+                values.push_back(t.block >= 0 ? block(t.block)[local] : t.uniform);
+            }
+        tree->setSorted(codes.data(), values.data(), codes.size());
+    }
+    return tree;
+}
+
+}  // namespace gseg::map::detail

@@ -1,0 +1,103 @@
+#pragma once
+/// \file brick_map.hpp
+/// Internal to the map layer: the working form of the two occupancy maps (ground, obstacles)
+/// while a drive is integrated. Voxels live in bricks of 8 x 8 x 8 (the OctoMap subtree three
+/// levels above the leaves), found by a hash of the brick's Morton code; each brick holds, per
+/// map, which voxels exist and their log-odds. A scan's update then costs one hash lookup per
+/// brick and a few instructions per voxel, instead of a walk down the octree and a node
+/// allocation per voxel.
+///
+/// Every voxel keeps exactly the value (float log-odds, same operations, same clamping) that
+/// OcTree::updateNode() calls would give it, and the OctoMap files are written from the bricks in
+/// the exact bytes of that tree. A brick whose existing voxels all sit at the same clamping bound
+/// keeps one value instead of 512 (as OctoMap prunes such subtrees).
+
+#include "map_tree.hpp"
+#include "voxel_keys.hpp"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <ostream>
+#include <vector>
+
+namespace gseg::map::detail {
+
+enum MapIndex { kGround = 0, kObstacles = 1 };
+
+/// The occupancy parameters as OctoMap holds them (float log-odds).
+struct LogOdds {
+    float hit = 0, miss = 0, clampMin = 0, clampMax = 0, occupied = 0;
+};
+
+class BrickMap {
+public:
+    explicit BrickMap(const LogOdds& l) : l_(l) {}
+
+    /// One scan: misses on `free` in both maps (ground: only where not occupied), hits on the
+    /// ground and obstacle voxels in their own map. All lists sorted.
+    void applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
+                   const std::vector<std::uint64_t>& obstacleHits);
+
+    /// Log-odds of a voxel; false if it does not exist in that map.
+    bool value(MapIndex m, std::uint64_t code, float& logOdds) const;
+    bool occupied(MapIndex m, std::uint64_t code) const {
+        float v = 0;
+        return value(m, code, v) && v >= l_.occupied;
+    }
+    /// Calls f(code, logOdds) for every voxel of map m (brick by brick, not sorted).
+    template <class F>
+    void forEachVoxel(MapIndex m, F&& f) const {
+        for (std::size_t b = 0; b < bricks_.size(); ++b) {
+            const TreeBrick& t = bricks_[b].map[m];
+            for (std::uint64_t w = 0; w < 8; ++w)
+                for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1) {
+                    const std::uint64_t local = (w << 6) | std::uint64_t(__builtin_ctzll(bits));
+                    f((codes_[b] << 9) | local, t.block >= 0 ? block(t.block)[local] : t.uniform);
+                }
+        }
+    }
+    /// Voxels of map m: occupied (>= the occupancy threshold) or free.
+    std::size_t count(MapIndex m, bool occupiedVoxels) const;
+
+    /// What OcTree::writeBinaryConst() writes for map m updated voxel by voxel (header included).
+    void writeBinary(MapIndex m, std::ostream& out, double resolution) const;
+    /// Map m as an OcTree (pruned where eight leaves are equal and clamped).
+    std::unique_ptr<MapTree> toTree(MapIndex m, const MapTree& configured) const;
+
+    std::size_t bricks() const { return bricks_.size(); }
+    std::size_t blocksInUse() const { return blockCount_ - freeBlocks_.size(); }  ///< bricks with 512 values
+
+private:
+    struct TreeBrick {
+        std::uint64_t exists[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        std::int32_t block = -1;  ///< 512 values, or -1: every existing voxel has `uniform`
+        float uniform = 0;
+        std::uint16_t atMin = 0, atMax = 0;  ///< existing voxels at each clamping bound
+    };
+    struct Brick {
+        TreeBrick map[2];
+    };
+    static constexpr std::size_t kBlocksPerChunk = 256;
+
+    LogOdds l_;
+    CodeIndex index_;                  ///< brick code -> position in bricks_
+    std::vector<std::uint64_t> codes_;  ///< brick code (Morton code >> 9) per brick
+    std::vector<Brick> bricks_;
+    std::vector<std::unique_ptr<float[]>> chunks_;  ///< value blocks, kBlocksPerChunk x 512 floats each
+    std::vector<std::int32_t> freeBlocks_;
+    std::size_t blockCount_ = 0;
+
+    float* block(std::int32_t b) { return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 512]; }
+    const float* block(std::int32_t b) const {
+        return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 512];
+    }
+    Brick& brickOf(std::uint64_t brickCode);
+    void materialise(TreeBrick& t);
+    void collapseIfUniform(TreeBrick& t);
+    /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics).
+    void update(TreeBrick& t, unsigned local, float delta, bool skipOccupied);
+    std::vector<std::size_t> sortedBricks() const;
+};
+
+}  // namespace gseg::map::detail
