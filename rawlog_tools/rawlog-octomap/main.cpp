@@ -102,9 +102,9 @@ void printReport(const RunReport& r, double resolution, unsigned threads) {
     const gseg::map::MapStats& s = r.stats;
     const double cellArea = resolution * resolution;
     std::printf("rawlog-octomap: %zu scans (%zu from _ground/_obstacles pairs, %zu raw scans not segmented again, %zu "
-                "skipped), sensor path %.2f m; points: %zu ground, %zu obstacle, %zu not used; %zu rays\n",
-                s.scans + r.skipped.size(), r.presegmented, r.rawWithPair, r.skipped.size(), s.pathLength, s.groundPoints,
-                s.obstaclePoints, s.pointsSkipped, s.rays);
+                "skipped), poses from %s, sensor path %.2f m; points: %zu ground, %zu obstacle, %zu not used; %zu rays\n",
+                s.scans + r.skipped.size(), r.presegmented, r.rawWithPair, r.skipped.size(), r.poseSource.c_str(),
+                s.pathLength, s.groundPoints, s.obstaclePoints, s.pointsSkipped, s.rays);
     if (r.origin)
         std::printf("map origin: (%.3f, %.3f, %.3f) m of the poses' world is (0, 0, 0) in the maps\n", r.origin->x(),
                     r.origin->y(), r.origin->z());
@@ -131,7 +131,6 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
                             {cli.input, cli.poses.poses, cli.poses.calib, cli.config});
     const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
     ScanStream stream(cli.poses);
-    if (!quiet) std::cerr << "rawlog-octomap: " << cli.input << ", poses from " << stream.poseSource() << "\n";
 
     gseg::map::TraversabilityMap map(cli.options);
     std::vector<ScanWorker> workers;  // one per thread: each has its own segmenter
@@ -163,6 +162,7 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
     report.times.read = stream.readSeconds();
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();
+    report.poseSource = stream.poseSource();
     const auto t0 = std::chrono::steady_clock::now();
     report.written = map.write(cli.prefix);
     report.times.writing = secondsSince(t0);
@@ -192,8 +192,7 @@ int main(int argc, char** argv) {
         std::cerr << "rawlog-octomap: " << e.what() << "\n";
         return 2;
     } catch (const std::exception& e) {
-        std::string what = e.what();
-        std::cerr << "rawlog-octomap: " << what.substr(0, what.find('\n')) << "\n";
+        std::cerr << "rawlog-octomap: " << gseg::map::reasonOf(e) << "\n";
         return 1;
     }
 }

@@ -29,6 +29,7 @@ struct RunReport {
     std::vector<std::string> skipped;  ///< "scan k (...): reason"
     std::vector<std::string> written;
     std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)
+    std::string poseSource;                 ///< "the rawlog" or the pose file
 };
 
 /// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless

@@ -40,6 +40,8 @@ ScanResult ScanWorker::operator()(const ScanJob& job) {
     const auto t0 = std::chrono::steady_clock::now();
     try {
         r.update = gseg::map::castScan(world.groundView(), world.obstaclesView(), world.sensorOrigin, options_);
+    } catch (const std::out_of_range& e) {
+        throw std::runtime_error(r.describe + ": " + e.what() + "; for poses in UTM or other large coordinates use --origin first");
     } catch (const std::exception& e) {
         throw std::runtime_error(r.describe + ": " + e.what());
     }

@@ -9,10 +9,10 @@
 
 namespace gseg::map {
 
-CheckedGzOutput::CheckedGzOutput(const std::string& path, int level) : path_(path) {
+CheckedGzOutput::CheckedGzOutput(const std::string& path, const std::string& name) : name_(name.empty() ? path : name) {
     errno = 0;
-    gz_ = gzopen(path.c_str(), ("wb" + std::to_string(level)).c_str());
-    if (!gz_) throw std::runtime_error(path + ": cannot create (" + (errno ? std::strerror(errno) : "zlib") + ")");
+    gz_ = gzopen(path.c_str(), "wb1");
+    if (!gz_) throw std::runtime_error(name_ + ": cannot create (" + (errno ? std::strerror(errno) : "zlib") + ")");
 }
 
 CheckedGzOutput::~CheckedGzOutput() {
@@ -23,7 +23,7 @@ void CheckedGzOutput::fail(const std::string& what) {
     int zerr = 0;
     const char* zmsg = gz_ ? gzerror(static_cast<gzFile>(gz_), &zerr) : "";
     const std::string why = zerr == Z_ERRNO || zerr == 0 ? std::strerror(errno) : zmsg;
-    throw std::runtime_error(path_ + ": " + what + " (" + why + ")");
+    throw std::runtime_error(name_ + ": " + what + " (" + why + ")");
 }
 
 size_t CheckedGzOutput::Write(const void* buffer, size_t count) {
@@ -44,11 +44,11 @@ void CheckedGzOutput::close() {
     errno = 0;
     const int rc = gzclose(static_cast<gzFile>(gz_));
     gz_ = nullptr;
-    if (rc != Z_OK) throw std::runtime_error(path_ + ": write failed on close (" + (rc == Z_ERRNO ? std::strerror(errno) : "zlib error") + ")");
+    if (rc != Z_OK) throw std::runtime_error(name_ + ": write failed on close (" + (rc == Z_ERRNO ? std::strerror(errno) : "zlib error") + ")");
 }
 
-size_t CheckedGzOutput::Read(void*, size_t) { throw std::logic_error(path_ + ": CheckedGzOutput is write-only"); }
+size_t CheckedGzOutput::Read(void*, size_t) { throw std::logic_error(name_ + ": CheckedGzOutput is write-only"); }
 
-uint64_t CheckedGzOutput::Seek(int64_t, CStream::TSeekOrigin) { throw std::logic_error(path_ + ": CheckedGzOutput cannot seek"); }
+uint64_t CheckedGzOutput::Seek(int64_t, CStream::TSeekOrigin) { throw std::logic_error(name_ + ": CheckedGzOutput cannot seek"); }
 
 }  // namespace gseg::map

@@ -35,6 +35,17 @@ std::string folderOf(const std::string& path) {
 
 }  // namespace
 
+std::string reasonOf(const std::exception& e) {
+    std::string what = e.what(), line;
+    for (std::size_t from = 0; from <= what.size();) {
+        const std::size_t to = std::min(what.find('\n', from), what.size());
+        line = what.substr(from, to - from);
+        if (!line.empty() && line.rfind("====", 0) != 0) return line;
+        from = to + 1;
+    }
+    return what.empty() ? "unknown error" : what;
+}
+
 std::string temporaryPathFor(const std::string& path) { return besideWithPrefix(path, "tmp"); }
 
 void writeFileChecked(const std::string& path, const std::string& bytes) {

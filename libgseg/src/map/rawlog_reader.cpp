@@ -1,5 +1,7 @@
 #include <gseg/map/rawlog_reader.hpp>
 
+#include <gseg/map/output_files.hpp>
+
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -33,9 +35,7 @@ std::shared_ptr<::mrpt::serialization::CSerializable> RawlogReader::next() {
     } catch (const ::mrpt::serialization::CExceptionEOF&) {
         return nullptr;  // clean end of the file
     } catch (const std::exception& e) {
-        const std::string what = e.what();
-        throw std::runtime_error(path_ + ": entry " + std::to_string(index_) + " is corrupt or truncated (" +
-                                 what.substr(0, what.find('\n')) + ")");
+        throw std::runtime_error(path_ + ": entry " + std::to_string(index_) + " is corrupt or truncated (" + reasonOf(e) + ")");
     }
     ++index_;
     return obj;

@@ -13,8 +13,9 @@ namespace gseg::map {
 
 class CheckedGzOutput : public ::mrpt::io::CStream {
 public:
-    /// Creates `path` (gzip, `level` 1 fast .. 9 small). Throws std::runtime_error naming it.
-    explicit CheckedGzOutput(const std::string& path, int level = 1);
+    /// Creates `path` (gzip, level 1: fast); errors name `name` (default: the path; e.g. the final
+    /// name of a temporary file). Throws std::runtime_error.
+    explicit CheckedGzOutput(const std::string& path, const std::string& name = "");
     /// Closes without checking: call close() to know the file is complete.
     ~CheckedGzOutput() override;
     CheckedGzOutput(const CheckedGzOutput&) = delete;
@@ -31,7 +32,7 @@ public:
     uint64_t getPosition() const override { return written_; }
 
 private:
-    std::string path_;
+    std::string name_;
     void* gz_ = nullptr;  ///< gzFile
     uint64_t written_ = 0;
     [[noreturn]] void fail(const std::string& what);

@@ -2,10 +2,15 @@
 /// \file output_files.hpp
 /// Output files written completely or not at all, checked before any work, never over an input.
 
+#include <exception>
 #include <string>
 #include <vector>
 
 namespace gseg::map {
+
+/// The line of an exception's message that says what went wrong: MRPT's exceptions start with a
+/// "==== MRPT exception ====" banner and end with a call stack.
+std::string reasonOf(const std::exception& e);
 
 /// `<folder>/.tmp<pid>_<name>` beside `path` (same folder, so the final rename is atomic).
 std::string temporaryPathFor(const std::string& path);
