@@ -8,13 +8,14 @@
 /// sorts voxels in the tree's depth-first order (children 0..7): a sorted list updates a tree in
 /// one walk.
 
-#include <octomap/OcTreeKey.h>
-
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
+
+#include <octomap/OcTreeKey.h>  // needs <cstddef>, <cstdint> and <vector> first
 
 namespace gseg::map::detail {
 
