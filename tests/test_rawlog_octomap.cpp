@@ -34,9 +34,11 @@ struct ToolRun {
     std::string out, err;
 };
 
-ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir) {
+/// Runs a built tool; `limits` goes before it in bash (e.g. "ulimit -f 64; trap '' XFSZ;").
+ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir, const std::string& limits = "") {
     ToolRun r;
-    const int st = std::system((gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt").c_str());
+    const std::string command = limits + " exec " + gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
+    const int st = std::system(("bash -c \"" + command + "\"").c_str());
     r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);  // a crash is >= 128
     std::ifstream o(dir + "/out.txt"), e(dir + "/err.txt");
     r.out.assign(std::istreambuf_iterator<char>(o), {});
@@ -398,6 +400,22 @@ TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
     EXPECT_NE(r.err.find("is the input"), std::string::npos) << r.err;
     EXPECT_TRUE(gseg::test::readText(dir + "/m_ground.bt") == before);
     EXPECT_FALSE(fs::exists(dir + "/m_obstacles.bt"));
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, DiskFullIsAnErrorAndNoMapFiles) {
+    // #9 item 6. The file size limit (EFBIG once the signal is ignored) stands in for a full disk.
+    const std::string dir = tempDir("full");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir,
+                              "ulimit -f 200; trap '' XFSZ;");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("write failed (File too large)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("wrote"), std::string::npos) << r.out;
+    EXPECT_TRUE(mapFiles(dir + "/m").empty());
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
     fs::remove_all(dir);
 }
 

@@ -13,6 +13,7 @@
 #include <gseg/map/progress.hpp>
 
 #include <chrono>
+#include <sys/resource.h>
 #include <cstdio>
 #include <iostream>
 #include <stdexcept>
@@ -94,6 +95,12 @@ Cli parseCli(int argc, char** argv) {
     return c;
 }
 
+double peakResidentMb() {
+    rusage u{};
+    ::getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_maxrss) / 1024.0;
+}
+
 double secondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -111,6 +118,8 @@ void printReport(const RunReport& r, double resolution, unsigned threads) {
     std::printf("voxels (%.2f m): %zu ground, %zu obstacle, %zu free; %zu obstacle voxels cleared (seen through), "
                 "%zu ground voxels under obstacles\n",
                 resolution, s.groundVoxels, s.obstacleVoxels, s.freeVoxels, s.clearedObstacleVoxels, s.groundUnderObstacle);
+    std::printf("map memory: %.1f MB (%zu bricks of 8x8x8 voxels, %zu words of 4x4x4 with a value per voxel)\n",
+                double(s.mapBytes) / 1e6, s.bricks, s.brickValueBlocks);
     std::printf("top-down grid: %zu traversable (%.1f m^2), %zu obstacle (%.1f m^2), %zu unknown cells\n",
                 s.cellsTraversable, double(s.cellsTraversable) * cellArea, s.cellsObstacle,
                 double(s.cellsObstacle) * cellArea, s.cellsUnknown);
@@ -119,6 +128,7 @@ void printReport(const RunReport& r, double resolution, unsigned threads) {
                 "thread(s)), map update %.2f, writing %.2f; wall %.2f, %.1f scans/s\n",
                 t.read, t.segmentation, t.transform, t.rayCasting, threads, t.mapUpdate, t.writing, r.wallSeconds,
                 r.wallSeconds > 0 ? double(s.scans) / r.wallSeconds : 0.0);
+    std::printf("peak memory: %.0f MB while integrating, %.0f MB with writing\n", r.peakMbBeforeWriting, r.peakMb);
     for (const auto& p : r.written) std::printf("wrote %s\n", p.c_str());
 }
 
@@ -163,11 +173,13 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();
     report.poseSource = stream.poseSource();
+    report.peakMbBeforeWriting = peakResidentMb();
     const auto t0 = std::chrono::steady_clock::now();
     report.written = map.write(cli.prefix);
     report.times.writing = secondsSince(t0);
     report.stats = map.stats();
     report.wallSeconds = secondsSince(start);
+    report.peakMb = peakResidentMb();
     return report;
 }
 

@@ -24,6 +24,7 @@ struct RunReport {
     gseg::map::MapStats stats;
     PhaseTimes times;
     double wallSeconds = 0;
+    double peakMbBeforeWriting = 0, peakMb = 0;  ///< [MB] peak resident memory of the process (ru_maxrss)
     std::size_t presegmented = 0;  ///< scans taken from a _ground/_obstacles pair
     std::size_t rawWithPair = 0;   ///< raw scans not segmented again because their pair was there
     std::vector<std::string> skipped;  ///< "scan k (...): reason"

@@ -13,45 +13,44 @@ BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
     return bricks_[i];
 }
 
-void BrickMap::materialise(TreeBrick& t) {
-    if (freeBlocks_.empty()) {
-        if (blockCount_ % kBlocksPerChunk == 0) chunks_.emplace_back(new float[kBlocksPerChunk * 512]);
-        freeBlocks_.push_back(std::int32_t(blockCount_++));
+void BrickMap::collapseIfUniform(Words& t) {
+    for (unsigned w = 0; w < 8; ++w) {
+        if (t.block[w] < 0) continue;
+        const int n = __builtin_popcountll(t.exists[w]);
+        if (t.atMin[w] != n && t.atMax[w] != n) continue;
+        t.uniform[w] = t.atMin[w] == n ? l_.clampMin : l_.clampMax;
+        freeBlocks_.push_back(t.block[w]);
+        t.block[w] = -1;
     }
-    t.block = freeBlocks_.back();
-    freeBlocks_.pop_back();
-    std::fill(block(t.block), block(t.block) + 512, t.uniform);
 }
 
-void BrickMap::collapseIfUniform(TreeBrick& t) {
-    if (t.block < 0) return;
-    int n = 0;
-    for (std::uint64_t w : t.exists) n += __builtin_popcountll(w);
-    if (t.atMin != n && t.atMax != n) return;
-    t.uniform = t.atMin == n ? l_.clampMin : l_.clampMax;
-    freeBlocks_.push_back(t.block);
-    t.block = -1;
-}
-
-void BrickMap::update(TreeBrick& t, unsigned local, float delta, bool skipOccupied) {
-    const std::uint64_t bit = 1ULL << (local & 63);
-    std::uint64_t& word = t.exists[local >> 6];
-    const bool exists = word & bit;
-    const float old = !exists ? 0.f : t.block >= 0 ? block(t.block)[local] : t.uniform;
+void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied) {
+    const unsigned w = local >> 6, v = local & 63;
+    const std::uint64_t bit = 1ULL << v;
+    const bool exists = t.exists[w] & bit;
+    const float old = exists ? valueOf(t, w, v) : 0.f;
     if (skipOccupied && exists && old >= l_.occupied) return;  // ground does not move
-    float v = old + delta;  // OcTreeNode::addValue(), then the clamping of updateNodeLogOdds()
-    if (v < l_.clampMin) v = l_.clampMin;
-    else if (v > l_.clampMax) v = l_.clampMax;
-    if (exists && v == old) return;  // at the bound already
-    if (t.block < 0) materialise(t);
-    if (exists) {
-        t.atMin -= old == l_.clampMin;
-        t.atMax -= old == l_.clampMax;
+    float value = old + delta;  // OcTreeNode::addValue(), then the clamping of updateNodeLogOdds()
+    if (value < l_.clampMin) value = l_.clampMin;
+    else if (value > l_.clampMax) value = l_.clampMax;
+    if (exists && value == old) return;  // at the bound already
+    if (t.block[w] < 0) {  // one value for the word so far: give it 64
+        if (freeBlocks_.empty()) {
+            if (blockCount_ % kBlocksPerChunk == 0) chunks_.emplace_back(new float[kBlocksPerChunk * 64]);
+            freeBlocks_.push_back(std::int32_t(blockCount_++));
+        }
+        t.block[w] = freeBlocks_.back();
+        freeBlocks_.pop_back();
+        std::fill(block(t.block[w]), block(t.block[w]) + 64, t.uniform[w]);
     }
-    word |= bit;
-    block(t.block)[local] = v;
-    t.atMin += v == l_.clampMin;
-    t.atMax += v == l_.clampMax;
+    if (exists) {
+        t.atMin[w] -= old == l_.clampMin;
+        t.atMax[w] -= old == l_.clampMax;
+    }
+    t.exists[w] |= bit;
+    block(t.block[w])[v] = value;
+    t.atMin[w] += value == l_.clampMin;
+    t.atMax[w] += value == l_.clampMax;
 }
 
 void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
@@ -74,36 +73,50 @@ void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vect
         collapseIfUniform(b.map[kGround]);
         collapseIfUniform(b.map[kObstacles]);
     });
-    for (const MapIndex m : {kGround, kObstacles})
-        forEachBrick(m == kGround ? groundHits : obstacleHits, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
-            for (const std::uint64_t* c = from; c != to; ++c) update(b.map[m], unsigned(*c & 511), l_.hit, false);
-            collapseIfUniform(b.map[m]);
-        });
+    forEachBrick(groundHits, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
+        for (const std::uint64_t* c = from; c != to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.hit, false);
+        collapseIfUniform(b.map[kGround]);
+    });
+    forEachBrick(obstacleHits, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
+        for (const std::uint64_t* c = from; c != to; ++c) {
+            update(b.map[kObstacles], unsigned(*c & 511), l_.hit, false);
+            b.everObstacle[(*c >> 6) & 7] |= 1ULL << (*c & 63);
+        }
+        collapseIfUniform(b.map[kObstacles]);
+    });
+}
+
+std::size_t BrickMap::clearedObstacles() const {
+    std::size_t n = 0;
+    for (const Brick& b : bricks_)
+        for (unsigned w = 0; w < 8; ++w)
+            for (std::uint64_t bits = b.everObstacle[w]; bits; bits &= bits - 1)
+                n += valueOf(b.map[kObstacles], w, unsigned(__builtin_ctzll(bits))) < l_.occupied;
+    return n;
 }
 
 bool BrickMap::value(MapIndex m, std::uint64_t code, float& logOdds) const {
     const long b = index_.find(code >> 9);
     if (b < 0) return false;
-    const TreeBrick& t = bricks_[std::size_t(b)].map[m];
-    const unsigned local = unsigned(code & 511);
-    if (!(t.exists[local >> 6] >> (local & 63) & 1)) return false;
-    logOdds = t.block >= 0 ? block(t.block)[local] : t.uniform;
+    const Words& t = bricks_[std::size_t(b)].map[m];
+    const unsigned w = unsigned(code >> 6) & 7, v = unsigned(code & 63);
+    if (!(t.exists[w] >> v & 1)) return false;
+    logOdds = valueOf(t, w, v);
     return true;
 }
 
 std::size_t BrickMap::count(MapIndex m, bool occupiedVoxels) const {
     std::size_t n = 0;
     for (const Brick& b : bricks_) {
-        const TreeBrick& t = b.map[m];
-        if (t.block < 0) {
-            if ((t.uniform >= l_.occupied) == occupiedVoxels)
-                for (std::uint64_t w : t.exists) n += std::size_t(__builtin_popcountll(w));
-            continue;
-        }
-        const float* v = block(t.block);
-        for (unsigned w = 0; w < 8; ++w)
+        const Words& t = b.map[m];
+        for (unsigned w = 0; w < 8; ++w) {
+            if (t.block[w] < 0) {
+                if ((t.uniform[w] >= l_.occupied) == occupiedVoxels) n += std::size_t(__builtin_popcountll(t.exists[w]));
+                continue;
+            }
             for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1)
-                n += (v[(w << 6) | unsigned(__builtin_ctzll(bits))] >= l_.occupied) == occupiedVoxels;
+                n += (block(t.block[w])[__builtin_ctzll(bits)] >= l_.occupied) == occupiedVoxels;
+        }
     }
     return n;
 }
@@ -138,7 +151,7 @@ void BrickMap::writeBinary(MapIndex m, std::ostream& out, double resolution) con
     std::uint64_t nodes = order.empty() ? 0 : 1;
     auto put = [&](const NodeBytes& n) { data.append(reinterpret_cast<const char*>(n.b), 2); };
     // The node at depth 13 that a brick is: words (depth 14), bytes (depth 15), voxels (leaves).
-    auto writeBrick = [&](const TreeBrick& t) {
+    auto writeBrick = [&](const Words& t) {
         NodeBytes words;
         for (unsigned w = 0; w < 8; ++w)
             if (t.exists[w]) words.set(w, kInner), ++nodes;
@@ -155,9 +168,7 @@ void BrickMap::writeBinary(MapIndex m, std::ostream& out, double resolution) con
                 NodeBytes leaves;
                 for (unsigned k = 0; k < 8; ++k) {
                     if (!(bits >> k & 1)) continue;
-                    const unsigned local = (w << 6) | (j << 3) | k;
-                    const float v = t.block >= 0 ? block(t.block)[local] : t.uniform;
-                    leaves.set(k, v >= l_.occupied ? kOccupiedLeaf : kFreeLeaf), ++nodes;
+                    leaves.set(k, valueOf(t, w, (j << 3) | k) >= l_.occupied ? kOccupiedLeaf : kFreeLeaf), ++nodes;
                 }
                 put(leaves);
             }
@@ -200,13 +211,13 @@ std::unique_ptr<MapTree> BrickMap::toTree(MapIndex m, const MapTree& configured)
     std::vector<std::uint64_t> codes;
     std::vector<float> values;
     for (std::size_t b : sortedBricks()) {
-        const TreeBrick& t = bricks_[b].map[m];
+        const Words& t = bricks_[b].map[m];
         codes.clear(), values.clear();
-        for (std::uint64_t w = 0; w < 8; ++w)
+        for (unsigned w = 0; w < 8; ++w)
             for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1) {
-                const std::uint64_t local = (w << 6) | std::uint64_t(__builtin_ctzll(bits));
-                codes.push_back((codes_[b] << 9) | local);
-                values.push_back(t.block >= 0 ? block(t.block)[local] : t.uniform);
+                const unsigned v = unsigned(__builtin_ctzll(bits));
+                codes.push_back((codes_[b] << 9) | (w << 6) | v);
+                values.push_back(valueOf(t, w, v));
             }
         tree->setSorted(codes.data(), values.data(), codes.size());
     }

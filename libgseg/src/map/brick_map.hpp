@@ -2,15 +2,15 @@
 /// \file brick_map.hpp
 /// Internal to the map layer: the working form of the two occupancy maps (ground, obstacles)
 /// while a drive is integrated. Voxels live in bricks of 8 x 8 x 8 (the OctoMap subtree three
-/// levels above the leaves), found by a hash of the brick's Morton code; each brick holds, per
-/// map, which voxels exist and their log-odds. A scan's update then costs one hash lookup per
-/// brick and a few instructions per voxel, instead of a walk down the octree and a node
-/// allocation per voxel.
+/// levels above the leaves), found by a hash of the brick's Morton code; a brick is eight words
+/// of 4 x 4 x 4 voxels (one 64-bit mask each: which voxels exist). A scan's update then costs one
+/// hash lookup per brick and a few instructions per voxel, instead of a walk down the octree and
+/// a node allocation per voxel.
 ///
 /// Every voxel keeps exactly the value (float log-odds, same operations, same clamping) that
 /// OcTree::updateNode() calls would give it, and the OctoMap files are written from the bricks in
-/// the exact bytes of that tree. A brick whose existing voxels all sit at the same clamping bound
-/// keeps one value instead of 512 (as OctoMap prunes such subtrees).
+/// the exact bytes of that tree. A word whose existing voxels all sit at the same clamping bound
+/// keeps one value instead of 64 (as OctoMap prunes such subtrees): most of a drive's free space.
 
 #include "map_tree.hpp"
 #include "voxel_keys.hpp"
@@ -35,7 +35,8 @@ public:
     explicit BrickMap(const LogOdds& l) : l_(l) {}
 
     /// One scan: misses on `free` in both maps (ground: only where not occupied), hits on the
-    /// ground and obstacle voxels in their own map. All lists sorted.
+    /// ground and obstacle voxels in their own map (which are remembered as ever obstacle). All
+    /// lists sorted.
     void applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
                    const std::vector<std::uint64_t>& obstacleHits);
 
@@ -49,14 +50,16 @@ public:
     template <class F>
     void forEachVoxel(MapIndex m, F&& f) const {
         for (std::size_t b = 0; b < bricks_.size(); ++b) {
-            const TreeBrick& t = bricks_[b].map[m];
-            for (std::uint64_t w = 0; w < 8; ++w)
+            const Words& t = bricks_[b].map[m];
+            for (unsigned w = 0; w < 8; ++w)
                 for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1) {
-                    const std::uint64_t local = (w << 6) | std::uint64_t(__builtin_ctzll(bits));
-                    f((codes_[b] << 9) | local, t.block >= 0 ? block(t.block)[local] : t.uniform);
+                    const unsigned v = unsigned(__builtin_ctzll(bits));
+                    f((codes_[b] << 9) | (w << 6) | v, valueOf(t, w, v));
                 }
         }
     }
+    /// Obstacle voxels once occupied by a hit and free now (seen through).
+    std::size_t clearedObstacles() const;
     /// Voxels of map m: occupied (>= the occupancy threshold) or free.
     std::size_t count(MapIndex m, bool occupiedVoxels) const;
 
@@ -66,37 +69,44 @@ public:
     std::unique_ptr<MapTree> toTree(MapIndex m, const MapTree& configured) const;
 
     std::size_t bricks() const { return bricks_.size(); }
-    std::size_t blocksInUse() const { return blockCount_ - freeBlocks_.size(); }  ///< bricks with 512 values
+    std::size_t blocksInUse() const { return blockCount_ - freeBlocks_.size(); }  ///< words with 64 values
+    std::size_t bytes() const {  ///< memory held (capacity, not size)
+        return index_.bytes() + codes_.capacity() * sizeof(std::uint64_t) + bricks_.capacity() * sizeof(Brick) +
+               chunks_.size() * kBlocksPerChunk * 64 * sizeof(float) + freeBlocks_.capacity() * sizeof(std::int32_t);
+    }
 
 private:
-    struct TreeBrick {
+    /// One map's part of a brick: per word of 64 voxels, which exist, and their values (a block
+    /// of 64, or one value for all).
+    struct Words {
         std::uint64_t exists[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-        std::int32_t block = -1;  ///< 512 values, or -1: every existing voxel has `uniform`
-        float uniform = 0;
-        std::uint16_t atMin = 0, atMax = 0;  ///< existing voxels at each clamping bound
+        std::int32_t block[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+        float uniform[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        std::uint8_t atMin[8] = {0, 0, 0, 0, 0, 0, 0, 0}, atMax[8] = {0, 0, 0, 0, 0, 0, 0, 0};  ///< values at each bound
     };
     struct Brick {
-        TreeBrick map[2];
+        Words map[2];
+        std::uint64_t everObstacle[8] = {0, 0, 0, 0, 0, 0, 0, 0};  ///< obstacle hit at least once
     };
-    static constexpr std::size_t kBlocksPerChunk = 256;
+    static constexpr std::size_t kBlocksPerChunk = 4096;
 
     LogOdds l_;
-    CodeIndex index_;                  ///< brick code -> position in bricks_
+    CodeIndex index_;                   ///< brick code -> position in bricks_
     std::vector<std::uint64_t> codes_;  ///< brick code (Morton code >> 9) per brick
     std::vector<Brick> bricks_;
-    std::vector<std::unique_ptr<float[]>> chunks_;  ///< value blocks, kBlocksPerChunk x 512 floats each
+    std::vector<std::unique_ptr<float[]>> chunks_;  ///< value blocks, kBlocksPerChunk x 64 floats each
     std::vector<std::int32_t> freeBlocks_;
     std::size_t blockCount_ = 0;
 
-    float* block(std::int32_t b) { return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 512]; }
+    float* block(std::int32_t b) { return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 64]; }
     const float* block(std::int32_t b) const {
-        return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 512];
+        return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 64];
     }
+    float valueOf(const Words& t, unsigned w, unsigned v) const { return t.block[w] >= 0 ? block(t.block[w])[v] : t.uniform[w]; }
     Brick& brickOf(std::uint64_t brickCode);
-    void materialise(TreeBrick& t);
-    void collapseIfUniform(TreeBrick& t);
+    void collapseIfUniform(Words& t);
     /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics).
-    void update(TreeBrick& t, unsigned local, float delta, bool skipOccupied);
+    void update(Words& t, unsigned local, float delta, bool skipOccupied);
     std::vector<std::size_t> sortedBricks() const;
 };
 

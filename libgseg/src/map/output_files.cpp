@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -58,6 +59,20 @@ void writeFileChecked(const std::string& path, const std::string& bytes) {
         const std::string detail = written ? reason() : why;
         std::remove(path.c_str());
         throw std::runtime_error(path + ": write failed (" + detail + ")");
+    }
+}
+
+void writeFileChecked(const std::string& path, const std::function<void(std::ostream&)>& fill) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(path + ": cannot create (" + reason() + ")");
+    errno = 0;
+    fill(out);
+    out.flush();
+    const std::string why = errno ? reason() : "stream error";
+    out.close();
+    if (!out) {
+        std::remove(path.c_str());
+        throw std::runtime_error(path + ": write failed (" + why + ")");
     }
 }
 

@@ -19,13 +19,6 @@
 
 namespace gseg::map {
 
-namespace detail {
-struct KeyMemory {
-    CodeIndex codes;
-    std::vector<std::uint64_t> list;  ///< the same codes, in insertion order
-};
-}  // namespace detail
-
 namespace {
 
 /// lo < v < hi (or lo <= v <= hi with `inclusive`).
@@ -84,7 +77,7 @@ Rgb colourOf(CellClass c) {
 }
 
 TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
-    : options_(options), everObstacle_(std::make_unique<detail::KeyMemory>()) {
+    : options_(options) {
     options_.validate();
     configured_ = makeTree(options_);
     detail::LogOdds l;
@@ -120,11 +113,6 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
     // ground graze the road near their end and would erode it scan after scan).
     voxels_->applyScan(u.free, u.groundHits, u.obstacleHits);
     groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
-    for (std::uint64_t c : u.obstacleHits) {
-        bool inserted = false;
-        everObstacle_->codes.insert(c, inserted);
-        if (inserted) everObstacle_->list.push_back(c);
-    }
     if (!path_.empty()) stats_.pathLength += (u.origin - path_.back()).norm();
     path_.push_back(u.origin);
     ++stats_.scans;
@@ -185,13 +173,14 @@ MapStats TraversabilityMap::stats() const {
     s.groundVoxels = voxels_->count(kGround, true);
     s.obstacleVoxels = voxels_->count(kObstacles, true);
     s.freeVoxels = voxels_->count(kObstacles, false);
-    float v = 0;
-    for (std::uint64_t c : everObstacle_->list)
-        s.clearedObstacleVoxels += voxels_->value(kObstacles, c, v) && !voxels_->occupied(kObstacles, c);
+    s.clearedObstacleVoxels = voxels_->clearedObstacles();
     const float occupied = configured_->getOccupancyThresLog();
     voxels_->forEachVoxel(kGround, [&](std::uint64_t code, float g) {
         s.groundUnderObstacle += g >= occupied && voxels_->occupied(kObstacles, code);
     });
+    s.bricks = voxels_->bricks();
+    s.brickValueBlocks = voxels_->blocksInUse();
+    s.mapBytes = voxels_->bytes();
     const TopDownGrid g = topDown();
     s.cellsTraversable = g.count(CellClass::Traversable);
     s.cellsObstacle = g.count(CellClass::Obstacle);
@@ -206,13 +195,15 @@ std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefi
 
 std::vector<std::string> TraversabilityMap::write(const std::string& prefix) const {
     if (empty()) throw std::logic_error("TraversabilityMap::write: no scan was inserted");
-    std::ostringstream groundBt, obstaclesBt, colouredOt;
-    voxels_->writeBinary(kGround, groundBt, configured_->getResolution());
-    voxels_->writeBinary(kObstacles, obstaclesBt, configured_->getResolution());
-    if (!colouredTree()->write(colouredOt)) throw std::runtime_error(prefix + ": OctoMap serialisation failed");
-    const std::string blobs[4] = {groundBt.str(), obstaclesBt.str(), colouredOt.str(), encodeTopDownPng(topDown(), path_)};
+    // One file at a time, straight to its temporary: the peak memory is the map plus one file.
     AtomicFiles files(outputPaths(prefix));
-    for (std::size_t i = 0; i < 4; ++i) writeFileChecked(files.temporary(i), blobs[i]);
+    const double res = configured_->getResolution();
+    writeFileChecked(files.temporary(0), [&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
+    writeFileChecked(files.temporary(1), [&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
+    writeFileChecked(files.temporary(2), [&](std::ostream& out) {
+        if (!colouredTree()->write(out)) throw std::runtime_error(files.paths()[2] + ": OctoMap serialisation failed");
+    });
+    writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_));
     files.commit();
     return files.paths();
 }

@@ -110,6 +110,7 @@ public:
         }
     }
     std::size_t size() const { return size_; }
+    std::size_t bytes() const { return slots_.capacity() * sizeof(Slot); }
     /// Empties the index, keeping its memory.
     void clear() {
         if (size_ == 0) return;

@@ -3,6 +3,8 @@
 /// Output files written completely or not at all, checked before any work, never over an input.
 
 #include <exception>
+#include <functional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,8 @@ std::string temporaryPathFor(const std::string& path);
 /// Writes `bytes` to `path`, checking every write and the close. Throws std::runtime_error
 /// naming the file and the reason (e.g. "No space left on device"); removes a partial file.
 void writeFileChecked(const std::string& path, const std::string& bytes);
+/// The same for content written by `fill` into a stream (no copy of it in memory).
+void writeFileChecked(const std::string& path, const std::function<void(std::ostream&)>& fill);
 
 /// A set of output files that appear together or not at all. Write file i to temporary(i), then
 /// commit(). Without commit() (an exception on the way), the destructor removes the temporaries.

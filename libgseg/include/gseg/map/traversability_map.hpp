@@ -27,7 +27,6 @@ class ColorOcTree;
 namespace gseg::map {
 
 namespace detail {
-struct KeyMemory;  // voxel keys ever occupied as obstacle (implementation detail)
 class MapTree;     // an OcTree built in sorted order (implementation detail)
 class BrickMap;    // the voxels while a drive is integrated (implementation detail)
 }
@@ -133,6 +132,9 @@ struct MapStats {
     std::size_t cellsTraversable = 0, cellsObstacle = 0;  ///< top-down grid
     std::size_t cellsUnknown = 0;      ///< cells without data inside the picture's frame
     double pathLength = 0;             ///< [m] length of the sensor path
+    std::size_t bricks = 0;            ///< 8 x 8 x 8 voxel bricks holding the maps while integrating
+    std::size_t brickValueBlocks = 0;  ///< words of 4 x 4 x 4 voxels with a value each (the others hold one)
+    std::size_t mapBytes = 0;          ///< [bytes] memory of the bricks, their index and values
 };
 
 /// Builds the maps scan by scan. Per scan, every voxel crossed by a ray (to a ground or an obstacle
@@ -193,7 +195,6 @@ private:
     std::unique_ptr<detail::BrickMap> voxels_;
     mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
     mutable std::unique_ptr<TopDownGrid> topDown_;
-    std::unique_ptr<detail::KeyMemory> everObstacle_;
     std::vector<Eigen::Vector3d> path_;
     MapStats stats_;
 };
