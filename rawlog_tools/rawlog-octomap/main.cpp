@@ -13,6 +13,7 @@
 #include <gseg/map/progress.hpp>
 
 #include <chrono>
+#include <malloc.h>
 #include <sys/resource.h>
 #include <cstdio>
 #include <iostream>
@@ -187,6 +188,12 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
 
 int main(int argc, char** argv) {
     using namespace rawlog_octomap;
+#ifdef __GLIBC__
+    // Each scan allocates and frees a few MB (its points, its voxel lists): keep them in the heap
+    // instead of mapping fresh pages for every scan (measured: a third less time in ray casting).
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
     try {
         const Cli cli = parseCli(argc, argv);
         if (cli.benchRounds > 0) {

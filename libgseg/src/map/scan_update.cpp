@@ -110,8 +110,7 @@ private:
                 tMax[i] = tDelta[i] = std::numeric_limits<double>::max();
             }
         }
-        // The same choices as OctoMap's loop, without branches on the axis (they mispredict):
-        // the smallest tMax picks the axis (ties as in OctoMap), adding 0.0 leaves the others exact.
+        // The same choices as OctoMap's loop, without branches on the axis (they mispredict).
         // One voxel along axis a: the axis bits of the code counted up or down, the others kept.
         std::uint64_t pick[3], fill[3], add[3];
         for (int a = 0; a < 3; ++a) {
@@ -122,16 +121,15 @@ private:
         std::uint64_t code = originCode_;
         double t0 = tMax[0], t1 = tMax[1], t2 = tMax[2];
         while (true) {
-            const bool first = t0 < t1;
-            const int near01 = first ? 0 : 1;
-            const int dim = (first ? t0 : t1) < t2 ? near01 : 2;
+            const int d01 = !(t0 < t1);  // OctoMap: tMax[0] < tMax[1] ? 0 : 1, then that one < tMax[2] ? it : 2
+            const int dim = (d01 ? t1 : t0) < t2 ? d01 : 2;
             const std::uint64_t m = kAxisMask[dim];
             code = ((((code & pick[dim]) | fill[dim]) + add[dim]) & m) | (code & ~m);
-            t0 += dim == 0 ? tDelta[0] : 0.0;
+            t0 += dim == 0 ? tDelta[0] : 0.0;  // + 0.0 leaves the other two exact
             t1 += dim == 1 ? tDelta[1] : 0.0;
             t2 += dim == 2 ? tDelta[2] : 0.0;
             if (code == endCode) return;
-            if (std::min(std::min(t0, t1), t2) > length) return;
+            if ((t0 > length) & (t1 > length) & (t2 > length)) return;  // min(tMax) > length
             crossed_.insert(code);
         }
     }
@@ -198,8 +196,9 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
                     const TraversabilityOptions& options) {
     options.validate();
     if (!sensorOrigin.allFinite()) throw std::invalid_argument("castScan: sensor origin is not finite");
-    thread_local Caster buffers;  // reused scan after scan
-    Caster& caster = buffers;       // one TLS lookup
+    thread_local std::unique_ptr<Caster> buffers;  // reused scan after scan, one set per thread
+    if (!buffers) buffers = std::make_unique<Caster>();
+    Caster& caster = *buffers;  // a plain pointer from here: no thread-local lookups in the loops
     caster.begin(options, sensorOrigin);
     ScanUpdate u;
     u.origin = sensorOrigin;

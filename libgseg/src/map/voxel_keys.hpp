@@ -175,22 +175,18 @@ public:
         std::vector<std::uint32_t> order(bricks_.size());
         for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
         std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bricks_[a] < bricks_[b]; });
-        std::vector<std::array<std::uint64_t, 8>> kept(order.size());
-        std::size_t count = 0;
-        for (std::size_t i = 0; i < order.size(); ++i) {
-            std::array<std::uint64_t, 8>& m = kept[i] = masks_[order[i]];
+        std::size_t bound = 0;  // every voxel of this set: room enough, one allocation
+        for (const auto& m : masks_)
+            for (std::uint64_t w : m) bound += std::size_t(__builtin_popcountll(w));
+        std::vector<std::uint64_t> out;
+        out.reserve(bound);
+        for (std::uint32_t b : order) {
+            std::array<std::uint64_t, 8> m = masks_[b];
             for (const BrickSet* other : minus) {
-                const long o = other->index_.find(bricks_[order[i]]);
+                const long o = other->index_.find(bricks_[b]);
                 if (o < 0) continue;
                 for (int w = 0; w < 8; ++w) m[std::size_t(w)] &= ~other->masks_[std::size_t(o)][std::size_t(w)];
             }
-            for (std::uint64_t w : m) count += std::size_t(__builtin_popcountll(w));
-        }
-        std::vector<std::uint64_t> out;
-        out.reserve(count);
-        for (std::size_t i = 0; i < order.size(); ++i) {
-            const std::uint32_t b = order[i];
-            const std::array<std::uint64_t, 8>& m = kept[i];
             for (std::uint64_t w = 0; w < 8; ++w)
                 for (std::uint64_t bits = m[w]; bits; bits &= bits - 1)
                     out.push_back((bricks_[b] << 9) | (w << 6) | std::uint64_t(__builtin_ctzll(bits)));
