@@ -307,6 +307,11 @@ TEST(OctomapBuilder, FastPathEqualsASimpleReferenceIntegration) {
         ref.obstacles.writeBinaryConst(obstaclesBt);
         EXPECT_TRUE(fileBytes(dir + "/fast_ground.bt") == groundBt.str());
         EXPECT_TRUE(fileBytes(dir + "/fast_obstacles.bt") == obstaclesBt.str());
+        // The .ot is what ColorOcTree::write() writes for the coloured tree built voxel by voxel.
+        std::ostringstream colouredOt;
+        ASSERT_TRUE(fast.colouredTree()->write(colouredOt));
+        EXPECT_GT(colouredOt.str().size(), 10000u);
+        EXPECT_TRUE(fileBytes(dir + "/fast_traversability.ot") == colouredOt.str());
         std::filesystem::remove_all(dir);
     }
 }

@@ -203,6 +203,137 @@ void BrickMap::writeBinary(MapIndex m, std::ostream& out, double resolution) con
     out.write(data.data(), std::streamsize(data.size()));
 }
 
+namespace {
+
+/// A node's colour in a ColorOcTree: the integer mean of its children's (all of them set here).
+struct Colour {
+    unsigned r = 0, g = 0, b = 0, n = 0;
+    void add(const std::uint8_t* c) { r += c[0], g += c[1], b += c[2], ++n; }
+    void add(const Colour& c) {
+        const std::uint8_t m[3] = {std::uint8_t(c.r), std::uint8_t(c.g), std::uint8_t(c.b)};
+        add(m);
+    }
+    Colour mean() const { return {r / n, g / n, b / n, 1}; }  // ColorOcTreeNode::getAverageChildColor()
+};
+
+}  // namespace
+
+void BrickMap::writeColoured(std::ostream& out, double resolution, float leafLogOdds, const std::uint8_t ground[3],
+                             const std::uint8_t obstacle[3]) const {
+    // Per brick with an occupied voxel: which are obstacles (the rest of `any` is ground).
+    struct Occupied {
+        std::size_t brick;
+        std::uint64_t any[8], obstacle[8];
+        Colour colour;  // of the brick's node (depth 13)
+    };
+    std::vector<Occupied> bricks;
+    for (std::size_t b : sortedBricks()) {
+        Occupied o{b, {}, {}, {}};
+        bool found = false;
+        for (unsigned w = 0; w < 8; ++w) {
+            for (const MapIndex m : {kObstacles, kGround}) {
+                const Words& t = bricks_[b].map[m];
+                for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1) {
+                    const unsigned v = unsigned(__builtin_ctzll(bits));
+                    if (valueOf(t, w, v) < l_.occupied) continue;
+                    if (m == kObstacles) o.obstacle[w] |= 1ULL << v;
+                    o.any[w] |= 1ULL << v;
+                    found = true;
+                }
+            }
+        }
+        if (found) bricks.push_back(o);
+    }
+    auto voxelColour = [&](const Occupied& o, unsigned w, unsigned v) {
+        return (o.obstacle[w] >> v & 1) ? obstacle : ground;
+    };
+    auto byteColour = [&](const Occupied& o, unsigned w, unsigned j) {
+        Colour c;
+        for (unsigned k = 0; k < 8; ++k)
+            if (o.any[w] >> (8 * j + k) & 1) c.add(voxelColour(o, w, 8 * j + k));
+        return c.mean();
+    };
+    auto wordColour = [&](const Occupied& o, unsigned w) {
+        Colour c;
+        for (unsigned j = 0; j < 8; ++j)
+            if (o.any[w] >> (8 * j) & 0xff) c.add(byteColour(o, w, j));
+        return c.mean();
+    };
+    for (Occupied& o : bricks) {
+        Colour c;
+        for (unsigned w = 0; w < 8; ++w)
+            if (o.any[w]) c.add(wordColour(o, w));
+        o.colour = c.mean();
+    }
+    std::string data;
+    std::uint64_t nodes = 0;
+    // A node: its log-odds (all equal here: one hit each, inner nodes their maximum), colour, and
+    // one bit per existing child (OcTreeBaseImpl::writeNodesRecurs(), ColorOcTreeNode::writeData()).
+    auto node = [&](const Colour& c, unsigned childBits) {
+        data.append(reinterpret_cast<const char*>(&leafLogOdds), sizeof leafLogOdds);
+        data.push_back(char(c.r)), data.push_back(char(c.g)), data.push_back(char(c.b));
+        data.push_back(char(childBits));
+        ++nodes;
+    };
+    auto writeBrick = [&](const Occupied& o) {
+        unsigned words = 0;
+        for (unsigned w = 0; w < 8; ++w) words |= unsigned(o.any[w] != 0) << w;
+        node(o.colour, words);
+        for (unsigned w = 0; w < 8; ++w) {
+            if (!o.any[w]) continue;
+            unsigned bytes = 0;
+            for (unsigned j = 0; j < 8; ++j) bytes |= unsigned((o.any[w] >> (8 * j) & 0xff) != 0) << j;
+            node(wordColour(o, w), bytes);
+            for (unsigned j = 0; j < 8; ++j) {
+                const unsigned voxels = unsigned(o.any[w] >> (8 * j) & 0xff);
+                if (!voxels) continue;
+                node(byteColour(o, w, j), voxels);
+                for (unsigned k = 0; k < 8; ++k) {
+                    if (!(voxels >> k & 1)) continue;
+                    const std::uint8_t* c = voxelColour(o, w, 8 * j + k);
+                    node(Colour{c[0], c[1], c[2], 1}, 0);
+                }
+            }
+        }
+    };
+    // Nodes above the bricks (depth < 13) holding bricks[lo, hi): colour first (it is written
+    // before the children), then the subtree.
+    auto groupsOf = [&](std::size_t lo, std::size_t hi, int depth, std::size_t* bounds) {
+        unsigned groups = 0, bits = 0;
+        for (std::size_t i = lo; i < hi;) {
+            const unsigned c = childIndex(codes_[bricks[i].brick] << 9, depth);
+            bounds[groups++] = i;
+            bits |= 1u << c;
+            while (i < hi && childIndex(codes_[bricks[i].brick] << 9, depth) == c) ++i;
+        }
+        bounds[groups] = hi;
+        return std::make_pair(groups, bits);
+    };
+    auto colourOf = [&](auto&& self, std::size_t lo, std::size_t hi, int depth) -> Colour {
+        if (depth == kTreeDepth - 3) return bricks[lo].colour;
+        std::size_t bounds[9];
+        const auto [groups, bits] = groupsOf(lo, hi, depth, bounds);
+        (void)bits;
+        Colour c;
+        for (unsigned g = 0; g < groups; ++g) c.add(self(self, bounds[g], bounds[g + 1], depth + 1));
+        return c.mean();
+    };
+    auto writeInner = [&](auto&& self, std::size_t lo, std::size_t hi, int depth) -> void {
+        if (depth == kTreeDepth - 3) return writeBrick(bricks[lo]);
+        std::size_t bounds[9];
+        const auto [groups, bits] = groupsOf(lo, hi, depth, bounds);
+        node(colourOf(colourOf, lo, hi, depth), bits);
+        for (unsigned g = 0; g < groups; ++g) self(self, bounds[g], bounds[g + 1], depth + 1);
+    };
+    if (!bricks.empty()) writeInner(writeInner, 0, bricks.size(), 0);
+    out << "# Octomap OcTree file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+    out << "id ColorOcTree" << std::endl;
+    out << "size " << nodes << std::endl;
+    out << "res " << resolution << std::endl;
+    out << "data" << std::endl;
+    out.write(data.data(), std::streamsize(data.size()));
+}
+
 std::unique_ptr<MapTree> BrickMap::toTree(MapIndex m, const MapTree& configured) const {
     auto tree = std::make_unique<MapTree>(configured.getResolution());
     tree->setProbHit(configured.getProbHit()), tree->setProbMiss(configured.getProbMiss());

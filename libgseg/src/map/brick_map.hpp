@@ -65,6 +65,12 @@ public:
 
     /// What OcTree::writeBinaryConst() writes for map m updated voxel by voxel (header included).
     void writeBinary(MapIndex m, std::ostream& out, double resolution) const;
+    /// What ColorOcTree::write() writes for a ColorOcTree holding, by one OcTree::updateNode(key,
+    /// true) each, the occupied obstacle voxels in `obstacle` colour and the other occupied ground
+    /// voxels in `ground` colour, after updateInnerOccupancy() (inner nodes: the children's
+    /// maximum log-odds and their mean colour). `leafLogOdds`: the tree's hit log-odds.
+    void writeColoured(std::ostream& out, double resolution, float leafLogOdds, const std::uint8_t ground[3],
+                       const std::uint8_t obstacle[3]) const;
     /// Map m as an OcTree (pruned where eight leaves are equal and clamped).
     std::unique_ptr<MapTree> toTree(MapIndex m, const MapTree& configured) const;
 

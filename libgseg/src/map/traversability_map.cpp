@@ -201,7 +201,10 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     writeFileChecked(files.temporary(0), [&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
     writeFileChecked(files.temporary(1), [&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
     writeFileChecked(files.temporary(2), [&](std::ostream& out) {
-        if (!colouredTree()->write(out)) throw std::runtime_error(files.paths()[2] + ": OctoMap serialisation failed");
+        const octomap::ColorOcTree defaults(res);  // colouredTree() leaves the hit probability as it is
+        const Rgb g = colourOf(CellClass::Traversable), o = colourOf(CellClass::Obstacle);
+        const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
+        voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
     });
     writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_));
     files.commit();
