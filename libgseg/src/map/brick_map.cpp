@@ -139,6 +139,17 @@ struct NodeBytes {
 };
 constexpr unsigned kInner = 3, kOccupiedLeaf = 2, kFreeLeaf = 1;
 
+/// The header of AbstractOccupancyOcTree::writeBinaryConst() / AbstractOcTree::write(), then the data.
+void writeOctomapFile(std::ostream& out, const char* firstLine, const char* id, std::uint64_t nodes, double resolution,
+                      const std::string& data) {
+    out << firstLine << "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+    out << "id " << id << std::endl;
+    out << "size " << nodes << std::endl;
+    out << "res " << resolution << std::endl;
+    out << "data" << std::endl;
+    out.write(data.data(), std::streamsize(data.size()));
+}
+
 }  // namespace
 
 void BrickMap::writeBinary(MapIndex m, std::ostream& out, double resolution) const {
@@ -195,12 +206,7 @@ void BrickMap::writeBinary(MapIndex m, std::ostream& out, double resolution) con
         }
     };
     if (!order.empty()) writeInner(writeInner, 0, order.size(), 0);
-    out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
-    out << "id OcTree" << std::endl;
-    out << "size " << nodes << std::endl;
-    out << "res " << resolution << std::endl;
-    out << "data" << std::endl;
-    out.write(data.data(), std::streamsize(data.size()));
+    writeOctomapFile(out, "# Octomap OcTree binary file", "OcTree", nodes, resolution, data);
 }
 
 namespace {
@@ -326,12 +332,7 @@ void BrickMap::writeColoured(std::ostream& out, double resolution, float leafLog
         for (unsigned g = 0; g < groups; ++g) self(self, bounds[g], bounds[g + 1], depth + 1);
     };
     if (!bricks.empty()) writeInner(writeInner, 0, bricks.size(), 0);
-    out << "# Octomap OcTree file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
-    out << "id ColorOcTree" << std::endl;
-    out << "size " << nodes << std::endl;
-    out << "res " << resolution << std::endl;
-    out << "data" << std::endl;
-    out.write(data.data(), std::streamsize(data.size()));
+    writeOctomapFile(out, "# Octomap OcTree file", "ColorOcTree", nodes, resolution, data);
 }
 
 std::unique_ptr<MapTree> BrickMap::toTree(MapIndex m, const MapTree& configured) const {

@@ -43,6 +43,16 @@ std::runtime_error lineError(const std::string& path, std::size_t lineNo, const 
     return std::runtime_error(path + ":" + std::to_string(lineNo) + ": " + what);
 }
 
+/// Calls f(lineNo, numbers) for each line that is not blank or a comment; `numbers` is empty
+/// (nullopt) if a token is not a finite number.
+template <class F>
+void forEachDataLine(const std::string& path, F&& f) {
+    std::ifstream in = openText(path);
+    std::string line;
+    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo)
+        if (!isSkipped(line)) f(lineNo, parseNumbers(line));
+}
+
 /// [R | t] from 12 row-major numbers; throws naming the line if R is not a rotation.
 Eigen::Isometry3d fromRowMajor3x4(const std::vector<double>& v, const std::string& path, std::size_t lineNo) {
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
@@ -61,12 +71,8 @@ Eigen::Isometry3d fromRowMajor3x4(const std::vector<double>& v, const std::strin
 }  // namespace
 
 std::vector<StampedPose> readTumTrajectory(const std::string& path) {
-    std::ifstream in = openText(path);
     std::vector<StampedPose> out;
-    std::string line;
-    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
-        if (isSkipped(line)) continue;
-        const auto v = parseNumbers(line);
+    forEachDataLine(path, [&](std::size_t lineNo, const std::optional<std::vector<double>>& v) {
         if (!v || v->size() != 8) throw lineError(path, lineNo, "expected 8 numbers `t x y z qx qy qz qw`");
         const Eigen::Quaterniond q((*v)[7], (*v)[4], (*v)[5], (*v)[6]);
         if (q.norm() < 1e-9) throw lineError(path, lineNo, "zero quaternion");
@@ -77,21 +83,17 @@ std::vector<StampedPose> readTumTrajectory(const std::string& path) {
         if (!out.empty() && sp.t <= out.back().t)
             throw lineError(path, lineNo, "time stamp " + std::to_string(sp.t) + " is not after the previous one");
         out.push_back(sp);
-    }
+    });
     if (out.empty()) throw std::runtime_error(path + ": no poses in the file");
     return out;
 }
 
 std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path) {
-    std::ifstream in = openText(path);
     std::vector<Eigen::Isometry3d> out;
-    std::string line;
-    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
-        if (isSkipped(line)) continue;
-        const auto v = parseNumbers(line);
+    forEachDataLine(path, [&](std::size_t lineNo, const std::optional<std::vector<double>>& v) {
         if (!v || v->size() != 12) throw lineError(path, lineNo, "expected 12 numbers (row-major 3x4 KITTI pose)");
         out.push_back(fromRowMajor3x4(*v, path, lineNo));
-    }
+    });
     if (out.empty()) throw std::runtime_error(path + ": no poses in the file");
     return out;
 }
@@ -109,17 +111,13 @@ Eigen::Isometry3d readKittiCalibTr(const std::string& path) {
 }
 
 std::vector<double> readKittiTimes(const std::string& path) {
-    std::ifstream in = openText(path);
     std::vector<double> out;
-    std::string line;
-    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
-        if (isSkipped(line)) continue;
-        const auto v = parseNumbers(line);
+    forEachDataLine(path, [&](std::size_t lineNo, const std::optional<std::vector<double>>& v) {
         if (!v || v->size() != 1) throw lineError(path, lineNo, "expected one finite time in seconds");
         if (!out.empty() && v->front() < out.back())
             throw lineError(path, lineNo, "time " + std::to_string(v->front()) + " s is before the previous one");
         out.push_back(v->front());
-    }
+    });
     return out;
 }
 
