@@ -239,6 +239,12 @@ TEST(RawlogOctomap, BadInputIsAClearErrorAndNoMapFiles) {
     std::ofstream(dir + "/few.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n";
     std::ofstream(dir + "/calib.txt") << "Tr: 0 -1 0 0 0 0 -1 0 1 0 0 0\n";
     std::ofstream(dir + "/late.tum") << "500.0 0 0 0 0 0 0 1\n501.0 1 0 0 0 0 0 1\n";
+    // #9 item 9: --resolution 0.0011 was accepted and ran for minutes.
+    for (const char* bad : {"--resolution 0.0011", "--resolution 0.01 --max-range 80", "--threads -1", "--origin 1,2"}) {
+        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/noposes.rawlog -o " + dir + "/m " + bad, dir);
+        EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+        EXPECT_EQ(messageLines(r.err).size(), 1u) << r.err;
+    }
     std::ofstream(dir + "/garbage.rawlog") << "this is not a rawlog at all, just some text to fail on";
     const Case cases[] = {
         {"-i " + dir + "/noposes.rawlog", "no poses"},

@@ -125,9 +125,10 @@ void printReport(const RunReport& r, double resolution, unsigned threads) {
                 s.cellsTraversable, double(s.cellsTraversable) * cellArea, s.cellsObstacle,
                 double(s.cellsObstacle) * cellArea, s.cellsUnknown);
     const PhaseTimes& t = r.times;
-    std::printf("time [s]: read %.2f, segmentation %.2f, transform %.2f, ray casting %.2f (these on %u worker "
-                "thread(s)), map update %.2f, writing %.2f; wall %.2f, %.1f scans/s\n",
-                t.read, t.segmentation, t.transform, t.rayCasting, threads, t.mapUpdate, t.writing, r.wallSeconds,
+    const std::string where = threads ? "summed over " + std::to_string(threads) + " worker thread(s)" : "one thread";
+    std::printf("time [s]: read %.2f, segmentation %.2f, transform %.2f, ray casting %.2f (%s), map update %.2f, "
+                "writing %.2f; wall %.2f, %.1f scans/s\n",
+                t.read, t.segmentation, t.transform, t.rayCasting, where.c_str(), t.mapUpdate, t.writing, r.wallSeconds,
                 r.wallSeconds > 0 ? double(s.scans) / r.wallSeconds : 0.0);
     std::printf("peak memory: %.0f MB while integrating, %.0f MB with writing\n", r.peakMbBeforeWriting, r.peakMb);
     for (const auto& p : r.written) std::printf("wrote %s\n", p.c_str());
