@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -25,10 +26,13 @@ struct ToolRun {
     std::string err;
 };
 
-ToolRun runTool(const std::string& args, const std::string& dir) {
+/// Runs kitti2rawlog; `limits` goes before it in bash (e.g. "ulimit -f 64; trap '' XFSZ;").
+ToolRun runTool(const std::string& args, const std::string& dir, const std::string& limits = "") {
     const std::string errPath = dir + "/stderr.txt";
     ToolRun r;
-    r.status = std::system((gseg::test::tool("kitti2rawlog") + " " + args + " > /dev/null 2> " + errPath).c_str());
+    const std::string command = limits + " exec " + gseg::test::tool("kitti2rawlog") + " " + args + " > /dev/null 2> " + errPath;
+    const int st = std::system(("bash -c \"" + command + "\"").c_str());
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
     std::ifstream in(errPath);
     r.err.assign(std::istreambuf_iterator<char>(in), {});
     return r;
@@ -67,15 +71,18 @@ Eigen::Matrix4d matrixOf(const mrpt::poses::CPose3D& p) {
     return m;
 }
 
-/// A tiny sequence: `frames` scans of 3 points, optional poses (identity + 1 m steps).
-std::string syntheticSequence(const std::string& name, int frames, int poseLines, bool times) {
+/// A tiny sequence: `frames` scans of 3 points (or `points` pseudo-random ones), optional poses
+/// (identity + 1 m steps).
+std::string syntheticSequence(const std::string& name, int frames, int poseLines, bool times, std::size_t points = 0) {
     const std::string dir = tempDir(name);
     fs::create_directories(dir + "/velodyne");
     for (int k = 0; k < frames; ++k) {
-        const float pts[12] = {1, 0, -1.7f, 0.5f, 2, 1, -1.7f, 0.2f, 5, 0, 0, 0.9f};
+        std::vector<float> pts = {1, 0, -1.7f, 0.5f, 2, 1, -1.7f, 0.2f, 5, 0, 0, 0.9f};
+        std::uint32_t x = 12345u + std::uint32_t(k);
+        for (std::size_t i = 0; i < 4 * points; ++i) pts.push_back(float((x = x * 1664525u + 1013904223u) >> 8) * 1e-5f);
         char n[32];
         std::snprintf(n, sizeof n, "/velodyne/%06d.bin", k);
-        gseg::io::writeFileAtomic(dir + n, pts, sizeof pts);
+        gseg::io::writeFileAtomic(dir + n, pts.data(), pts.size() * sizeof(float));
     }
     if (poseLines > 0) {
         std::ofstream p(dir + "/poses.txt");
@@ -160,6 +167,86 @@ TEST(Kitti2Rawlog, BadInputIsAClearErrorAndNoFile) {
     EXPECT_FALSE(fs::exists(dir + "/g.rawlog"));
     for (const auto& e : fs::directory_iterator(dir))
         EXPECT_EQ(e.path().filename(), "stderr.txt") << "left behind: " << e.path();
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+void expectNothingLeftBehind(const std::string& dir) {
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_EQ(e.path().filename(), "stderr.txt") << "left behind: " << e.path();
+}
+
+TEST(Kitti2Rawlog, BadPosesCalibrationAndTimesNameFileAndLine) {
+    // #9 item 10: a scaled rotation, an all-zero Tr, NaN in times.txt.
+    struct Case {
+        const char* file;
+        std::string text, expect;
+    };
+    const Case cases[] = {{"poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n2 0 0 1 0 2 0 0 0 0 2 0\n1 0 0 2 0 1 0 0 0 0 1 0\n",
+                           "/poses.txt:2: the 3x3 part is not a rotation"},
+                          {"calib.txt", "Tr: 0 0 0 0 0 0 0 0 0 0 0 0\n", "/calib.txt:1: the 3x3 part is not a rotation"},
+                          {"times.txt", "0.0\nnan\n1.0\n", "/times.txt:2: expected one finite time"}};
+    for (const auto& c : cases) {
+        const std::string seq = syntheticSequence("badfile", 3, 3, true), dir = tempDir("badfile_out");
+        std::ofstream(seq + "/" + c.file) << c.text;
+        const ToolRun r = runTool(seq + " -o " + dir + "/x.rawlog", dir);
+        EXPECT_EQ(r.status, 1) << c.file;
+        EXPECT_NE(r.err.find(c.expect), std::string::npos) << r.err;
+        expectNothingLeftBehind(dir);
+        fs::remove_all(seq), fs::remove_all(dir);
+    }
+}
+
+TEST(Kitti2Rawlog, AnInputAsOutputIsRefusedBeforeAnythingIsWritten) {
+    // #9 item 7: `kitti2rawlog SEQ -o SEQ/velodyne/000001.bin` destroyed the scan.
+    const std::string seq = syntheticSequence("same", 3, 3, true), dir = tempDir("same_out");
+    for (const std::string& target : {seq + "/velodyne/000001.bin", seq + "/poses.txt"}) {
+        const std::string before = gseg::test::readText(target);
+        const ToolRun r = runTool(seq + " -o " + target, dir);
+        EXPECT_EQ(r.status, 2) << target;
+        EXPECT_NE(r.err.find("is the input"), std::string::npos) << r.err;
+        EXPECT_TRUE(gseg::test::readText(target) == before) << target;
+    }
+    ToolRun r = runTool(seq + " -o " + dir + "/a.rawlog --simplemap " + dir + "/a.rawlog", dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("given as two outputs"), std::string::npos) << r.err;
+    r = runTool(seq + " -o " + dir + "/missing/a.rawlog", dir);  // fail early
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("kitti2rawlog: 1 scans"), std::string::npos) << "no scan converted: " << r.err;
+    expectNothingLeftBehind(dir);
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, DiskFullIsAnErrorAndNoFile) {
+    // #9 item 6: a full disk gave "wrote ..." and exit 0 with a truncated rawlog. The file size
+    // limit (EFBIG once the signal is ignored) stands in for a full disk.
+    const std::string seq = syntheticSequence("full", 3, 3, true, 20000), dir = tempDir("full_out");
+    const ToolRun r = runTool(seq + " -o " + dir + "/f.rawlog --simplemap " + dir + "/f.simplemap", dir,
+                              "ulimit -f 64; trap '' XFSZ;");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find(dir + "/f.rawlog: write failed (File too large)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("wrote"), std::string::npos) << r.err;
+    expectNothingLeftBehind(dir);
+    // The same without the limit works.
+    EXPECT_EQ(runTool(seq + " -o " + dir + "/f.rawlog", dir).status, 0);
+    EXPECT_EQ(readBack(dir + "/f.rawlog").size(), 3u);
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, RepeatContinuesTheTrajectory) {
+    // Poses: 1 m steps along camera z = velodyne x; times 0.5 s apart.
+    const std::string seq = syntheticSequence("repeat", 3, 3, true), dir = tempDir("repeat_out");
+    const ToolRun r = runTool(seq + " -o " + dir + "/r.rawlog --repeat 3", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto entries = readBack(dir + "/r.rawlog");
+    ASSERT_EQ(entries.size(), 9u);
+    for (std::size_t n = 0; n < 9; ++n) {
+        ASSERT_TRUE(entries[n].pose && entries[n].scan);
+        EXPECT_NEAR(entries[n].pose->pose.mean.x(), double(n), 1e-6) << n;
+        EXPECT_NEAR(entries[n].pose->pose.mean.y(), 0.0, 1e-6) << n;
+        EXPECT_NEAR(mrpt::Clock::toDouble(entries[n].scan->timestamp), 0.5 * double(n), 1e-6) << n;
+        EXPECT_EQ(entries[n].scan->pointcloud->size(), 3u);
+    }
     fs::remove_all(seq), fs::remove_all(dir);
 }
 

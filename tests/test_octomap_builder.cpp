@@ -1,7 +1,10 @@
 // TraversabilityMap on a simulated drive with exact poses and exact labels: a flat road that
 // turns into a 10 % ramp, a box, a wall, and a car that leaves after the first scans.
+#include <gseg/map/output_files.hpp>
+#include <gseg/map/scan_update.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <support/lidar_sim.hpp>
+#include <support/paths.hpp>
 
 #include <gtest/gtest.h>
 #include <mrpt/img/CImage.h>
@@ -11,6 +14,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <unistd.h>
 
 namespace {
@@ -54,21 +59,39 @@ gseg::test::Lidar lidar() {
     return l;
 }
 
+/// One scan of the drive in the world frame: ground and obstacle x, y, z triples and the origin.
+struct DriveScan {
+    std::vector<float> ground, obstacles;
+    Eigen::Vector3d origin;
+    gseg::PointCloudView groundView() const { return gseg::PointCloudView(ground.data(), ground.size() / 3); }
+    gseg::PointCloudView obstaclesView() const { return gseg::PointCloudView(obstacles.data(), obstacles.size() / 3); }
+};
+
 /// Drives from x = 0 to x = 30 in 2 m steps; the car is there for the first 3 scans.
-TraversabilityMap drive() {
-    TraversabilityMap map;
+std::vector<DriveScan> driveScans() {
+    std::vector<DriveScan> out;
     for (int k = 0; k <= 15; ++k) {
+        DriveScan d;
         const double x = 2.0 * k;
-        const Eigen::Vector3d origin(x, 0.0, roadZ(x) + kSensorHeight);
-        const auto scan = gseg::test::simulate(sceneFrom(origin, k < 3), lidar());
-        std::vector<float> ground, obstacles;
+        d.origin = Eigen::Vector3d(x, 0.0, roadZ(x) + kSensorHeight);
+        const auto scan = gseg::test::simulate(sceneFrom(d.origin, k < 3), lidar());
         for (std::size_t i = 0; i < scan.size(); ++i) {
-            auto& out = scan.truth[i] == Truth::Ground ? ground : obstacles;
-            for (int a = 0; a < 3; ++a) out.push_back(scan.xyz[3 * i + std::size_t(a)] + float(origin[a]));
+            auto& pts = scan.truth[i] == Truth::Ground ? d.ground : d.obstacles;
+            for (int a = 0; a < 3; ++a) pts.push_back(scan.xyz[3 * i + std::size_t(a)] + float(d.origin[a]));
         }
-        map.insertScan(gseg::PointCloudView(ground.data(), ground.size() / 3),
-                       gseg::PointCloudView(obstacles.data(), obstacles.size() / 3), origin);
+        out.push_back(std::move(d));
     }
+    return out;
+}
+
+const std::vector<DriveScan>& theScans() {
+    static const std::vector<DriveScan> scans = driveScans();
+    return scans;
+}
+
+TraversabilityMap drive(const gseg::map::TraversabilityOptions& options = {}) {
+    TraversabilityMap map(options);
+    for (const auto& d : theScans()) map.insertScan(d.groundView(), d.obstaclesView(), d.origin);
     return map;
 }
 
@@ -140,14 +163,16 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     ASSERT_EQ(written.size(), 4u);
     mrpt::img::CImage png;
     ASSERT_TRUE(png.loadFromFile(dir + "/drive_traversability.png"));
-    ASSERT_EQ(int(png.getWidth()), grid.width);
-    ASSERT_EQ(int(png.getHeight()), grid.height);
+    const auto layout = gseg::map::pictureLayout(grid, m.path());
+    ASSERT_EQ(layout.cellsPerPixel, 1);
+    ASSERT_EQ(int(png.getWidth()), layout.width);
+    ASSERT_EQ(int(png.getHeight()), layout.height);
     mrpt::math::CMatrixFloat R, G, B;  // [0, 1]
     png.getAsRGBMatrices(R, G, B);
     if (png.getChannelsOrder() == "BGR") std::swap(R, B);  // MRPT 2.5.8 hands back the stored order
     for (const auto& p : probes) {
         int c = 0, r = 0;
-        ASSERT_TRUE(grid.toPixel(p.x, p.y, c, r));
+        ASSERT_TRUE(layout.toPixel(p.x, p.y, c, r));
         const auto want = gseg::map::colourOf(p.want);
         EXPECT_EQ(std::lround(255 * R(r, c)), want.r) << "pixel of " << p.x << ", " << p.y;
         EXPECT_EQ(std::lround(255 * G(r, c)), want.g);
@@ -186,6 +211,269 @@ TEST(OctomapBuilder, InvalidOptionsAndEmptyMapAreErrors) {
     TraversabilityMap m;
     EXPECT_THROW(m.write("/tmp/never"), std::logic_error);
     EXPECT_THROW(m.insertScan({}, {}, Eigen::Vector3d(NAN, 0, 0)), std::invalid_argument);
+}
+
+/// The simple reference integration (the map layer before sorted batch updates): per scan, a
+/// KeySet of the voxels OcTree::computeRayKeys() crosses, then one OcTree::updateNode() per voxel.
+class ReferenceMap {
+public:
+    explicit ReferenceMap(const gseg::map::TraversabilityOptions& o) : o_(o), ground(o.resolution), obstacles(o.resolution) {
+        for (octomap::OcTree* t : {&ground, &obstacles}) {
+            t->setProbHit(o.probHit), t->setProbMiss(o.probMiss), t->setOccupancyThres(o.occupancyThreshold);
+            t->setClampingThresMin(o.clampMin), t->setClampingThresMax(o.clampMax);
+        }
+    }
+
+    void insert(const DriveScan& d) {
+        const octomap::point3d origin(float(d.origin.x()), float(d.origin.y()), float(d.origin.z()));
+        octomap::KeySet groundHits, obstacleHits, rayEnds, freeCells;
+        std::vector<octomap::point3d> ends;
+        auto collect = [&](const std::vector<float>& pts, octomap::KeySet& hits) {
+            for (std::size_t i = 0; i + 2 < pts.size(); i += 3) {
+                octomap::point3d p(pts[i], pts[i + 1], pts[i + 2]);
+                const octomap::point3d dir = p - origin;
+                const double range = dir.norm();
+                if (range > o_.maxRange) p = origin + dir * float(o_.maxRange / range);
+                octomap::OcTreeKey key;
+                if (!ground.coordToKeyChecked(p, key)) continue;
+                if (range <= o_.maxRange) hits.insert(key);
+                if (rayEnds.insert(key).second) ends.push_back(p);
+            }
+        };
+        collect(d.ground, groundHits);
+        collect(d.obstacles, obstacleHits);
+        octomap::KeyRay ray;
+        for (const auto& end : ends) {
+            ground.computeRayKeys(origin, end, ray);
+            for (const auto& k : ray)
+                if (!groundHits.count(k) && !obstacleHits.count(k)) freeCells.insert(k);
+        }
+        for (const auto& k : freeCells) {
+            const octomap::OcTreeNode* g = ground.search(k);
+            if (!(g && ground.isNodeOccupied(g))) ground.updateNode(k, false, true);
+            obstacles.updateNode(k, false, true);
+        }
+        for (const auto& k : groundHits) ground.updateNode(k, true, true);
+        for (const auto& k : obstacleHits) obstacles.updateNode(k, true, true);
+        ground.updateInnerOccupancy();
+        obstacles.updateInnerOccupancy();
+    }
+
+    gseg::map::TraversabilityOptions o_;
+    octomap::OcTree ground, obstacles;
+};
+
+/// Every voxel of `reference` (unpruned) has exactly the same log-odds in `fast`, and `fast` has
+/// no other voxel.
+void expectSameVoxels(const octomap::OcTree& reference, const octomap::OcTree& fast, const char* what) {
+    std::size_t voxels = 0, differ = 0;
+    for (auto it = reference.begin_leafs(); it != reference.end_leafs(); ++it, ++voxels) {
+        ASSERT_EQ(it.getDepth(), 16u) << what;
+        const octomap::OcTreeNode* n = fast.search(it.getKey());
+        if (!n || n->getLogOdds() != it->getLogOdds()) ++differ;
+    }
+    std::size_t fastVoxels = 0;
+    for (auto it = fast.begin_leafs(); it != fast.end_leafs(); ++it) fastVoxels += std::size_t(1) << (3 * (16 - it.getDepth()));
+    EXPECT_EQ(differ, 0u) << what << ": voxels with another value";
+    EXPECT_EQ(fastVoxels, voxels) << what;
+    EXPECT_GT(voxels, 10000u) << what;
+}
+
+std::string fileBytes(const std::string& path) { return gseg::test::readText(path); }
+
+std::string tempDir(const std::string& name) {
+    const auto d = std::filesystem::temp_directory_path() / ("gseg_builder_" + std::to_string(::getpid()) + "_" + name);
+    std::filesystem::remove_all(d);
+    std::filesystem::create_directories(d);
+    return d.string();
+}
+
+TEST(OctomapBuilder, FastPathEqualsASimpleReferenceIntegration) {
+    gseg::map::TraversabilityOptions shortRays;  // rays cut at 12 m, voxels off the 0.2 m grid
+    shortRays.resolution = 0.15, shortRays.maxRange = 12;
+    for (const auto& o : {gseg::map::TraversabilityOptions(), shortRays}) {
+        SCOPED_TRACE("resolution " + std::to_string(o.resolution) + ", maxRange " + std::to_string(o.maxRange));
+        ReferenceMap ref(o);
+        for (const auto& d : theScans()) ref.insert(d);
+        const TraversabilityMap fast = drive(o);
+        expectSameVoxels(ref.ground, fast.groundTree(), "ground");
+        expectSameVoxels(ref.obstacles, fast.obstacleTree(), "obstacles");
+        EXPECT_LT(double(fast.obstacleTree().size()), 0.8 * double(ref.obstacles.size())) << "pruning saves memory";
+        // The .bt files are byte for byte what OctoMap writes for the reference trees.
+        const std::string dir = tempDir("ref");
+        fast.write(dir + "/fast");
+        std::ostringstream groundBt, obstaclesBt;
+        ref.ground.writeBinaryConst(groundBt);
+        ref.obstacles.writeBinaryConst(obstaclesBt);
+        EXPECT_TRUE(fileBytes(dir + "/fast_ground.bt") == groundBt.str());
+        EXPECT_TRUE(fileBytes(dir + "/fast_obstacles.bt") == obstaclesBt.str());
+        // The .ot is what ColorOcTree::write() writes for the coloured tree built voxel by voxel.
+        std::ostringstream colouredOt;
+        ASSERT_TRUE(fast.colouredTree()->write(colouredOt));
+        EXPECT_GT(colouredOt.str().size(), 10000u);
+        EXPECT_TRUE(fileBytes(dir + "/fast_traversability.ot") == colouredOt.str());
+        std::filesystem::remove_all(dir);
+    }
+}
+
+TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
+    const gseg::map::TraversabilityOptions o;
+    std::vector<std::string> bytes;
+    for (const auto& d : theScans()) {
+        const auto u = gseg::map::castScan(d.groundView(), d.obstaclesView(), d.origin, o);
+        EXPECT_TRUE(std::is_sorted(u.free.begin(), u.free.end()));
+        EXPECT_EQ(u, gseg::map::castScan(d.groundView(), d.obstaclesView(), d.origin, o)) << "deterministic";
+        bytes.push_back(gseg::map::serializeScanUpdate(u));
+        EXPECT_EQ(gseg::map::deserializeScanUpdate(bytes.back()), u) << "serialisation round trip";
+        EXPECT_LT(bytes.back().size(), 3 * (u.free.size() + u.groundHits.size() + u.obstacleHits.size()) + 64);
+    }
+    // Cast in reverse order, sent as bytes, applied in scan order: the same files as inserting.
+    std::vector<std::string> reversed(bytes.size());
+    for (std::size_t k = bytes.size(); k-- > 0;) {
+        const auto& d = theScans()[k];
+        reversed[k] = gseg::map::serializeScanUpdate(gseg::map::castScan(d.groundView(), d.obstaclesView(), d.origin, o));
+    }
+    TraversabilityMap fromBytes(o);
+    for (const auto& b : reversed) fromBytes.apply(gseg::map::deserializeScanUpdate(b));
+    const std::string dir = tempDir("bytes");
+    fromBytes.write(dir + "/a");
+    theDrive().write(dir + "/b");
+    for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png"})
+        EXPECT_TRUE(fileBytes(dir + "/a" + f) == fileBytes(dir + "/b" + f)) << f;
+    std::filesystem::remove_all(dir);
+    // Damaged bytes are an error, not a garbage update.
+    std::string cut = bytes[0].substr(0, bytes[0].size() / 2), bad = bytes[0];
+    bad[0] = 'X';
+    EXPECT_THROW(gseg::map::deserializeScanUpdate(cut), std::runtime_error);
+    EXPECT_THROW(gseg::map::deserializeScanUpdate(bad), std::runtime_error);
+    EXPECT_THROW(gseg::map::deserializeScanUpdate(bytes[0] + "x"), std::runtime_error);
+}
+
+TEST(OctomapBuilder, NoOccupiedVoxelStillWritesReadableMaps) {
+    // Every point beyond maxRange (#9 item 3: ColorOcTree crashed on an empty tree).
+    gseg::map::TraversabilityOptions o;
+    o.maxRange = 5;
+    TraversabilityMap m(o);
+    const float far[6] = {20, 0, 0, 0, 30, -1};
+    m.insertScan(gseg::PointCloudView(far, 1), gseg::PointCloudView(far + 3, 1), Eigen::Vector3d(0, 0, 1.8));
+    const auto s = m.stats();
+    EXPECT_EQ(s.groundVoxels + s.obstacleVoxels, 0u);
+    EXPECT_GT(s.freeVoxels, 20u);
+    const std::string dir = tempDir("empty");
+    ASSERT_EQ(m.write(dir + "/e").size(), 4u);
+    std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(dir + "/e_traversability.ot"));
+    ASSERT_NE(dynamic_cast<octomap::ColorOcTree*>(any.get()), nullptr);
+    EXPECT_EQ(any->size(), 0u);
+    mrpt::img::CImage png;
+    EXPECT_TRUE(png.loadFromFile(dir + "/e_traversability.png"));
+    std::filesystem::remove_all(dir);
+}
+
+TEST(OctomapBuilder, SensorOutsideTheExtentIsAnErrorAndFarPointsAreCounted) {
+    TraversabilityMap m;  // 0.2 m: +-6553.6 m
+    const float p[3] = {500000.5f, 5000000.5f, 100.0f};
+    try {
+        m.insertScan(gseg::PointCloudView(p, 1), {}, Eigen::Vector3d(500000, 5000000, 101.8));  // UTM
+        FAIL() << "no throw";
+    } catch (const std::out_of_range& e) {
+        EXPECT_NE(std::string(e.what()).find("outside the map's extent of +-6553.6"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(m.empty());
+    // Near the edge: a point 20 m away but outside the extent, a NaN point, and one inside.
+    const float mixed[9] = {6560, 0, 0, NAN, 0, 0, 6545, 0, 0};
+    m.insertScan(gseg::PointCloudView(mixed, 3), {}, Eigen::Vector3d(6540, 0, 1.8));
+    EXPECT_EQ(m.stats().pointsSkipped, 2u);
+    EXPECT_EQ(m.stats().groundVoxels, 1u);
+}
+
+TEST(OctomapBuilder, TopDownPictureOfAPathKilometresLongStaysSmall) {
+    // Two scans 6 km apart (#9 item 9: the dense grid took 205 s and 4 GB).
+    TraversabilityMap m;
+    const float a[3] = {1, 0, 0}, b[3] = {4241, 4243, 0};
+    m.insertScan(gseg::PointCloudView(a, 1), {}, Eigen::Vector3d(0, 0, 1.8));
+    m.insertScan(gseg::PointCloudView(b, 1), {}, Eigen::Vector3d(4243, 4243, 1.8));
+    const auto grid = m.topDown();
+    EXPECT_EQ(grid.count(CellClass::Traversable), 2u);
+    const auto layout = gseg::map::pictureLayout(grid, m.path());
+    EXPECT_EQ(layout.cellsPerPixel, 6);  // 21226 cells a side in at most 4096 pixels
+    EXPECT_LE(std::max(layout.width, layout.height), 4096);
+    const std::string dir = tempDir("far");
+    m.write(dir + "/f");
+    mrpt::img::CImage png;
+    ASSERT_TRUE(png.loadFromFile(dir + "/f_traversability.png"));
+    EXPECT_EQ(int(png.getWidth()), layout.width);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(OctomapBuilder, TopDownGridIndexesNegativeCellsAndTileBorders) {
+    gseg::map::TopDownGrid g(0.5);
+    struct Case {
+        double x, y;
+        std::int64_t ix, iy;
+    };
+    const Case cases[] = {{0.0, 0.0, 0, 0},      {-0.01, 0.0, -1, 0},   {-0.5, -0.5, -1, -1}, {-0.51, 31.99, -2, 63},
+                          {32.0, -32.0, 64, -64}, {-32.01, 0.2, -65, 0}, {1e3, -1e3, 2000, -2000}};
+    for (const auto& c : cases) {
+        EXPECT_EQ(g.cellIndex(c.x), c.ix) << c.x;
+        EXPECT_EQ(g.cellIndex(c.y), c.iy) << c.y;
+        g.set(c.ix, c.iy, CellClass::Obstacle);
+        EXPECT_EQ(g.at(c.x, c.y), CellClass::Obstacle) << c.x << ", " << c.y;
+    }
+    EXPECT_EQ(g.count(CellClass::Obstacle), 7u);
+    EXPECT_EQ(g.at(-0.4, 31.9), CellClass::Unknown);
+    g.set(-1, 0, CellClass::Traversable);
+    EXPECT_EQ(g.count(CellClass::Obstacle), 6u);
+    EXPECT_EQ(g.count(CellClass::Traversable), 1u);
+    EXPECT_EQ(g.minX(), -65);
+    EXPECT_EQ(g.maxY(), 63);
+}
+
+TEST(OctomapBuilder, AbsurdResolutionsAreRejected) {
+    for (double r : {0.0011, 0.0, -0.2, 11.0, 1e9}) {
+        gseg::map::TraversabilityOptions o;
+        o.resolution = r;
+        EXPECT_THROW(o.validate(), std::invalid_argument) << r;
+    }
+    gseg::map::TraversabilityOptions o;
+    o.resolution = 0.01, o.maxRange = 100;  // rays of 10000 voxels
+    try {
+        o.validate();
+        FAIL() << "no throw";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("10000 voxels"), std::string::npos) << e.what();
+    }
+    o.maxRange = 50;
+    EXPECT_NO_THROW(o.validate());
+}
+
+TEST(OctomapBuilder, FailedRenameLeavesThePreviousOutputsAsTheyWere) {
+    // #9 item 9: a failed final rename deleted the previous run's outputs.
+    const std::string dir = tempDir("rename");
+    const std::vector<std::string> paths = {dir + "/a", dir + "/b", dir + "/c"};
+    for (const auto& p : paths) std::ofstream(p) << "previous " << p;
+    {
+        gseg::map::AtomicFiles files(paths);
+        for (std::size_t i = 0; i < 3; ++i) gseg::map::writeFileChecked(files.temporary(i), "new");
+        std::filesystem::remove(files.temporary(2));  // the third rename fails
+        EXPECT_THROW(files.commit(), std::runtime_error);
+    }
+    for (const auto& p : paths) EXPECT_EQ(fileBytes(p), "previous " + p);
+    // The same through the map: the last target is a folder, so the first three must stay.
+    const auto& m = theDrive();
+    m.write(dir + "/m");
+    const std::string before = fileBytes(dir + "/m_ground.bt");
+    std::filesystem::remove(dir + "/m_traversability.png");
+    std::filesystem::create_directories(dir + "/m_traversability.png/x");
+    TraversabilityMap other;
+    const float pt[3] = {3, 0, 0};
+    other.insertScan(gseg::PointCloudView(pt, 1), {}, Eigen::Vector3d(0, 0, 1.8));
+    EXPECT_THROW(other.write(dir + "/m"), std::runtime_error);
+    EXPECT_EQ(fileBytes(dir + "/m_ground.bt"), before);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/m_obstacles.bt"));
+    std::size_t entries = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir)) entries += e.path().filename().string()[0] == '.';
+    EXPECT_EQ(entries, 0u) << "temporary or backup files left behind";
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

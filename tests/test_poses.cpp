@@ -72,4 +72,46 @@ TEST(Poses, KittiSequence00InVelodyneFrame) {
     EXPECT_NEAR(t5.x(), cam[5].translation().z(), 0.1);
 }
 
+/// The message of what `f` throws ("" if nothing).
+template <class F>
+std::string errorOf(F&& f) {
+    try {
+        f();
+    } catch (const std::runtime_error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(Poses, RotationsThatAreNotRotationsNameFileAndLine) {
+    // #9 item 10: a scaled rotation or an all-zero Tr silently scaled or collapsed the map.
+    const auto scaled = writeTemp("scaled.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n2 0 0 1 0 2 0 0 0 0 2 0\n");
+    std::string e = errorOf([&] { readKittiPoses(scaled); });
+    EXPECT_NE(e.find(scaled + ":2: the 3x3 part is not a rotation"), std::string::npos) << e;
+    const auto zero = writeTemp("zero_calib.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: 0 0 0 0 0 0 0 0 0 0 0 0\n");
+    e = errorOf([&] { readKittiCalibTr(zero); });
+    EXPECT_NE(e.find(zero + ":2: the 3x3 part is not a rotation"), std::string::npos) << e;
+    const auto mirrored = writeTemp("mirror.txt", "-1 0 0 0 0 1 0 0 0 0 1 0\n");  // orthonormal, det -1
+    EXPECT_NE(errorOf([&] { readKittiPoses(mirrored); }).find(":1:"), std::string::npos);
+    // Printed with 7 digits, as in KITTI's files: accepted.
+    const auto printed = writeTemp("printed.txt", "9.999978e-01 5.272628e-04 -2.066935e-03 -4.690294e-02 "
+                                                  "-5.296506e-04 9.999992e-01 -1.154865e-03 -2.839928e-02 "
+                                                  "2.066324e-03 1.155958e-03 9.999971e-01 8.586941e-01\n");
+    EXPECT_EQ(readKittiPoses(printed).size(), 1u);
+}
+
+TEST(Poses, TimesMustBeFiniteAndInOrder) {
+    const auto good = writeTemp("times_ok.txt", "0.000000e+00\n1.037359e-01\n\n2.073381e-01\n");
+    EXPECT_EQ(readKittiTimes(good).size(), 3u);
+    struct Case {
+        std::string text, where;
+    };
+    for (const Case& c : {Case{"0.0\n0.1\nnan\n", ":3:"}, Case{"0.0\ninf\n", ":2:"}, Case{"0.0\n0.2\n0.1\n", ":3:"},
+                          Case{"0.0\n0.1 0.2\n", ":2:"}, Case{"0.0\nabc\n", ":2:"}}) {
+        const auto path = writeTemp("times_bad.txt", c.text);
+        const std::string e = errorOf([&] { readKittiTimes(path); });
+        EXPECT_NE(e.find(path + c.where), std::string::npos) << c.text << " -> " << e;
+    }
+}
+
 }  // namespace

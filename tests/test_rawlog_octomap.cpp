@@ -1,5 +1,6 @@
 // rawlog-octomap end to end: a simulated drive with a mounted sensor (poses in the rawlog or a TUM
-// file), the real SemanticKITTI sequence 00 through kitti2rawlog, and bad input.
+// file, raw scans or rawlog-gseg's pairs), the real SemanticKITTI sequence 00 through kitti2rawlog
+// (and rawlog-gseg), threads, progress, skipped scans, failing early, and bad input.
 #include <gseg/map/poses.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/paths.hpp>
@@ -17,6 +18,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -32,9 +34,12 @@ struct ToolRun {
     std::string out, err;
 };
 
-ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir) {
+/// Runs a built tool; `limits` goes before it in bash (e.g. "ulimit -f 64; trap '' XFSZ;").
+ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir, const std::string& limits = "") {
     ToolRun r;
-    r.status = std::system((gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt").c_str());
+    const std::string command = limits + " exec " + gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
+    const int st = std::system(("bash -c \"" + command + "\"").c_str());
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);  // a crash is >= 128
     std::ifstream o(dir + "/out.txt"), e(dir + "/err.txt");
     r.out.assign(std::istreambuf_iterator<char>(o), {});
     r.err.assign(std::istreambuf_iterator<char>(e), {});
@@ -60,13 +65,22 @@ std::vector<std::string> mapFiles(const std::string& prefix) {
     return out;
 }
 
-/// Vehicle at x = 3k on the road (z = kRoadZ); the scans are in the sensor frame.
-mrpt::poses::CPose3D vehiclePose(int k) { return mrpt::poses::CPose3D(3.0 * k, 0, kRoadZ, 0, 0, 0); }
+/// Vehicle at x = 3k on the road (z = kRoadZ), plus `offset` (e.g. UTM); scans in the sensor frame.
+mrpt::poses::CPose3D vehiclePose(int k, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero()) {
+    return mrpt::poses::CPose3D(3.0 * k + offset.x(), offset.y(), kRoadZ + offset.z(), 0, 0, 0);
+}
 
-/// Writes 8 scans of a road with a box and a wall; with `poses`, a CObservationRobotPose before each.
-/// With `presegmented`, each scan is written as rawlog-gseg writes it: a `LIDAR_ground` and a
-/// `LIDAR_obstacles` CObservationPointCloud, split by the simulator's exact truth.
-void writeDrive(const std::string& path, bool poses, bool presegmented = false) {
+/// How writeDrive() lays the scans out.
+struct Drive {
+    bool poses = true;                  ///< a CObservationRobotPose before each scan
+    enum Layout { Raw, Pair, RawAndPair } layout = Raw;  ///< Pair: as rawlog-gseg --replace writes; RawAndPair: without
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();    ///< added to every pose
+    int emptyScan = -1;                 ///< this scan has no points
+};
+
+/// Writes 8 scans of a road with a box and a wall. Pairs are `LIDAR_ground` and `LIDAR_obstacles`
+/// CObservationPointCloud, split by the simulator's exact truth.
+void writeDrive(const std::string& path, const Drive& d = {}) {
     mrpt::io::CFileGZOutputStream f(path);
     auto out = mrpt::serialization::archiveFrom(f);
     gseg::test::Lidar lidar;
@@ -82,15 +96,15 @@ void writeDrive(const std::string& path, bool poses, bool presegmented = false) 
         box(0, -8.2, kRoadZ, 40, -8, kRoadZ + 3);
         const auto scan = gseg::test::simulate(s, lidar);
         const auto t = mrpt::Clock::fromDouble(100.0 + 0.1 * k);
-        if (poses) {
+        if (d.poses) {
             mrpt::obs::CObservationRobotPose p;
-            p.pose.mean = vehiclePose(k);
+            p.pose.mean = vehiclePose(k, d.offset);
             p.timestamp = t;
             out << p;
         }
         auto write = [&](const std::string& label, int want) {  // want: -1 all, 1 ground, 0 obstacles
             auto pc = mrpt::maps::CSimplePointsMap::Create();
-            for (std::size_t i = 0; i < scan.size(); ++i)
+            for (std::size_t i = 0; i < scan.size() && k != d.emptyScan; ++i)
                 if (want < 0 || (scan.truth[i] == Truth::Ground) == (want == 1))
                     pc->insertPoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2]);
             mrpt::obs::CObservationPointCloud obs;
@@ -100,13 +114,22 @@ void writeDrive(const std::string& path, bool poses, bool presegmented = false) 
             obs.timestamp = t;
             out << obs;
         };
-        if (presegmented) {
-            write("LIDAR_ground", 1);
-            write("LIDAR_obstacles", 0);
-        } else {
-            write("LIDAR", -1);
-        }
+        if (d.layout != Drive::Pair) write("LIDAR", -1);
+        if (d.layout != Drive::Raw) write("LIDAR_ground", 1), write("LIDAR_obstacles", 0);
     }
+}
+
+/// stderr lines that are not progress.
+std::vector<std::string> messageLines(const std::string& err) {
+    std::vector<std::string> out;
+    std::size_t from = 0;
+    while (from < err.size()) {
+        const std::size_t to = std::min(err.find('\n', from), err.size());
+        const std::string line = err.substr(from, to - from);
+        if (!line.empty() && line.find("scans/s") == std::string::npos) out.push_back(line);
+        from = to + 1;
+    }
+    return out;
 }
 
 void expectDriveMap(const std::string& prefix) {
@@ -127,30 +150,41 @@ void expectDriveMap(const std::string& prefix) {
 
 TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
     const std::string dir = tempDir("sim");
-    writeDrive(dir + "/drive.rawlog", true);
+    writeDrive(dir + "/drive.rawlog");
     std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("voxels (0.20 m)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("8 scans (0 from _ground/_obstacles pairs"), std::string::npos) << r.out;
+    for (const char* phase : {"read ", "segmentation ", "transform ", "ray casting ", "map update ", "writing "})
+        EXPECT_NE(r.out.find(phase), std::string::npos) << "time of " << phase << " in: " << r.out;
     expectDriveMap(dir + "/m");
     fs::remove_all(dir);
 }
 
 TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
     const std::string dir = tempDir("preseg");
-    writeDrive(dir + "/drive.rawlog", true, true);
     // A wrong sensor height: had the tool segmented these scans again, the road would be lost.
     std::ofstream(dir + "/gseg.yaml") << "distToGround: 9.0\n";
-    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
-    ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_NE(r.out.find("8 scans"), std::string::npos) << r.out;
-    expectDriveMap(dir + "/m");
+    for (const auto layout : {Drive::Pair, Drive::RawAndPair}) {  // rawlog-gseg with and without --replace
+        Drive d;
+        d.layout = layout;
+        writeDrive(dir + "/drive.rawlog", d);
+        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+        const std::string raw = layout == Drive::Pair ? "0" : "8";
+        EXPECT_NE(r.out.find("8 scans (8 from _ground/_obstacles pairs, " + raw + " raw scans not segmented again"),
+                  std::string::npos) << r.out;
+        expectDriveMap(dir + "/m");
+    }
     fs::remove_all(dir);
 }
 
 TEST(RawlogOctomap, SimulatedDriveWithTumPoses) {
     const std::string dir = tempDir("tum");
-    writeDrive(dir + "/drive.rawlog", false);
+    Drive d;
+    d.poses = false;
+    writeDrive(dir + "/drive.rawlog", d);
     std::ofstream tum(dir + "/poses.tum");
     for (int k = 0; k < 8; ++k) tum << std::to_string(100.0 + 0.1 * k) << " " << 3.0 * k << " 0 " << kRoadZ << " 0 0 0 1\n";
     tum.close();
@@ -196,17 +230,25 @@ TEST(RawlogOctomap, KittiSequence00ThroughKitti2rawlog) {
 
 TEST(RawlogOctomap, BadInputIsAClearErrorAndNoMapFiles) {
     const std::string dir = tempDir("bad");
-    writeDrive(dir + "/noposes.rawlog", false);
+    Drive noPoses;
+    noPoses.poses = false;
+    writeDrive(dir + "/noposes.rawlog", noPoses);
     struct Case {
         std::string args, expect;
     };
     std::ofstream(dir + "/few.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n";
     std::ofstream(dir + "/calib.txt") << "Tr: 0 -1 0 0 0 0 -1 0 1 0 0 0\n";
     std::ofstream(dir + "/late.tum") << "500.0 0 0 0 0 0 0 1\n501.0 1 0 0 0 0 0 1\n";
+    // #9 item 9: --resolution 0.0011 was accepted and ran for minutes.
+    for (const char* bad : {"--resolution 0.0011", "--resolution 0.01 --max-range 80", "--threads -1", "--origin 1,2"}) {
+        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/noposes.rawlog -o " + dir + "/m " + bad, dir);
+        EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+        EXPECT_EQ(messageLines(r.err).size(), 1u) << r.err;
+    }
     std::ofstream(dir + "/garbage.rawlog") << "this is not a rawlog at all, just some text to fail on";
     const Case cases[] = {
         {"-i " + dir + "/noposes.rawlog", "no poses"},
-        {"-i " + dir + "/noposes.rawlog --poses " + dir + "/few.txt", "2 poses for 8 scans"},
+        {"-i " + dir + "/noposes.rawlog --poses " + dir + "/few.txt", "2 poses, but scan 2"},
         {"-i " + dir + "/noposes.rawlog --poses " + dir + "/late.tum", "no pose within"},
         {"-i " + dir + "/garbage.rawlog", "garbage.rawlog"},
         {"-i " + dir + "/missing.rawlog", "missing.rawlog"},
@@ -214,11 +256,188 @@ TEST(RawlogOctomap, BadInputIsAClearErrorAndNoMapFiles) {
     for (const auto& c : cases) {
         const ToolRun r = runTool("rawlog-octomap", c.args + " -o " + dir + "/m", dir);
         EXPECT_NE(r.status, 0) << c.args;
-        EXPECT_NE(r.err.find("rawlog-octomap: "), std::string::npos) << r.err;
-        EXPECT_NE(r.err.find(c.expect), std::string::npos) << "wanted '" << c.expect << "' in: " << r.err;
-        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+        const auto lines = messageLines(r.err);
+        ASSERT_EQ(lines.size(), 1u) << "one line: " << r.err;
+        EXPECT_EQ(lines[0].rfind("rawlog-octomap: ", 0), 0u) << r.err;
+        EXPECT_NE(lines[0].find(c.expect), std::string::npos) << "wanted '" << c.expect << "' in: " << r.err;
         EXPECT_TRUE(mapFiles(dir + "/m").empty()) << c.args;
     }
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, ChainKitti2rawlogRawlogGsegRawlogOctomapSegmentsEachScanOnce) {
+    const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    const std::string dir = tempDir("chain"), config = std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml";
+    ToolRun r = runTool("kitti2rawlog", fs::path(poses).parent_path().string() + " -o " + dir + "/seq00.rawlog", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = runTool("rawlog-gseg", "-i " + dir + "/seq00.rawlog -o " + dir + "/split.rawlog -c " + config, dir);  // no --replace
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = runTool("rawlog-octomap", "-i " + dir + "/split.rawlog -o " + dir + "/m", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("6 scans (6 from _ground/_obstacles pairs, 6 raw scans not segmented again, 0 skipped)"),
+              std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("segmentation 0.00,"), std::string::npos) << "nothing segmented again: " << r.out;
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
+    const std::string dir = tempDir("threads");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    for (const char* threads : {"0", "1", "3"}) {
+        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/t" + threads + " -c " + dir +
+                                                        "/gseg.yaml --threads " + threads, dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+    for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png"}) {
+        const std::string one = gseg::test::readText(dir + "/t0" + f);
+        EXPECT_GT(one.size(), 100u) << f;
+        EXPECT_TRUE(one == gseg::test::readText(dir + "/t1" + f)) << f;
+        EXPECT_TRUE(one == gseg::test::readText(dir + "/t3" + f)) << f;
+    }
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, ProgressShowsScansPerSecondAndTimeLeft) {
+    const std::string dir = tempDir("progress");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    // Not a terminal: plain lines (the first scan, then every 10 s, then the end), no carriage returns.
+    EXPECT_NE(r.err.find("rawlog-octomap: 1 scans, "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(" left"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("rawlog-octomap: 8 scans, "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(" in all"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, AScanThatCannotBeSegmentedIsSkippedNamedAndCounted) {
+    const std::string dir = tempDir("skip");
+    Drive d;
+    d.emptyScan = 3;
+    writeDrive(dir + "/drive.rawlog", d);
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
+    EXPECT_EQ(r.status, 1) << "the exit code says a scan was skipped";
+    EXPECT_NE(r.err.find("skipped scan 3 ('LIDAR' at rawlog entry 7"), std::string::npos) << r.err;
+    EXPECT_NE(r.out.find("8 scans (0 from _ground/_obstacles pairs, 0 raw scans not segmented again, 1 skipped)"),
+              std::string::npos) << r.out;
+    expectDriveMap(dir + "/m");  // the other seven made the maps
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, NoOccupiedVoxelIsNoCrash) {
+    // #9 item 3: SEGV in ColorOcTree when nothing ends up occupied.
+    const std::string dir = tempDir("empty");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    // Every point beyond --max-range (the nearest is the road 1.8 m below the sensor).
+    ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml --max-range 1.5", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("voxels (0.20 m): 0 ground, 0 obstacle"), std::string::npos) << r.out;
+    ASSERT_EQ(mapFiles(dir + "/m").size(), 4u);
+    std::unique_ptr<octomap::AbstractOcTree> ot(octomap::AbstractOcTree::read(dir + "/m_traversability.ot"));
+    ASSERT_NE(ot, nullptr);
+    EXPECT_EQ(ot->size(), 0u);
+    // Every point far above the sensor: a ceiling 60 m up.
+    {
+        mrpt::io::CFileGZOutputStream f(dir + "/high.rawlog");
+        auto out = mrpt::serialization::archiveFrom(f);
+        for (int k = 0; k < 3; ++k) {
+            mrpt::obs::CObservationRobotPose p;
+            p.pose.mean = vehiclePose(k);
+            p.timestamp = mrpt::Clock::fromDouble(100.0 + 0.1 * k);
+            out << p;
+            auto pc = mrpt::maps::CSimplePointsMap::Create();
+            for (int i = -20; i <= 20; ++i)
+                for (int j = -20; j <= 20; ++j) pc->insertPoint(float(i), float(j), 60.f);
+            mrpt::obs::CObservationPointCloud obs;
+            obs.pointcloud = pc, obs.sensorPose = kMount, obs.sensorLabel = "LIDAR", obs.timestamp = p.timestamp;
+            out << obs;
+        }
+    }
+    r = runTool("rawlog-octomap", "-i " + dir + "/high.rawlog -o " + dir + "/h -c " + dir + "/gseg.yaml", dir);
+    ASSERT_EQ(r.status, 0) << r.err;  // whatever the labels: every point is beyond the 50 m rays
+    EXPECT_NE(r.out.find("voxels (0.20 m): 0 ground, 0 obstacle"), std::string::npos) << r.out;
+    EXPECT_EQ(mapFiles(dir + "/h").size(), 4u);
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, PosesInUtmNeedAnOriginAndThenWork) {
+    const std::string dir = tempDir("utm");
+    Drive d;
+    d.offset = Eigen::Vector3d(500000.0, 5000000.0, 250.0);
+    writeDrive(dir + "/utm.rawlog", d);
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string args = "-i " + dir + "/utm.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml";
+    ToolRun r = runTool("rawlog-octomap", args, dir);
+    EXPECT_EQ(r.status, 1);
+    const auto lines = messageLines(r.err);
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    EXPECT_NE(lines[0].find("lies outside the map's extent of +-6553.6 m"), std::string::npos) << r.err;
+    EXPECT_NE(lines[0].find("--origin first"), std::string::npos) << r.err;
+    EXPECT_TRUE(mapFiles(dir + "/m").empty());
+    r = runTool("rawlog-octomap", args + " --origin first", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    // The first sensor position (500000.5, 5000000, 251.9) in whole metres is the maps' origin.
+    EXPECT_NE(r.out.find("map origin: (500001.000, 5000000.000, 252.000)"), std::string::npos) << r.out;
+    octomap::OcTree ground(dir + "/m_ground.bt");
+    for (double x : {5.0, 9.0, 14.0}) EXPECT_TRUE(occupied(ground, x - 1.0, 1.5, kRoadZ - 2.0)) << "road at x " << x;
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
+    const std::string dir = tempDir("early");
+    writeDrive(dir + "/drive.rawlog");
+    for (const std::string& prefix : {dir + "/missing/m", std::string("/proc/gseg_maps_test/m"), std::string("/proc/m")}) {
+        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + prefix, dir);
+        EXPECT_EQ(r.status, 1) << prefix;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line and no scan read: " << r.err;
+        EXPECT_NE(r.err.find(prefix + "_ground.bt: "), std::string::npos) << r.err;
+    }
+    // An input as output is refused, and the input is left as it was.
+    fs::copy_file(dir + "/drive.rawlog", dir + "/m_ground.bt");
+    const std::string before = gseg::test::readText(dir + "/m_ground.bt");
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/m_ground.bt -o " + dir + "/m", dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("is the input"), std::string::npos) << r.err;
+    EXPECT_TRUE(gseg::test::readText(dir + "/m_ground.bt") == before);
+    EXPECT_FALSE(fs::exists(dir + "/m_obstacles.bt"));
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, DiskFullIsAnErrorAndNoMapFiles) {
+    // #9 item 6. The file size limit (EFBIG once the signal is ignored) stands in for a full disk.
+    const std::string dir = tempDir("full");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir,
+                              "ulimit -f 200; trap '' XFSZ;");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("write failed (File too large)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("wrote"), std::string::npos) << r.out;
+    EXPECT_TRUE(mapFiles(dir + "/m").empty());
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_NE(e.path().filename().string()[0], '.') << "left behind: " << e.path();
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
+    const std::string dir = tempDir("bench");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/b -c " + dir +
+                                                    "/gseg.yaml --max-range 15 --bench 2", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 2 + 4 + 2) << r.out;
+    EXPECT_LT(r.out.find("1      plain OctoMap"), r.out.find("1      rawlog-octomap")) << r.out;
+    EXPECT_LT(r.out.find("2      rawlog-octomap"), r.out.find("2      plain OctoMap")) << r.out;
+    EXPECT_NE(r.out.find("x faster"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("ray casting"), std::string::npos) << r.out;
+    EXPECT_TRUE(fs::exists(dir + "/b_bench_ground.bt") && fs::exists(dir + "/b_bench_plain.bt"));
     fs::remove_all(dir);
 }
 

@@ -10,13 +10,17 @@
 // Time stamps: times.txt (seconds since the drive started) taken as seconds since the UNIX epoch;
 // without times.txt, frame k is at k * 0.1 s (KITTI's 10 Hz).
 // --simplemap also writes the same scans with their poses as a CSimpleMap, the input of MRPT's
-// observations2map.
+// observations2map (MRPT builds a simplemap in memory: not for long drives).
+// --repeat N writes the frames N times along a continuing synthetic trajectory (each round starts
+// where the previous one ended, one frame step later): a long drive for benchmarks, streamed.
+// Every write and the close are checked; outputs appear complete or not at all, never over an input.
 
 #include <gseg/io/kitti.hpp>
+#include <gseg/map/gz_output.hpp>
+#include <gseg/map/output_files.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/map/progress.hpp>
 
-#include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CObservationPointCloud.h>
@@ -28,12 +32,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -42,18 +44,19 @@ namespace {
 
 const char* kUsage =
     "usage: kitti2rawlog SEQUENCE_DIR -o OUT.rawlog [--poses FILE] [--calib FILE] [--no-poses]\n"
-    "                    [--first N] [--last M] [--simplemap OUT.simplemap]\n"
+    "                    [--first N] [--last M] [--simplemap OUT.simplemap] [--repeat N]\n"
     "  SEQUENCE_DIR  a KITTI odometry sequence: velodyne/NNNNNN.bin, optional times.txt, poses.txt, calib.txt\n"
     "  --poses FILE  KITTI poses (3x4 per frame, camera-0); default SEQUENCE_DIR/poses.txt if present\n"
     "  --calib FILE  calib.txt with Tr (velodyne to camera-0); default SEQUENCE_DIR/calib.txt\n"
     "  --no-poses    write scans only, even if poses.txt is present\n"
     "  --first N, --last M  convert frames N..M (frame numbers, inclusive)\n"
-    "  --simplemap F also write scans + poses as a CSimpleMap (input of observations2map)\n";
+    "  --simplemap F also write scans + poses as a CSimpleMap (input of observations2map; held in memory)\n"
+    "  --repeat N    the frames N times along a continuing trajectory (a long drive for benchmarks; needs poses)\n";
 
 struct Cli {
     std::string sequence, output, poses, calib, simplemap;
     bool noPoses = false;
-    long first = 0, last = -1;
+    long first = 0, last = -1, repeat = 1;
 };
 
 long parseIndex(const std::string& flag, const std::string& v) {
@@ -82,6 +85,7 @@ Cli parseCli(int argc, char** argv) {
         else if (a == "--no-poses") c.noPoses = true;
         else if (a == "--first") c.first = parseIndex(a, value());
         else if (a == "--last") c.last = parseIndex(a, value());
+        else if (a == "--repeat") c.repeat = std::max(1L, parseIndex(a, value()));
         else if (a == "-h" || a == "--help") {
             std::cout << kUsage;
             std::exit(0);
@@ -114,18 +118,7 @@ std::vector<std::pair<long, std::string>> listScans(const Cli& c) {
 /// times.txt as seconds, or empty if absent.
 std::vector<double> readTimes(const std::string& sequence) {
     const fs::path p = fs::path(sequence) / "times.txt";
-    std::vector<double> t;
-    if (!fs::exists(p)) return t;
-    std::ifstream in(p);
-    std::string line;
-    for (std::size_t n = 1; std::getline(in, line); ++n) {
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        char* end = nullptr;
-        const double v = std::strtod(line.c_str(), &end);
-        if (end == line.c_str()) throw std::runtime_error(p.string() + ":" + std::to_string(n) + ": not a time in seconds");
-        t.push_back(v);
-    }
-    return t;
+    return fs::exists(p) ? gseg::map::readKittiTimes(p.string()) : std::vector<double>();
 }
 
 /// Velodyne poses of the frames, world = first converted frame; nullopt without poses.
@@ -181,15 +174,28 @@ mrpt::obs::CObservationRobotPose::Ptr makePose(const Eigen::Isometry3d& p, mrpt:
     return obs;
 }
 
-/// Temporary path beside `path` (same folder, so rename() is atomic).
-std::string tempFor(const std::string& path) { return path + ".tmp" + std::to_string(::getpid()); }
-
-void commit(const std::string& tmp, const std::string& path) {
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw std::runtime_error(path + ": cannot rename the temporary file into place");
-    }
+/// Every file the conversion reads (an output must be none of them).
+std::vector<std::string> inputsOf(const Cli& c, const std::vector<std::pair<long, std::string>>& scans) {
+    std::vector<std::string> in = {c.poses, c.calib};
+    for (const char* f : {"poses.txt", "calib.txt", "times.txt"}) in.push_back((fs::path(c.sequence) / f).string());
+    for (const auto& s : scans) in.push_back(s.second);
+    return in;
 }
+
+/// Frame i of round r of --repeat: the trajectory continues from the end of round r - 1.
+struct Repeater {
+    Eigen::Isometry3d round = Eigen::Isometry3d::Identity();  ///< first pose of the next round, relative to the first
+    double period = 0;                                        ///< [s] time of one round
+
+    Repeater(const std::vector<Eigen::Isometry3d>* poses, const std::vector<double>& t) {
+        if (!poses || poses->empty()) return;
+        const auto& p = *poses;
+        const Eigen::Isometry3d step = p.size() > 1 ? p[0].inverse() * p[1] : Eigen::Isometry3d::Identity();
+        round = p.back() * step * p[0].inverse();
+        const double dt = t.size() > 1 ? t[1] - t[0] : 0.1;
+        period = (t.empty() ? 0.1 * double(p.size() - 1) : t.back() - t.front()) + dt;
+    }
+};
 
 void run(const Cli& c) {
     const auto scans = listScans(c);
@@ -200,46 +206,48 @@ void run(const Cli& c) {
     const auto poses = framePoses(c, scans);
     if (!c.simplemap.empty() && !poses)
         throw std::invalid_argument("--simplemap needs poses (poses.txt in the sequence or --poses)");
+    if (c.repeat > 1 && !poses) throw std::invalid_argument("--repeat needs poses (poses.txt in the sequence or --poses)");
+    std::vector<std::string> outputs = {c.output};
+    if (!c.simplemap.empty()) outputs.push_back(c.simplemap);
+    gseg::map::checkOutputs(outputs, inputsOf(c, scans));  // before anything is written
     std::cerr << "kitti2rawlog: " << scans.size() << " scans (frames " << scans.front().first << ".." << scans.back().first
               << "), " << (poses ? "with poses" : "no poses") << ", "
-              << (times.empty() ? "no times.txt: 10 Hz time stamps" : "times from times.txt") << "\n";
+              << (times.empty() ? "no times.txt: 10 Hz time stamps" : "times from times.txt")
+              << (c.repeat > 1 ? ", " + std::to_string(c.repeat) + " rounds" : std::string()) << "\n";
 
-    const std::string tmp = tempFor(c.output), tmpMap = c.simplemap.empty() ? "" : tempFor(c.simplemap);
-    try {
-        mrpt::maps::CSimpleMap simplemap;
-        {
-            mrpt::io::CFileGZOutputStream file;
-            if (!file.open(tmp)) throw std::runtime_error(c.output + ": cannot create");
-            auto out = mrpt::serialization::archiveFrom(file);
-            gseg::map::Progress progress(stderr, "kitti2rawlog", scans.size());
-            for (std::size_t i = 0; i < scans.size(); ++i) {
-                const long k = scans[i].first;
-                const auto t = mrpt::Clock::fromDouble(times.empty() ? 0.1 * double(k) : times[std::size_t(k)]);
-                const auto scan = makeScan(scans[i].second, t);
-                if (poses) out << *makePose((*poses)[i], t);
-                out << *scan;
-                if (!tmpMap.empty()) {
-                    auto sf = mrpt::obs::CSensoryFrame::Create();
-                    sf->insert(scan);
-                    simplemap.insert(mrpt::poses::CPose3DPDFGaussian::Create(toPose((*poses)[i])), sf);
-                }
-                progress.update(i + 1, fs::path(scans[i].second).filename().string() + ": " +
-                                           std::to_string(scan->pointcloud->size()) + " points");
-            }
+    std::vector<double> frameTimes;
+    for (const auto& s : scans) frameTimes.push_back(times.empty() ? 0.1 * double(s.first) : times[std::size_t(s.first)]);
+    const Repeater repeater(poses ? &*poses : nullptr, frameTimes);
+    gseg::map::AtomicFiles files(outputs);
+    mrpt::maps::CSimpleMap simplemap;
+    gseg::map::CheckedGzOutput file(files.temporary(0), c.output);
+    auto out = mrpt::serialization::archiveFrom(file);
+    gseg::map::Progress progress(stderr, "kitti2rawlog", "scans");
+    const std::size_t total = scans.size() * std::size_t(c.repeat);
+    Eigen::Isometry3d roundStart = Eigen::Isometry3d::Identity();
+    for (std::size_t n = 0; n < total; ++n) {
+        const std::size_t i = n % scans.size(), r = n / scans.size();
+        if (i == 0 && r > 0) roundStart = roundStart * repeater.round;
+        const auto t = mrpt::Clock::fromDouble(frameTimes[i] + double(r) * repeater.period);
+        const auto scan = makeScan(scans[i].second, t);
+        if (poses) out << *makePose(roundStart * (*poses)[i], t);
+        out << *scan;
+        if (!c.simplemap.empty()) {
+            auto sf = mrpt::obs::CSensoryFrame::Create();
+            sf->insert(scan);
+            simplemap.insert(mrpt::poses::CPose3DPDFGaussian::Create(toPose(roundStart * (*poses)[i])), sf);
         }
-        if (!tmpMap.empty()) {
-            mrpt::io::CFileGZOutputStream file;
-            if (!file.open(tmpMap)) throw std::runtime_error(c.simplemap + ": cannot create");
-            mrpt::serialization::archiveFrom(file) << simplemap;
-        }
-    } catch (...) {
-        std::remove(tmp.c_str());
-        if (!tmpMap.empty()) std::remove(tmpMap.c_str());
-        throw;
+        progress.update(n + 1, double(n + 1) / double(total));
     }
-    commit(tmp, c.output);
-    if (!tmpMap.empty()) commit(tmpMap, c.simplemap);
-    std::cerr << "kitti2rawlog: wrote " << c.output << (tmpMap.empty() ? "" : " and " + c.simplemap) << "\n";
+    file.close();
+    if (!c.simplemap.empty()) {
+        gseg::map::CheckedGzOutput map(files.temporary(1), c.simplemap);
+        mrpt::serialization::archiveFrom(map) << simplemap;
+        map.close();
+    }
+    files.commit();
+    progress.finish(total);
+    std::cerr << "kitti2rawlog: wrote " << c.output << (c.simplemap.empty() ? "" : " and " + c.simplemap) << "\n";
 }
 
 }  // namespace
@@ -252,8 +260,7 @@ int main(int argc, char** argv) {
         std::cerr << "kitti2rawlog: " << e.what() << "\n" << kUsage;
         return 2;
     } catch (const std::exception& e) {
-        std::string what = e.what();
-        std::cerr << "kitti2rawlog: " << what.substr(0, what.find('\n')) << "\n";
+        std::cerr << "kitti2rawlog: " << gseg::map::reasonOf(e) << "\n";
         return 1;
     }
 }

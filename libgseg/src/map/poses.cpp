@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -42,22 +43,36 @@ std::runtime_error lineError(const std::string& path, std::size_t lineNo, const 
     return std::runtime_error(path + ":" + std::to_string(lineNo) + ": " + what);
 }
 
-Eigen::Isometry3d fromRowMajor3x4(const std::vector<double>& v, std::size_t first = 0) {
+/// Calls f(lineNo, numbers) for each line that is not blank or a comment; `numbers` is empty
+/// (nullopt) if a token is not a finite number.
+template <class F>
+void forEachDataLine(const std::string& path, F&& f) {
+    std::ifstream in = openText(path);
+    std::string line;
+    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo)
+        if (!isSkipped(line)) f(lineNo, parseNumbers(line));
+}
+
+/// [R | t] from 12 row-major numbers; throws naming the line if R is not a rotation.
+Eigen::Isometry3d fromRowMajor3x4(const std::vector<double>& v, const std::string& path, std::size_t lineNo) {
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
     for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 4; ++c) m(r, c) = v[first + std::size_t(4 * r + c)];
+        for (int c = 0; c < 4; ++c) m(r, c) = v[std::size_t(4 * r + c)];
+    const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
+    const double offOrtho = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), det = R.determinant();
+    if (!(offOrtho <= kRotationTolerance && std::abs(det - 1) <= kRotationTolerance)) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "the 3x3 part is not a rotation (|R^T R - I| up to %.3g, det R = %.6g)", offOrtho, det);
+        throw lineError(path, lineNo, buf);
+    }
     return Eigen::Isometry3d(m);
 }
 
 }  // namespace
 
 std::vector<StampedPose> readTumTrajectory(const std::string& path) {
-    std::ifstream in = openText(path);
     std::vector<StampedPose> out;
-    std::string line;
-    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
-        if (isSkipped(line)) continue;
-        const auto v = parseNumbers(line);
+    forEachDataLine(path, [&](std::size_t lineNo, const std::optional<std::vector<double>>& v) {
         if (!v || v->size() != 8) throw lineError(path, lineNo, "expected 8 numbers `t x y z qx qy qz qw`");
         const Eigen::Quaterniond q((*v)[7], (*v)[4], (*v)[5], (*v)[6]);
         if (q.norm() < 1e-9) throw lineError(path, lineNo, "zero quaternion");
@@ -68,21 +83,17 @@ std::vector<StampedPose> readTumTrajectory(const std::string& path) {
         if (!out.empty() && sp.t <= out.back().t)
             throw lineError(path, lineNo, "time stamp " + std::to_string(sp.t) + " is not after the previous one");
         out.push_back(sp);
-    }
+    });
     if (out.empty()) throw std::runtime_error(path + ": no poses in the file");
     return out;
 }
 
 std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path) {
-    std::ifstream in = openText(path);
     std::vector<Eigen::Isometry3d> out;
-    std::string line;
-    for (std::size_t lineNo = 1; std::getline(in, line); ++lineNo) {
-        if (isSkipped(line)) continue;
-        const auto v = parseNumbers(line);
+    forEachDataLine(path, [&](std::size_t lineNo, const std::optional<std::vector<double>>& v) {
         if (!v || v->size() != 12) throw lineError(path, lineNo, "expected 12 numbers (row-major 3x4 KITTI pose)");
-        out.push_back(fromRowMajor3x4(*v));
-    }
+        out.push_back(fromRowMajor3x4(*v, path, lineNo));
+    });
     if (out.empty()) throw std::runtime_error(path + ": no poses in the file");
     return out;
 }
@@ -94,9 +105,20 @@ Eigen::Isometry3d readKittiCalibTr(const std::string& path) {
         if (line.rfind("Tr:", 0) != 0) continue;
         const auto v = parseNumbers(line.substr(3));
         if (!v || v->size() != 12) throw lineError(path, lineNo, "`Tr:` needs 12 numbers (velodyne to camera-0, 3x4)");
-        return fromRowMajor3x4(*v);
+        return fromRowMajor3x4(*v, path, lineNo);
     }
     throw std::runtime_error(path + ": no `Tr:` line (velodyne-to-camera calibration)");
+}
+
+std::vector<double> readKittiTimes(const std::string& path) {
+    std::vector<double> out;
+    forEachDataLine(path, [&](std::size_t lineNo, const std::optional<std::vector<double>>& v) {
+        if (!v || v->size() != 1) throw lineError(path, lineNo, "expected one finite time in seconds");
+        if (!out.empty() && v->front() < out.back())
+            throw lineError(path, lineNo, "time " + std::to_string(v->front()) + " s is before the previous one");
+        out.push_back(v->front());
+    });
+    return out;
 }
 
 std::vector<Eigen::Isometry3d> kittiToVelodyneFrame(const std::vector<Eigen::Isometry3d>& cameraPoses,

@@ -5,6 +5,9 @@
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include <gseg/sensor_height.hpp>
+
+#include <chrono>
 #include <stdexcept>
 
 namespace gseg::map {
@@ -37,10 +40,20 @@ ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs) {
 }
 
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter) {
+                         GroundSegmenter& segmenter, bool autoHeight, WorldScanTimes* times) {
+    const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> levelled = gseg::mrpt::levelledPoints(obs);
     if (levelled.empty()) throw std::invalid_argument("observation '" + obs.sensorLabel + "' has no points");
-    const Result r = segmenter.segment(PointCloudView(levelled.data(), levelled.size() / 4, 4 * sizeof(float)), false);
+    const PointCloudView cloud(levelled.data(), levelled.size() / 4, 4 * sizeof(float));
+    if (autoHeight) {
+        const auto h = estimateSensorHeight(cloud);
+        if (!h.valid) throw std::invalid_argument("'" + obs.sensorLabel + "': distToGround: auto found no ground level");
+        Params p = segmenter.params();
+        p.distToGround = h.height;
+        segmenter = GroundSegmenter(p);
+    }
+    const Result r = segmenter.segment(cloud, false);
+    const auto t1 = std::chrono::steady_clock::now();
 
     // Levelled frame = sensor position with the robot's axes: world = robot pose + sensor offset.
     ::mrpt::poses::CPose3D sensorPose;
@@ -53,6 +66,10 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
     for (std::size_t i = 0; i < r.labels.size(); ++i)
         pushWorld(levelledToWorld, &levelled[4 * i], r.labels[i] ? out.ground : out.obstacles);
     out.sensorOrigin = originOf(obs, robotPose);
+    if (times) {
+        times->segmentation += std::chrono::duration<double>(t1 - t0).count();
+        times->transform += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    }
     return out;
 }
 

@@ -30,12 +30,22 @@ enum class PoseFileFormat { Tum, Kitti };
 std::vector<StampedPose> readTumTrajectory(const std::string& path);
 
 /// Reads a KITTI poses file: 12 numbers per line (row-major 3x4 [R | t]). Throws
-/// std::runtime_error naming the file and line on a missing file or a line without 12 numbers.
+/// std::runtime_error naming the file and line on a missing file, a line without 12 finite
+/// numbers, or an R that is not a rotation (R^T R != I or det R != 1, within kRotationTolerance).
 std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path);
 
 /// Reads `Tr:` (velodyne to camera-0, 12 numbers) from a KITTI `calib.txt`. Throws
-/// std::runtime_error naming the file if it is missing or has no valid `Tr:` line.
+/// std::runtime_error naming the file (and line) if it is missing, has no valid `Tr:` line, or its
+/// rotation is not one (an all-zero Tr, a scaled rotation).
 Eigen::Isometry3d readKittiCalibTr(const std::string& path);
+
+/// Reads a KITTI `times.txt`: one time [s] per line. Throws std::runtime_error naming the file and
+/// line on anything but one finite number per line, or a time before the previous one.
+std::vector<double> readKittiTimes(const std::string& path);
+
+/// Largest |R^T R - I| entry and |det R - 1| accepted for a rotation read from a file (the files
+/// print 7 to 12 significant digits).
+constexpr double kRotationTolerance = 1e-3;
 
 /// Tr^-1 * P_k * Tr for every k: the velodyne poses in the frame of the first velodyne pose's
 /// world (velodyne frame of frame 0 when P_0 is the identity).

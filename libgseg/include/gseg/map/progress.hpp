@@ -1,39 +1,51 @@
 #pragma once
 /// \file progress.hpp
-/// Progress of a long loop, for the map tools: a bar redrawn in place on a terminal, plain lines
-/// (about every 10 %, and every item of short runs) otherwise.
+/// Progress of a long run for the map tools: items done, items per second and the time left. On
+/// a terminal one live line, redrawn at most every 0.2 s; otherwise (a log file, a pipe) plain
+/// lines at a steady rate: the first item, then one line every `interval` seconds, and the end.
 
+#include <chrono>
 #include <cstddef>
 #include <cstdio>
+#include <functional>
 #include <string>
-#include <unistd.h>
 
 namespace gseg::map {
 
 class Progress {
 public:
-    /// `out` is where progress goes (a tool passes stderr); `total` items are expected.
-    Progress(std::FILE* out, std::string label, std::size_t total)
-        : out_(out), label_(std::move(label)), total_(total), tty_(::isatty(::fileno(out)) == 1) {}
+    using Clock = std::function<double()>;  ///< seconds, monotonic
 
-    /// Item `done` (1-based) finished; `note` is appended (e.g. the figures of that item).
-    void update(std::size_t done, const std::string& note = "") {
-        if (tty_) {
-            const int width = 30, filled = total_ ? int(width * done / total_) : width;
-            std::fprintf(out_, "\r%s [%s%s] %zu/%zu %s\033[K", label_.c_str(), std::string(std::size_t(filled), '#').c_str(),
-                         std::string(std::size_t(width - filled), ' ').c_str(), done, total_, note.c_str());
-            if (done == total_) std::fputc('\n', out_);
-        } else if (total_ <= 20 || done == total_ || (10 * done / total_) != (10 * (done - 1) / total_)) {
-            std::fprintf(out_, "%s %zu/%zu %s\n", label_.c_str(), done, total_, note.c_str());
-        }
-        std::fflush(out_);
+    /// `out` is where progress goes (a tool passes stderr); `unit` names the items ("scans").
+    /// `tty`: live line or plain lines (default: whether `out` is a terminal).
+    Progress(std::FILE* out, std::string label, std::string unit, int tty = -1, double interval = 10.0,
+             Clock clock = steadySeconds);
+
+    /// `done` items finished; `fraction` of the whole work done (0..1, e.g. bytes of the input
+    /// read; negative: unknown, no time left shown); `note` is appended.
+    void update(std::size_t done, double fraction, const std::string& note = "");
+    /// A message line (e.g. a skipped item) that does not garble the live line.
+    void message(const std::string& text);
+    /// The last line (always printed): items, rate and elapsed time.
+    void finish(std::size_t done, const std::string& note = "");
+
+    /// The text of a line (no newline), for tests and logs.
+    std::string line(std::size_t done, double fraction, const std::string& note) const;
+
+    static double steadySeconds() {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
     }
 
 private:
     std::FILE* out_;
-    std::string label_;
-    std::size_t total_;
+    std::string label_, unit_;
     bool tty_;
+    double interval_;
+    Clock clock_;
+    double start_, lastPrint_ = -1e300;
 };
+
+/// "2 min 05 s", "45 s", "1 h 03 min".
+std::string formatDuration(double seconds);
 
 }  // namespace gseg::map

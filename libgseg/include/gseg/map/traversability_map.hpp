@@ -11,10 +11,12 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace octomap {
@@ -25,12 +27,15 @@ class ColorOcTree;
 namespace gseg::map {
 
 namespace detail {
-struct KeyMemory;  // voxel keys ever occupied as obstacle (implementation detail)
+class MapTree;     // an OcTree built in sorted order (implementation detail)
+class BrickMap;    // the voxels while a drive is integrated (implementation detail)
 }
+
+struct ScanUpdate;
 
 /// How scans are fused. Probabilities are OctoMap's (log-odds update per scan and voxel).
 struct TraversabilityOptions {
-    double resolution = 0.2;          ///< [m] voxel edge (also the top-down grid cell)
+    double resolution = 0.2;          ///< [m] voxel edge (also the top-down grid cell), 0.01 to 10
     double maxRange = 50.0;           ///< [m] longer rays clear free space up to this range and add no hit
     double probHit = 0.7;             ///< [-] occupancy probability of a hit
     double probMiss = 0.4;            ///< [-] occupancy probability of a ray passing through
@@ -38,39 +43,98 @@ struct TraversabilityOptions {
     double clampMax = 0.97;           ///< [-] upper clamping (lower: quicker clearing of moved obstacles)
     double occupancyThreshold = 0.5;  ///< [-] a voxel is occupied above this probability
     double clearance = 2.0;           ///< [m] obstacle voxels higher than this above the column's ground do not block it (branches, bridges)
-    void validate() const;            ///< throws std::invalid_argument naming the first invalid field
+    /// Throws std::invalid_argument naming the first invalid field (also a ray longer than
+    /// kMaxRayVoxels voxels: maxRange / resolution).
+    void validate() const;
+    /// [m] the maps span -extent() .. +extent() on each axis (OctoMap's 16-bit keys: 32768 voxels
+    /// each side of the origin); points outside are skipped, a sensor outside is an error.
+    double extent() const { return 32768.0 * resolution; }
+    static constexpr double kMaxRayVoxels = 5000;  ///< longest ray, in voxels
 };
 
 /// What the top-down grid says about one column of voxels.
 enum class CellClass : std::uint8_t { Unknown = 0, Traversable = 1, Obstacle = 2 };
 
-/// Top-down grid: one cell per voxel column. Row 0 is the largest y (north up), column 0 the
-/// smallest x; the PNG shows the same cells, one pixel each.
-struct TopDownGrid {
-    double minX = 0, maxY = 0;  ///< [m] world x of the left edge and world y of the top edge
-    double cell = 0.2;          ///< [m] cell edge
-    int width = 0, height = 0;  ///< [cells]
-    std::vector<CellClass> cells;  ///< row-major, width * height
+/// Top-down grid: one cell per voxel column, cell (ix, iy) covering world x in
+/// [ix * cell, (ix + 1) * cell) and y likewise. Sparse: only cells with data are stored, in tiles
+/// of 64 x 64 cells, so memory follows the mapped area, not the extent of the path.
+class TopDownGrid {
+public:
+    explicit TopDownGrid(double cell = 0.2) : cell_(cell) {}
+    double cell() const { return cell_; }  ///< [m] cell edge
 
-    /// Column / row of world (x, y); false if outside the grid.
-    bool toPixel(double x, double y, int& col, int& row) const;
-    /// Class at world (x, y); Unknown outside the grid.
-    CellClass at(double x, double y) const;
+    std::int64_t cellIndex(double v) const { return std::int64_t(std::floor(v / cell_)); }
+    /// Class at world (x, y); Unknown where nothing was seen.
+    CellClass at(double x, double y) const { return atCell(cellIndex(x), cellIndex(y)); }
+    CellClass atCell(std::int64_t ix, std::int64_t iy) const;
+    void set(std::int64_t ix, std::int64_t iy, CellClass c);
+
+    bool empty() const { return !any_; }  ///< no cell was ever set to a known class
+    std::size_t count(CellClass c) const;  ///< cells of class c (Traversable or Obstacle)
+    /// Cell index ranges of every cell ever set to a known class, inclusive (meaningless when empty()).
+    std::int64_t minX() const { return lo_[0]; }
+    std::int64_t maxX() const { return hi_[0]; }
+    std::int64_t minY() const { return lo_[1]; }
+    std::int64_t maxY() const { return hi_[1]; }
+
+    /// Calls f(ix, iy, class) for every cell with data (tile by tile).
+    template <class F>
+    void forEachCell(F&& f) const {
+        for (const auto& [key, tile] : tiles_)
+            for (int j = 0; j < kTile; ++j)
+                for (int i = 0; i < kTile; ++i) {
+                    const CellClass c = tile[std::size_t(j * kTile + i)];
+                    if (c != CellClass::Unknown) f(tileX(key) * kTile + i, tileY(key) * kTile + j, c);
+                }
+    }
+
+    static constexpr int kTile = 64;  ///< [cells] tile edge
+
+private:
+    double cell_;
+    std::unordered_map<std::uint64_t, std::vector<CellClass>> tiles_;
+    std::int64_t lo_[2] = {0, 0}, hi_[2] = {0, 0};
+    bool any_ = false;
+    std::size_t counts_[3] = {0, 0, 0};  ///< per class; [Unknown] unused
+    static std::uint64_t tileKey(std::int64_t tx, std::int64_t ty);
+    static std::int64_t tileX(std::uint64_t key);
+    static std::int64_t tileY(std::uint64_t key);
 };
+
+/// Where the top-down picture puts the grid: the cells with data and the driven path, with a
+/// margin of 5 cells; one pixel per cell, or one per cellsPerPixel x cellsPerPixel cells (the most
+/// blocking class wins) where the picture would exceed maxSide pixels.
+struct PictureLayout {
+    std::int64_t leftCell = 0;  ///< cell index (x) of column 0
+    std::int64_t topCell = 0;   ///< cell index (y) of row 0 (north up: rows go to smaller y)
+    int width = 0, height = 0;  ///< [pixels]
+    int cellsPerPixel = 1;
+    double cell = 0.2;          ///< [m]
+    std::uint64_t cellsWide = 0, cellsHigh = 0;  ///< [cells] the framed area
+
+    /// Pixel of world (x, y); false outside the picture.
+    bool toPixel(double x, double y, int& col, int& row) const;
+};
+PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, int maxSide = 4096);
 
 /// Figures of a map, voxels counted at the finest resolution.
 struct MapStats {
     std::size_t scans = 0;             ///< scans inserted
     std::size_t groundPoints = 0;      ///< ground points given (all scans)
     std::size_t obstaclePoints = 0;    ///< obstacle points given (all scans)
+    std::size_t pointsSkipped = 0;     ///< points not used: NaN/infinite or outside the map's extent
     std::size_t rays = 0;              ///< rays cast (one per endpoint voxel and scan)
     std::size_t groundVoxels = 0;      ///< occupied voxels of the ground tree
     std::size_t obstacleVoxels = 0;    ///< occupied voxels of the obstacle tree
     std::size_t freeVoxels = 0;        ///< voxels known free in the obstacle tree
     std::size_t clearedObstacleVoxels = 0;  ///< voxels once occupied as obstacle, free by the end (seen through)
     std::size_t groundUnderObstacle = 0;    ///< occupied in both trees: shown as obstacle
-    std::size_t cellsTraversable = 0, cellsObstacle = 0, cellsUnknown = 0;  ///< top-down grid
+    std::size_t cellsTraversable = 0, cellsObstacle = 0;  ///< top-down grid
+    std::size_t cellsUnknown = 0;      ///< cells without data inside the picture's frame
     double pathLength = 0;             ///< [m] length of the sensor path
+    std::size_t bricks = 0;            ///< 8 x 8 x 8 voxel bricks holding the maps while integrating
+    std::size_t brickValueBlocks = 0;  ///< words of 4 x 4 x 4 voxels with a value each (the others hold one)
+    std::size_t mapBytes = 0;          ///< [bytes] memory of the bricks, their index and values
 };
 
 /// Builds the maps scan by scan. Per scan, every voxel crossed by a ray (to a ground or an obstacle
@@ -79,6 +143,11 @@ struct MapStats {
 /// through is cleared, and a ground hit never lowers an obstacle voxel (a voxel occupied in both
 /// trees counts as obstacle). Misses never lower an occupied ground voxel: rays to distant ground
 /// graze the road just before their end and would erode it (ground does not move).
+///
+/// Every voxel gets exactly the value OctoMap's OcTree::updateNode() calls would give it, and the
+/// `.bt` files are byte for byte what OcTree::writeBinaryConst() writes for those trees; while
+/// the drive is integrated the voxels are kept in bricks of 8 x 8 x 8 (a brick whose voxels all
+/// sit at one clamping bound keeps one value), which makes a scan's update cheap.
 class TraversabilityMap {
 public:
     /// Throws std::invalid_argument on invalid options.
@@ -90,39 +159,52 @@ public:
     const TraversabilityOptions& options() const { return options_; }
 
     /// Inserts one scan: ground and obstacle points and the sensor origin, all in the world frame
-    /// [m]. Throws std::invalid_argument on a NaN/infinite origin; NaN points are skipped.
+    /// [m]: castScan() then apply(). Throws std::invalid_argument on a NaN/infinite origin and
+    /// std::out_of_range on an origin outside the map's extent; NaN points are skipped.
     void insertScan(const PointCloudView& ground, const PointCloudView& obstacles, const Eigen::Vector3d& sensorOrigin);
+    /// Applies one scan's update (castScan() with this map's options). Updates must be applied in
+    /// scan order; the result depends on nothing else.
+    void apply(const ScanUpdate& update);
 
     bool empty() const { return stats_.scans == 0; }
-    const octomap::OcTree& groundTree() const { return *ground_; }
-    const octomap::OcTree& obstacleTree() const { return *obstacles_; }
+    /// The maps as OctoMap trees (built when first asked for after a scan; pruned where eight
+    /// leaves hold the same clamped value).
+    const octomap::OcTree& groundTree() const;
+    const octomap::OcTree& obstacleTree() const;
     const std::vector<Eigen::Vector3d>& path() const { return path_; }  ///< sensor origins, in order
 
-    /// Ground and obstacle voxels in one tree: ground green, obstacle red (occupied voxels only).
+    /// Ground and obstacle voxels in one tree: ground green, obstacle red (occupied voxels only;
+    /// an empty tree when no voxel is occupied).
     std::unique_ptr<octomap::ColorOcTree> colouredTree() const;
-    /// The top-down grid over every occupied voxel and the path.
+    /// The top-down grid of every occupied voxel column.
     TopDownGrid topDown() const;
     /// Counters and voxel counts (walks both trees).
     MapStats stats() const;
 
+    /// The four files write() writes for `prefix`, in this order.
+    static std::vector<std::string> outputPaths(const std::string& prefix);
     /// Writes `<prefix>_ground.bt`, `<prefix>_obstacles.bt`, `<prefix>_traversability.ot` and
-    /// `<prefix>_traversability.png`: all of them or none (temporary files, then renamed). Throws
-    /// std::runtime_error naming the file on failure and std::logic_error if no scan was inserted.
-    /// Returns the paths written.
+    /// `<prefix>_traversability.png`: all of them or none (temporary files, then renamed; if a
+    /// rename fails the previous versions are put back). Throws std::runtime_error naming the
+    /// file on failure and std::logic_error if no scan was inserted. Returns the paths written.
     std::vector<std::string> write(const std::string& prefix) const;
 
 private:
     TraversabilityOptions options_;
-    std::unique_ptr<octomap::OcTree> ground_, obstacles_;
-    std::unique_ptr<detail::KeyMemory> everObstacle_;
+    std::unique_ptr<detail::MapTree> configured_;  ///< an empty tree with the options: OctoMap's own log-odds
+    std::unique_ptr<detail::BrickMap> voxels_;
+    mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
+    mutable std::unique_ptr<TopDownGrid> topDown_;
     std::vector<Eigen::Vector3d> path_;
     MapStats stats_;
 };
 
-/// Writes the grid as a PNG (one pixel per cell: traversable green, obstacle red, unknown dark
-/// grey), the path as a blue polyline with its start marked white. Atomic. Throws
-/// std::runtime_error naming the file on failure.
+/// Writes the picture (traversable green, obstacle red, unknown dark grey, the path as a blue
+/// polyline with its start marked white) as a PNG, atomically. Throws std::runtime_error naming
+/// the file on failure.
 void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath);
+/// The same PNG as bytes.
+std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath);
 
 /// RGB of each class in the PNG.
 struct Rgb {

@@ -35,11 +35,19 @@ struct WorldScan {
 enum class ScanPart { Raw, Ground, Obstacles };
 ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs);
 
+/// Where segmentToWorld() spent its time [s].
+struct WorldScanTimes {
+    double segmentation = 0;  ///< points out of the observation, sensor height, segmentation
+    double transform = 0;     ///< into the world frame
+};
+
 /// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) and puts
-/// both classes into the world frame with `robotPose` + the observation's sensorPose. Throws
-/// std::invalid_argument for a non-LiDAR observation or an empty scan.
+/// both classes into the world frame with `robotPose` + the observation's sensorPose. With
+/// `autoHeight` (`distToGround: auto`), the sensor height is estimated from the scan first and
+/// `segmenter` is replaced by one with that height. Throws std::invalid_argument for a non-LiDAR
+/// observation, an empty scan, or no ground level found for `autoHeight`.
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter);
+                         GroundSegmenter& segmenter, bool autoHeight = false, WorldScanTimes* times = nullptr);
 
 /// Appends every point of `obs` (one class already) in the world frame to `out` (x, y, z
 /// triples) and returns the sensor's world position.

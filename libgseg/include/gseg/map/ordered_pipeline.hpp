@@ -1,0 +1,146 @@
+#pragma once
+/// \file ordered_pipeline.hpp
+/// The structure of map building: items (scans) are produced in order, worked on in parallel
+/// (segmentation, transform, ray casting: independent of the map), and their results consumed
+/// strictly in item order (the map updates), with a bounded number of items in flight.
+///
+/// The three roles are plain functions, so the same split serves other transports: a process
+/// that sends each item's result (e.g. a serialised ScanUpdate) to the one that consumes them in
+/// order gives the same maps as one process.
+
+#include <condition_variable>
+#include <cstddef>
+#include <exception>
+#include <functional>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace gseg::map {
+
+/// How runOrdered() runs.
+struct PipelineOptions {
+    unsigned workers = 2;      ///< worker threads; 0: everything on the calling thread, one item at a time
+    std::size_t capacity = 6;  ///< items in flight at most (produced, not yet consumed): bounds memory; >= 1
+};
+
+/// Runs `produce` on the calling thread until it returns false (it fills the next item),
+/// `work(worker, item)` on the worker threads (`worker` in [0, workers), so each worker can keep
+/// its own state), and `consume(index, result)` on one thread for index 0, 1, 2, ... in order.
+///
+/// Errors: an exception thrown by any role is rethrown here once every thread has ended; if
+/// several are thrown, the one of the earliest item (a producer error counts at the index of the
+/// item it was producing), so the error does not depend on timing. Items after an error are not
+/// consumed; every item before it is.
+template <class Item, class Result>
+void runOrdered(const std::function<bool(Item&)>& produce, const std::function<Result(unsigned, Item&)>& work,
+                const std::function<void(std::size_t, Result&)>& consume, const PipelineOptions& options) {
+    if (options.workers == 0) {
+        for (std::size_t index = 0;; ++index) {
+            Item item;
+            if (!produce(item)) return;
+            Result r = work(0, item);
+            consume(index, r);
+        }
+    }
+    struct Done {
+        Result result{};
+        std::exception_ptr error;
+    };
+    std::mutex m;
+    std::condition_variable changed;
+    std::vector<std::pair<std::size_t, Item>> queue;  // produced, not yet taken by a worker (FIFO)
+    std::size_t queueHead = 0;
+    std::map<std::size_t, Done> done;                 // worked on, not yet consumed
+    std::size_t produced = 0, consumed = 0;
+    bool producing = true, stop = false;
+    std::exception_ptr error;
+    std::size_t errorIndex = std::numeric_limits<std::size_t>::max();
+    auto fail = [&](std::size_t index, std::exception_ptr e) {  // under the lock
+        if (index < errorIndex) errorIndex = index, error = e;
+    };
+    const std::size_t capacity = options.capacity == 0 ? 1 : options.capacity;
+
+    auto worker = [&](unsigned id) {
+        std::unique_lock<std::mutex> lock(m);
+        while (true) {
+            changed.wait(lock, [&] { return stop || queueHead < queue.size() || !producing; });
+            if (stop || queueHead == queue.size()) return;  // stopped, or nothing left to produce
+            auto [index, item] = std::move(queue[queueHead++]);
+            if (queueHead == queue.size()) queue.clear(), queueHead = 0;
+            lock.unlock();
+            Done d;
+            try {
+                d.result = work(id, item);
+            } catch (...) {
+                d.error = std::current_exception();
+            }
+            lock.lock();
+            done.emplace(index, std::move(d));
+            changed.notify_all();
+        }
+    };
+    auto consumer = [&] {
+        std::unique_lock<std::mutex> lock(m);
+        while (true) {
+            changed.wait(lock, [&] { return stop || done.count(consumed) || (!producing && consumed == produced); });
+            if (stop || !done.count(consumed)) return;
+            auto node = done.extract(consumed);
+            if (node.mapped().error) {
+                fail(consumed, node.mapped().error);
+                stop = true;
+                changed.notify_all();
+                return;
+            }
+            lock.unlock();
+            std::exception_ptr e;
+            try {
+                consume(consumed, node.mapped().result);
+            } catch (...) {
+                e = std::current_exception();
+            }
+            lock.lock();
+            if (e) {
+                fail(consumed, e);
+                stop = true;
+            }
+            ++consumed;
+            changed.notify_all();
+            if (stop) return;
+        }
+    };
+
+    std::vector<std::thread> threads;
+    for (unsigned i = 0; i < options.workers; ++i) threads.emplace_back(worker, i);
+    threads.emplace_back(consumer);
+    {
+        std::unique_lock<std::mutex> lock(m);
+        while (true) {
+            changed.wait(lock, [&] { return stop || produced - consumed < capacity; });
+            if (stop) break;
+            lock.unlock();
+            Item item;
+            bool more = false;
+            std::exception_ptr e;
+            try {
+                more = produce(item);
+            } catch (...) {
+                e = std::current_exception();
+            }
+            lock.lock();
+            if (e) fail(produced, e);  // items before it are still consumed (or fail earlier)
+            if (e || !more) break;
+            queue.emplace_back(produced++, std::move(item));
+            changed.notify_all();
+        }
+        producing = false;
+        changed.notify_all();
+    }
+    for (auto& t : threads) t.join();
+    if (error) std::rethrow_exception(error);
+}
+
+}  // namespace gseg::map

@@ -1,0 +1,52 @@
+#pragma once
+/// \file scan_update.hpp
+/// What one scan does to the traversability maps, computed without the maps: the voxels its rays
+/// cross (misses) and the voxels its ground and obstacle points fall in (hits). Ray casting a
+/// scan is independent of every other scan, so scans can be cast on any thread (or process) in
+/// any order; TraversabilityMap::apply() then applies the updates strictly in scan order, which
+/// makes the maps the same whatever the order the casting finished in.
+///
+/// Voxels are OctoMap keys at the map resolution as Morton codes (see TraversabilityMap): sorted,
+/// so an update is one walk down the trees.
+
+#include <gseg/map/traversability_map.hpp>
+#include <gseg/point_cloud.hpp>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace gseg::map {
+
+/// The per-scan result: a plain value (serialisable with serializeScanUpdate()).
+struct ScanUpdate {
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
+    std::vector<std::uint64_t> free;          ///< voxels crossed by a ray and holding no hit of this scan (sorted)
+    std::vector<std::uint64_t> groundHits;    ///< voxels holding a ground point within maxRange (sorted)
+    std::vector<std::uint64_t> obstacleHits;  ///< voxels holding an obstacle point within maxRange (sorted)
+    std::uint64_t groundPoints = 0;           ///< ground points given
+    std::uint64_t obstaclePoints = 0;         ///< obstacle points given
+    std::uint64_t rays = 0;                   ///< rays cast (one per endpoint voxel)
+    std::uint64_t pointsSkipped = 0;          ///< points not used: NaN/infinite or outside the map's extent
+
+    bool operator==(const ScanUpdate& o) const;
+};
+
+/// Ray casts one scan, all in the world frame [m]: one ray from `sensorOrigin` to the first point
+/// of each endpoint voxel (ground points first, then obstacles; points beyond maxRange end their
+/// ray at maxRange and add no hit), as OctoMap's discretized insertion does. Throws
+/// std::invalid_argument on invalid options and std::out_of_range (naming the position and the
+/// extent) if the origin lies outside the map's extent (TraversabilityOptions::extent()).
+ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacles, const Eigen::Vector3d& sensorOrigin,
+                    const TraversabilityOptions& options);
+
+/// A compact byte string of the update (sorted codes delta-encoded as varints), for sending the
+/// per-scan result to another process. Little-endian, versioned.
+std::string serializeScanUpdate(const ScanUpdate& update);
+/// Inverse of serializeScanUpdate(). Throws std::runtime_error on a truncated or malformed string.
+ScanUpdate deserializeScanUpdate(const std::string& bytes);
+
+}  // namespace gseg::map

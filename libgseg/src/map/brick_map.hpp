@@ -1,0 +1,119 @@
+#pragma once
+/// \file brick_map.hpp
+/// Internal to the map layer: the working form of the two occupancy maps (ground, obstacles)
+/// while a drive is integrated. Voxels live in bricks of 8 x 8 x 8 (the OctoMap subtree three
+/// levels above the leaves), found by a hash of the brick's Morton code; a brick is eight words
+/// of 4 x 4 x 4 voxels (one 64-bit mask each: which voxels exist). A scan's update then costs one
+/// hash lookup per brick and a few instructions per voxel, instead of a walk down the octree and
+/// a node allocation per voxel.
+///
+/// Every voxel keeps exactly the value (float log-odds, same operations, same clamping) that
+/// OcTree::updateNode() calls would give it, and the OctoMap files are written from the bricks in
+/// the exact bytes of that tree. A word whose existing voxels all sit at the same clamping bound
+/// keeps one value instead of 64 (as OctoMap prunes such subtrees): most of a drive's free space.
+
+#include "map_tree.hpp"
+#include "voxel_keys.hpp"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <ostream>
+#include <vector>
+
+namespace gseg::map::detail {
+
+enum MapIndex { kGround = 0, kObstacles = 1 };
+
+/// The occupancy parameters as OctoMap holds them (float log-odds).
+struct LogOdds {
+    float hit = 0, miss = 0, clampMin = 0, clampMax = 0, occupied = 0;
+};
+
+class BrickMap {
+public:
+    explicit BrickMap(const LogOdds& l) : l_(l) {}
+
+    /// One scan: misses on `free` in both maps (ground: only where not occupied), hits on the
+    /// ground and obstacle voxels in their own map (which are remembered as ever obstacle). All
+    /// lists sorted.
+    void applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
+                   const std::vector<std::uint64_t>& obstacleHits);
+
+    /// Log-odds of a voxel; false if it does not exist in that map.
+    bool value(MapIndex m, std::uint64_t code, float& logOdds) const;
+    bool occupied(MapIndex m, std::uint64_t code) const {
+        float v = 0;
+        return value(m, code, v) && v >= l_.occupied;
+    }
+    /// Calls f(code, logOdds) for every voxel of map m (brick by brick, not sorted).
+    template <class F>
+    void forEachVoxel(MapIndex m, F&& f) const {
+        for (std::size_t b = 0; b < bricks_.size(); ++b) {
+            const Words& t = bricks_[b].map[m];
+            for (unsigned w = 0; w < 8; ++w)
+                for (std::uint64_t bits = t.exists[w]; bits; bits &= bits - 1) {
+                    const unsigned v = unsigned(__builtin_ctzll(bits));
+                    f((codes_[b] << 9) | (w << 6) | v, valueOf(t, w, v));
+                }
+        }
+    }
+    /// Obstacle voxels once occupied by a hit and free now (seen through).
+    std::size_t clearedObstacles() const;
+    /// Voxels of map m: occupied (>= the occupancy threshold) or free.
+    std::size_t count(MapIndex m, bool occupiedVoxels) const;
+
+    /// What OcTree::writeBinaryConst() writes for map m updated voxel by voxel (header included).
+    void writeBinary(MapIndex m, std::ostream& out, double resolution) const;
+    /// What ColorOcTree::write() writes for a ColorOcTree holding, by one OcTree::updateNode(key,
+    /// true) each, the occupied obstacle voxels in `obstacle` colour and the other occupied ground
+    /// voxels in `ground` colour, after updateInnerOccupancy() (inner nodes: the children's
+    /// maximum log-odds and their mean colour). `leafLogOdds`: the tree's hit log-odds.
+    void writeColoured(std::ostream& out, double resolution, float leafLogOdds, const std::uint8_t ground[3],
+                       const std::uint8_t obstacle[3]) const;
+    /// Map m as an OcTree (pruned where eight leaves are equal and clamped).
+    std::unique_ptr<MapTree> toTree(MapIndex m, const MapTree& configured) const;
+
+    std::size_t bricks() const { return bricks_.size(); }
+    std::size_t blocksInUse() const { return blockCount_ - freeBlocks_.size(); }  ///< words with 64 values
+    std::size_t bytes() const {  ///< memory held (capacity, not size)
+        return index_.bytes() + codes_.capacity() * sizeof(std::uint64_t) + bricks_.capacity() * sizeof(Brick) +
+               chunks_.size() * kBlocksPerChunk * 64 * sizeof(float) + freeBlocks_.capacity() * sizeof(std::int32_t);
+    }
+
+private:
+    /// One map's part of a brick: per word of 64 voxels, which exist, and their values (a block
+    /// of 64, or one value for all).
+    struct Words {
+        std::uint64_t exists[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        std::int32_t block[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+        float uniform[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        std::uint8_t atMin[8] = {0, 0, 0, 0, 0, 0, 0, 0}, atMax[8] = {0, 0, 0, 0, 0, 0, 0, 0};  ///< values at each bound
+    };
+    struct Brick {
+        Words map[2];
+        std::uint64_t everObstacle[8] = {0, 0, 0, 0, 0, 0, 0, 0};  ///< obstacle hit at least once
+    };
+    static constexpr std::size_t kBlocksPerChunk = 4096;
+
+    LogOdds l_;
+    CodeIndex index_;                   ///< brick code -> position in bricks_
+    std::vector<std::uint64_t> codes_;  ///< brick code (Morton code >> 9) per brick
+    std::vector<Brick> bricks_;
+    std::vector<std::unique_ptr<float[]>> chunks_;  ///< value blocks, kBlocksPerChunk x 64 floats each
+    std::vector<std::int32_t> freeBlocks_;
+    std::size_t blockCount_ = 0;
+
+    float* block(std::int32_t b) { return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 64]; }
+    const float* block(std::int32_t b) const {
+        return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 64];
+    }
+    float valueOf(const Words& t, unsigned w, unsigned v) const { return t.block[w] >= 0 ? block(t.block[w])[v] : t.uniform[w]; }
+    Brick& brickOf(std::uint64_t brickCode);
+    void collapseIfUniform(Words& t);
+    /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics).
+    void update(Words& t, unsigned local, float delta, bool skipOccupied);
+    std::vector<std::size_t> sortedBricks() const;
+};
+
+}  // namespace gseg::map::detail

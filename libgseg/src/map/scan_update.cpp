@@ -1,0 +1,249 @@
+#include <gseg/map/scan_update.hpp>
+
+#include "voxel_keys.hpp"
+
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <cstring>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace gseg::map {
+namespace {
+
+using detail::BrickSet;
+using detail::mortonCode;
+
+constexpr std::uint64_t kAxisMask[3] = {0x249249249249ULL, 0x249249249249ULL << 1, 0x249249249249ULL << 2};
+
+/// Ray casting of one scan. The voxels are exactly those OcTree::computeRayKeys() gives (the same
+/// traversal with the same floating-point operations), so the maps are OctoMap's; but the keys go
+/// straight into the brick sets as Morton codes. Buffers are kept between scans (one per thread).
+class Caster {
+public:
+    /// Prepares a scan: throws std::out_of_range if the origin lies outside the map's extent.
+    void begin(const TraversabilityOptions& o, const Eigen::Vector3d& sensorOrigin) {
+        if (!geometry_ || geometry_->getResolution() != o.resolution) geometry_ = std::make_unique<octomap::OcTree>(o.resolution);
+        maxRange_ = o.maxRange, limit_ = 2 * o.extent();
+        origin_ = octomap::point3d(float(sensorOrigin.x()), float(sensorOrigin.y()), float(sensorOrigin.z()));
+        if (!keyOf(origin_, originKey_)) {
+            std::ostringstream s;
+            s.precision(3);
+            s << std::fixed << "sensor position (" << sensorOrigin.x() << ", " << sensorOrigin.y() << ", " << sensorOrigin.z()
+              << ") m lies outside the map's extent of +-" << std::setprecision(1) << o.extent() << " m ("
+              << std::setprecision(2) << o.resolution << " m voxels)";
+            throw std::out_of_range(s.str());
+        }
+        originCode_ = mortonCode(originKey_);
+        for (BrickSet* b : {&ends_, &groundHits_, &obstacleHits_, &crossed_}) b->clear();
+        endPoints_.clear();
+        endCodes_.clear();
+    }
+
+    BrickSet& groundHits() { return groundHits_; }
+    BrickSet& obstacleHits() { return obstacleHits_; }
+
+    /// Hits and ray ends of a point set (the first point of each endpoint voxel ends a ray).
+    void collect(const PointCloudView& pts, BrickSet& hits, ScanUpdate& u) {
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            octomap::point3d p(pts.x(i), pts.y(i), pts.z(i));
+            const octomap::point3d d = p - origin_;
+            const double range = d.norm();
+            const bool hit = range <= maxRange_;
+            if (!hit) p = origin_ + d * float(maxRange_ / range);
+            octomap::OcTreeKey key;
+            if (!std::isfinite(range) || !keyOf(p, key)) {
+                ++u.pointsSkipped;
+                continue;
+            }
+            const std::uint64_t code = mortonCode(key);
+            if (hit) hits.insert(code);
+            if (ends_.insert(code)) endPoints_.push_back(p), endCodes_.push_back(code);
+        }
+    }
+
+    /// Every voxel from the origin's up to (not including) each ray end's.
+    void castRays() {
+        for (std::size_t r = 0; r < endPoints_.size(); ++r) castRay(endPoints_[r], endCodes_[r]);
+    }
+    std::size_t rays() const { return endPoints_.size(); }
+    const BrickSet& crossed() const { return crossed_; }
+
+private:
+    std::unique_ptr<octomap::OcTree> geometry_;  ///< an empty tree: key arithmetic only
+    double maxRange_ = 0, limit_ = 0;
+    octomap::point3d origin_;
+    octomap::OcTreeKey originKey_;
+    std::uint64_t originCode_ = 0;
+    BrickSet ends_, groundHits_, obstacleHits_, crossed_;
+    std::vector<octomap::point3d> endPoints_;
+    std::vector<std::uint64_t> endCodes_;
+
+    bool keyOf(const octomap::point3d& p, octomap::OcTreeKey& key) const {
+        for (int a = 0; a < 3; ++a)  // far outside: rejected before OctoMap's int conversion can overflow
+            if (!(std::abs(double(p(a))) < limit_)) return false;
+        return geometry_->coordToKeyChecked(p, key);
+    }
+
+    /// OcTree::computeRayKeys(origin, end) (OctoMap 1.9.7), marking each key in crossed_.
+    void castRay(const octomap::point3d& end, std::uint64_t endCode) {
+        if (endCode == originCode_) return;
+        crossed_.insert(originCode_);
+        octomap::point3d direction = (end - origin_);
+        const float length = float(direction.norm());
+        direction /= length;
+        int step[3];
+        double tMax[3], tDelta[3];
+        const double resolution = geometry_->getResolution();
+        for (int i = 0; i < 3; ++i) {
+            step[i] = direction(i) > 0.0 ? 1 : direction(i) < 0.0 ? -1 : 0;
+            if (step[i] != 0) {
+                double voxelBorder = geometry_->keyToCoord(originKey_[unsigned(i)]);
+                voxelBorder += float(step[i] * resolution * 0.5);
+                tMax[i] = (voxelBorder - origin_(i)) / direction(i);
+                tDelta[i] = resolution / std::fabs(direction(i));
+            } else {
+                tMax[i] = tDelta[i] = std::numeric_limits<double>::max();
+            }
+        }
+        // The same choices as OctoMap's loop, without branches on the axis (they mispredict).
+        // One voxel along axis a: the axis bits of the code counted up or down, the others kept.
+        std::uint64_t pick[3], fill[3], add[3];
+        for (int a = 0; a < 3; ++a) {
+            pick[a] = step[a] > 0 ? ~0ULL : kAxisMask[a];  // up: carry through the other bits (filled)
+            fill[a] = step[a] > 0 ? ~kAxisMask[a] : 0;     // down: borrow within the axis bits only
+            add[a] = step[a] > 0 ? 1 : ~0ULL;
+        }
+        std::uint64_t code = originCode_;
+        double t0 = tMax[0], t1 = tMax[1], t2 = tMax[2];
+        while (true) {
+            const int d01 = !(t0 < t1);  // OctoMap: tMax[0] < tMax[1] ? 0 : 1, then that one < tMax[2] ? it : 2
+            const int dim = (d01 ? t1 : t0) < t2 ? d01 : 2;
+            const std::uint64_t m = kAxisMask[dim];
+            code = ((((code & pick[dim]) | fill[dim]) + add[dim]) & m) | (code & ~m);
+            t0 += dim == 0 ? tDelta[0] : 0.0;  // + 0.0 leaves the other two exact
+            t1 += dim == 1 ? tDelta[1] : 0.0;
+            t2 += dim == 2 ? tDelta[2] : 0.0;
+            if (code == endCode) return;
+            if ((t0 > length) & (t1 > length) & (t2 > length)) return;  // min(tMax) > length
+            crossed_.insert(code);
+        }
+    }
+};
+
+// ---- byte encoding ----
+
+void putVarint(std::string& out, std::uint64_t v) {
+    while (v >= 0x80) out.push_back(char(std::uint8_t(v) | 0x80)), v >>= 7;
+    out.push_back(char(v));
+}
+
+void putRaw64(std::string& out, std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) out.push_back(char(std::uint8_t(v >> (8 * i))));
+}
+
+class Reader {
+public:
+    Reader(const std::string& s, std::size_t start) : s_(s), pos_(start) {}
+    std::uint64_t varint() {
+        std::uint64_t v = 0;
+        for (int shift = 0; shift < 64; shift += 7) {
+            const std::uint8_t b = byte();
+            v |= std::uint64_t(b & 0x7f) << shift;
+            if (!(b & 0x80)) return v;
+        }
+        throw std::runtime_error("scan update: malformed number");
+    }
+    std::uint64_t raw64() {
+        std::uint64_t v = 0;
+        for (int i = 0; i < 8; ++i) v |= std::uint64_t(byte()) << (8 * i);
+        return v;
+    }
+    std::vector<std::uint64_t> codes() {
+        const std::uint64_t n = varint();
+        if (n > s_.size() - pos_) throw std::runtime_error("scan update: list longer than the data");
+        std::vector<std::uint64_t> out(n);
+        std::uint64_t prev = 0;
+        for (auto& c : out) prev = c = prev + varint();
+        return out;
+    }
+    bool atEnd() const { return pos_ == s_.size(); }
+
+private:
+    const std::string& s_;
+    std::size_t pos_;
+    std::uint8_t byte() {
+        if (pos_ >= s_.size()) throw std::runtime_error("scan update: truncated");
+        return std::uint8_t(s_[pos_++]);
+    }
+};
+
+const char kMagic[] = "GSU1";
+
+}  // namespace
+
+bool ScanUpdate::operator==(const ScanUpdate& o) const {
+    return origin == o.origin && free == o.free && groundHits == o.groundHits && obstacleHits == o.obstacleHits &&
+           groundPoints == o.groundPoints && obstaclePoints == o.obstaclePoints && rays == o.rays &&
+           pointsSkipped == o.pointsSkipped;
+}
+
+ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacles, const Eigen::Vector3d& sensorOrigin,
+                    const TraversabilityOptions& options) {
+    options.validate();
+    if (!sensorOrigin.allFinite()) throw std::invalid_argument("castScan: sensor origin is not finite");
+    thread_local std::unique_ptr<Caster> buffers;  // reused scan after scan, one set per thread
+    if (!buffers) buffers = std::make_unique<Caster>();
+    Caster& caster = *buffers;  // a plain pointer from here: no thread-local lookups in the loops
+    caster.begin(options, sensorOrigin);
+    ScanUpdate u;
+    u.origin = sensorOrigin;
+    u.groundPoints = ground.size();
+    u.obstaclePoints = obstacles.size();
+    caster.collect(ground, caster.groundHits(), u);
+    caster.collect(obstacles, caster.obstacleHits(), u);
+    caster.castRays();
+    u.rays = caster.rays();
+    u.free = caster.crossed().sortedCodes({&caster.groundHits(), &caster.obstacleHits()});
+    u.groundHits = caster.groundHits().sortedCodes();
+    u.obstacleHits = caster.obstacleHits().sortedCodes();
+    return u;
+}
+
+std::string serializeScanUpdate(const ScanUpdate& u) {
+    std::string out(kMagic, 4);
+    for (int a = 0; a < 3; ++a) {
+        std::uint64_t bits = 0;
+        std::memcpy(&bits, &u.origin[a], sizeof bits);
+        putRaw64(out, bits);
+    }
+    for (std::uint64_t v : {u.groundPoints, u.obstaclePoints, u.rays, u.pointsSkipped}) putVarint(out, v);
+    for (const auto* list : {&u.free, &u.groundHits, &u.obstacleHits}) {
+        putVarint(out, list->size());
+        std::uint64_t prev = 0;
+        for (std::uint64_t c : *list) putVarint(out, c - prev), prev = c;
+    }
+    return out;
+}
+
+ScanUpdate deserializeScanUpdate(const std::string& bytes) {
+    if (bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
+    ScanUpdate u;
+    Reader in(bytes, 4);
+    for (int a = 0; a < 3; ++a) {
+        const std::uint64_t bits = in.raw64();
+        std::memcpy(&u.origin[a], &bits, sizeof bits);
+    }
+    u.groundPoints = in.varint(), u.obstaclePoints = in.varint(), u.rays = in.varint(), u.pointsSkipped = in.varint();
+    u.free = in.codes();
+    u.groundHits = in.codes();
+    u.obstacleHits = in.codes();
+    if (!in.atEnd()) throw std::runtime_error("scan update: trailing bytes");
+    return u;
+}
+
+}  // namespace gseg::map

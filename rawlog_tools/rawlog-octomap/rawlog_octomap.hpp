@@ -1,0 +1,43 @@
+#pragma once
+// rawlog-octomap: the command line, one map-building run, and the benchmark against plain OctoMap.
+
+#include "scan_stream.hpp"
+#include "scan_work.hpp"
+
+#include <gseg/map/traversability_map.hpp>
+
+#include <string>
+#include <vector>
+
+namespace rawlog_octomap {
+
+struct Cli {
+    std::string input, prefix, config;
+    PoseConfig poses;
+    gseg::map::TraversabilityOptions options;
+    unsigned threads = 0;  ///< worker threads (0: everything on one thread)
+    int benchRounds = 0;   ///< --bench N
+};
+
+/// What a run did.
+struct RunReport {
+    gseg::map::MapStats stats;
+    PhaseTimes times;
+    double wallSeconds = 0;
+    double peakMbBeforeWriting = 0, peakMb = 0;  ///< [MB] peak resident memory of the process (ru_maxrss)
+    std::size_t presegmented = 0;  ///< scans taken from a _ground/_obstacles pair
+    std::size_t rawWithPair = 0;   ///< raw scans not segmented again because their pair was there
+    std::vector<std::string> skipped;  ///< "scan k (...): reason"
+    std::vector<std::string> written;
+    std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)
+    std::string poseSource;                 ///< "the rawlog" or the pose file
+};
+
+/// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless
+/// `quiet`. Throws std::invalid_argument (bad usage) or std::runtime_error (bad input, naming it).
+RunReport buildMaps(const Cli& cli, bool quiet = false);
+
+/// --bench: alternates plain OctoMap and rawlog-octomap on the same rawlog, prints both timings.
+void runBench(const Cli& cli);
+
+}  // namespace rawlog_octomap

@@ -1,0 +1,45 @@
+#pragma once
+// The per-scan work of rawlog-octomap, independent of the map: segmentation (or the pre-segmented
+// pair), transformation into the world, ray casting into a ScanUpdate. One ScanWorker per thread.
+
+#include "scan_stream.hpp"
+
+#include <gseg/ground_segmenter.hpp>
+#include <gseg/map/scan_update.hpp>
+#include <gseg/mrpt/config.hpp>
+
+#include <string>
+
+namespace rawlog_octomap {
+
+/// Seconds per phase (summed over threads when added up).
+struct PhaseTimes {
+    double read = 0, segmentation = 0, transform = 0, rayCasting = 0, mapUpdate = 0, writing = 0;
+    PhaseTimes& operator+=(const PhaseTimes& o);
+};
+
+/// What the work gives for one scan.
+struct ScanResult {
+    gseg::map::ScanUpdate update;
+    PhaseTimes times;
+    std::string skipped;    ///< why the scan could not be used ("" when it was)
+    std::string describe;   ///< the scan, for messages
+    bool presegmented = false;
+    double fraction = 0;    ///< of the rawlog read (progress)
+};
+
+class ScanWorker {
+public:
+    ScanWorker(const gseg::mrpt::LoadedConfig& config, const gseg::map::TraversabilityOptions& options);
+    /// A scan that cannot be segmented (no points, no ground level for `auto`, bad points) comes
+    /// back skipped with the reason; a sensor outside the map's extent or a non-finite pose throws
+    /// std::runtime_error naming the scan.
+    ScanResult operator()(const ScanJob& job);
+
+private:
+    gseg::GroundSegmenter segmenter_;
+    bool autoHeight_;
+    gseg::map::TraversabilityOptions options_;
+};
+
+}  // namespace rawlog_octomap
