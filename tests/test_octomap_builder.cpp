@@ -3,12 +3,17 @@
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/map/world_scan.hpp>
 #include <support/lidar_sim.hpp>
+#include <support/scenes.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
 #include <mrpt/img/CImage.h>
+#include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/math/CMatrixF.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/poses/CPose3D.h>
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
@@ -477,3 +482,29 @@ TEST(OctomapBuilder, FailedRenameLeavesThePreviousOutputsAsTheyWere) {
 }
 
 }  // namespace
+
+TEST(OctomapBuilder, ReflectionsBelowTheRoadBecomeNeitherGroundNorObstacles) {
+    // A scan over flat ground with 2,000 mirror reflections 1-3 m under the road: segmentToWorld
+    // leaves them out of both classes, so no obstacle voxel appears under the road.
+    auto n = gseg::test::scene("reflections");
+    auto pc = mrpt::maps::CSimplePointsMap::Create();
+    for (std::size_t i = 0; i < n.scan.size(); ++i) pc->insertPoint(n.scan.xyz[3 * i], n.scan.xyz[3 * i + 1], n.scan.xyz[3 * i + 2]);
+    mrpt::obs::CObservationPointCloud obs;
+    obs.pointcloud = pc;
+    obs.sensorLabel = "LIDAR";
+    gseg::Params p;
+    p.distToGround = n.sensorHeight;
+    gseg::GroundSegmenter seg(p);
+    const gseg::map::WorldScan w = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), seg);
+    EXPECT_GE(w.reflections, 1900u);
+    EXPECT_EQ(w.ground.size() / 3 + w.obstacles.size() / 3 + w.reflections, n.scan.size());
+    for (std::size_t i = 2; i < w.obstacles.size(); i += 3) EXPECT_GT(w.obstacles[i], -1.73f - 1.0f) << i / 3;
+    gseg::map::TraversabilityMap map;
+    map.apply(gseg::map::castScan(w.groundView(), w.obstaclesView(), w.sensorOrigin, map.options()));
+    EXPECT_GT(map.stats().groundVoxels, 1000u);
+    // With distToGround: auto the same (reflections do not move the estimate either).
+    gseg::AutoHeightSegmenter autoSeg(gseg::Params{});
+    const gseg::map::WorldScan a = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), seg, &autoSeg);
+    EXPECT_GE(a.reflections, 1900u);
+    EXPECT_TRUE(a.heightNote.empty()) << a.heightNote;
+}

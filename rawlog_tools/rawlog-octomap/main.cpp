@@ -113,6 +113,10 @@ void printReport(const RunReport& r, double resolution, unsigned threads) {
                 "skipped), poses from %s, sensor path %.2f m; points: %zu ground, %zu obstacle, %zu not used; %zu rays\n",
                 s.scans + r.skipped.size(), r.presegmented, r.rawWithPair, r.skipped.size(), r.poseSource.c_str(),
                 s.pathLength, s.groundPoints, s.obstaclePoints, s.pointsSkipped, s.rays);
+    if (r.reflections) std::printf("%zu points more than belowGroundMargin below the ground left out (reflections)\n", r.reflections);
+    if (!r.heightFallbacks.empty())
+        std::printf("distToGround: auto found no estimate in %zu scan(s), first: %s\n", r.heightFallbacks.size(),
+                    r.heightFallbacks[0].c_str());
     if (r.origin)
         std::printf("map origin: (%.3f, %.3f, %.3f) m of the poses' world is (0, 0, 0) in the maps\n", r.origin->x(),
                     r.origin->y(), r.origin->z());
@@ -159,6 +163,8 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
             map.apply(r.update);
             report.times.mapUpdate += secondsSince(t0);
             report.presegmented += r.presegmented;
+            report.reflections += r.reflections;
+            if (!r.heightNote.empty()) report.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
         }
         if (!quiet) progress.update(k + 1, r.fraction);
     };

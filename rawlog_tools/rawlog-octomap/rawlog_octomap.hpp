@@ -27,6 +27,8 @@ struct RunReport {
     double peakMbBeforeWriting = 0, peakMb = 0;  ///< [MB] peak resident memory of the process (ru_maxrss)
     std::size_t presegmented = 0;  ///< scans taken from a _ground/_obstacles pair
     std::size_t rawWithPair = 0;   ///< raw scans not segmented again because their pair was there
+    std::size_t reflections = 0;   ///< points left out of both maps: far below the ground
+    std::vector<std::string> heightFallbacks;  ///< distToGround: auto found no estimate: "scan k (...): what was used"
     std::vector<std::string> skipped;  ///< "scan k (...): reason"
     std::vector<std::string> written;
     std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)

@@ -14,7 +14,9 @@ PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
 }
 
 ScanWorker::ScanWorker(const gseg::mrpt::LoadedConfig& config, const gseg::map::TraversabilityOptions& options)
-    : segmenter_(config.params), autoHeight_(config.distToGroundAuto), options_(options) {}
+    : segmenter_(config.params),
+      autoHeight_(config.distToGroundAuto ? std::make_unique<gseg::AutoHeightSegmenter>(config.params) : nullptr),
+      options_(options) {}
 
 ScanResult ScanWorker::operator()(const ScanJob& job) {
     ScanResult r;
@@ -25,7 +27,10 @@ ScanResult ScanWorker::operator()(const ScanJob& job) {
     if (job.raw) {
         gseg::map::WorldScanTimes t;
         try {
-            world = gseg::map::segmentToWorld(*job.raw, job.robotPose, segmenter_, autoHeight_, &t);
+            if (autoHeight_) autoHeight_->reset();  // any thread count gives the same maps
+            world = gseg::map::segmentToWorld(*job.raw, job.robotPose, segmenter_, autoHeight_.get(), &t);
+            r.reflections = world.reflections;
+            r.heightNote = world.heightNote;
         } catch (const std::invalid_argument& e) {
             r.skipped = e.what();
             return r;

@@ -5,9 +5,11 @@
 #include "scan_stream.hpp"
 
 #include <gseg/ground_segmenter.hpp>
+#include <gseg/sensor_height.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/mrpt/config.hpp>
 
+#include <memory>
 #include <string>
 
 namespace rawlog_octomap {
@@ -26,19 +28,22 @@ struct ScanResult {
     std::string describe;   ///< the scan, for messages
     bool presegmented = false;
     double fraction = 0;    ///< of the rawlog read (progress)
+    std::size_t reflections = 0;  ///< points left out: far below the ground (Result::belowGround)
+    std::string heightNote;       ///< distToGround: auto found no estimate: what was used instead
 };
 
 class ScanWorker {
 public:
     ScanWorker(const gseg::mrpt::LoadedConfig& config, const gseg::map::TraversabilityOptions& options);
-    /// A scan that cannot be segmented (no points, no ground level for `auto`, bad points) comes
-    /// back skipped with the reason; a sensor outside the map's extent or a non-finite pose throws
+    /// A scan that cannot be segmented (no points) comes back skipped with the reason; with
+    /// `distToGround: auto` a scan without an estimate uses the configured height (not the previous
+    /// scan's: workers see scans in any order, and the maps must not depend on the thread count); a sensor outside the map's extent or a non-finite pose throws
     /// std::runtime_error naming the scan.
     ScanResult operator()(const ScanJob& job);
 
 private:
     gseg::GroundSegmenter segmenter_;
-    bool autoHeight_;
+    std::unique_ptr<gseg::AutoHeightSegmenter> autoHeight_;  // distToGround: auto
     gseg::map::TraversabilityOptions options_;
 };
 

@@ -8,6 +8,7 @@
 #include <gseg/sensor_height.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 namespace gseg::map {
@@ -40,19 +41,20 @@ ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs) {
 }
 
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter, bool autoHeight, WorldScanTimes* times) {
+                         GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight, WorldScanTimes* times) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> levelled = gseg::mrpt::levelledPoints(obs);
     if (levelled.empty()) throw std::invalid_argument("observation '" + obs.sensorLabel + "' has no points");
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 4 * sizeof(float));
+    WorldScan out;
+    Result r;
     if (autoHeight) {
-        const auto h = estimateSensorHeight(cloud);
-        if (!h.valid) throw std::invalid_argument("'" + obs.sensorLabel + "': distToGround: auto found no ground level");
-        Params p = segmenter.params();
-        p.distToGround = h.height;
-        segmenter = GroundSegmenter(p);
+        r = autoHeight->segment(cloud, false);
+        if (autoHeight->lastDecision().source != HeightDecision::Source::Estimated)
+            out.heightNote = autoHeight->lastDecision().describe();
+    } else {
+        r = segmenter.segment(cloud, false);
     }
-    const Result r = segmenter.segment(cloud, false);
     const auto t1 = std::chrono::steady_clock::now();
 
     // Levelled frame = sensor position with the robot's axes: world = robot pose + sensor offset.
@@ -60,11 +62,19 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
     obs.getSensorPose(sensorPose);
     const ::mrpt::poses::CPose3D levelledToWorld =
         robotPose + ::mrpt::poses::CPose3D(sensorPose.x(), sensorPose.y(), sensorPose.z(), 0, 0, 0);
-    WorldScan out;
     out.ground.reserve(3 * r.numGround);
     out.obstacles.reserve(3 * r.numNonGround);
-    for (std::size_t i = 0; i < r.labels.size(); ++i)
-        pushWorld(levelledToWorld, &levelled[4 * i], r.labels[i] ? out.ground : out.obstacles);
+    // Points without a return, and reflections below the ground, are neither ground nor obstacles.
+    std::size_t next = 0;  // into r.belowGround (ascending)
+    for (std::size_t i = 0; i < r.labels.size(); ++i) {
+        if (next < r.belowGround.size() && r.belowGround[next] == i) {
+            ++next, ++out.reflections;
+            continue;
+        }
+        const float* p = &levelled[4 * i];
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
+        pushWorld(levelledToWorld, p, r.labels[i] ? out.ground : out.obstacles);
+    }
     out.sensorOrigin = originOf(obs, robotPose);
     if (times) {
         times->segmentation += std::chrono::duration<double>(t1 - t0).count();

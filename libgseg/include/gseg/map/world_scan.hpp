@@ -6,6 +6,7 @@
 
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/point_cloud.hpp>
+#include <gseg/sensor_height.hpp>
 
 #include <Eigen/Core>
 
@@ -26,6 +27,8 @@ struct WorldScan {
     std::vector<float> ground;     ///< x, y, z triples [m], world frame
     std::vector<float> obstacles;  ///< x, y, z triples [m], world frame
     Eigen::Vector3d sensorOrigin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
+    std::size_t reflections = 0;   ///< points left out: more than belowGroundMargin below the ground (Result::belowGround)
+    std::string heightNote;        ///< distToGround: auto could not estimate this scan: what was used instead
     PointCloudView groundView() const { return PointCloudView(ground.data(), ground.size() / 3); }
     PointCloudView obstaclesView() const { return PointCloudView(obstacles.data(), obstacles.size() / 3); }
 };
@@ -43,11 +46,13 @@ struct WorldScanTimes {
 
 /// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) and puts
 /// both classes into the world frame with `robotPose` + the observation's sensorPose. With
-/// `autoHeight` (`distToGround: auto`), the sensor height is estimated from the scan first and
-/// `segmenter` is replaced by one with that height. Throws std::invalid_argument for a non-LiDAR
-/// observation, an empty scan, or no ground level found for `autoHeight`.
+/// `autoHeight` given (`distToGround: auto`), that segmenter estimates the height per scan (and
+/// never refuses one); otherwise `segmenter` is used. Points without a return and reflections below
+/// the ground (Result::belowGround) go into neither class. Throws std::invalid_argument for a
+/// non-LiDAR observation or an empty scan.
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter, bool autoHeight = false, WorldScanTimes* times = nullptr);
+                         GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight = nullptr,
+                         WorldScanTimes* times = nullptr);
 
 /// Appends every point of `obs` (one class already) in the world frame to `out` (x, y, z
 /// triples) and returns the sensor's world position.
