@@ -1,6 +1,7 @@
 // GroundFilter (the MRPT observation filter) and rawlog-gseg end to end.
 #include <gseg/io/kitti.hpp>
 #include <gseg/mrpt/ground_filter.hpp>
+#include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/paths.hpp>
@@ -8,6 +9,8 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3D.h>
@@ -15,9 +18,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 namespace fs = std::filesystem;
 
@@ -269,4 +274,147 @@ TEST(RawlogGseg, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("Velodyne1_SCAN_ground"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("Velodyne1_SCAN_obstacles"), std::string::npos) << r.output;
+}
+
+// --- Hostile and unusual observations (issue #9 items 2, 8, 11) ----------------------------------
+
+namespace {
+
+const std::string kRotScan = "/usr/share/mrpt/datasets/rot_scan_velodyne.rawlog";
+
+/// A simulated level scan as a CObservationPointCloud.
+mrpt::obs::CObservationPointCloud simulatedCloud(const gseg::test::SimScan& scan) {
+    auto pc = mrpt::maps::CPointsMapXYZI::Create();
+    for (std::size_t i = 0; i < scan.size(); ++i) pc->insertPoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2]);
+    mrpt::obs::CObservationPointCloud obs;
+    obs.pointcloud = pc;
+    obs.sensorLabel = "SIM";
+    return obs;
+}
+
+gseg::test::SimScan streetScan() {
+    gseg::test::Scene s;
+    s.addFlatGround(1.73);
+    s.addBox(6, -1, -1.73, 8, 1, 0);
+    return gseg::test::simulate(s, gseg::test::Lidar::hdl64());
+}
+
+}  // namespace
+
+TEST(GroundFilterHostile, VelodynePointVectorsOfDifferentLengthsAreRejected) {
+    mrpt::obs::CObservationVelodyneScan velo;
+    velo.sensorLabel = "VLP";
+    velo.point_cloud.x.assign(1000, 1.f);
+    velo.point_cloud.y.assign(10, 1.f);
+    velo.point_cloud.z.assign(10, -1.f);
+    try {
+        gseg::GroundFilter().filter(velo);
+        ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("differ in length (x 1000, y 10, z 10"), std::string::npos) << e.what();
+    }
+    velo.point_cloud.y.assign(1000, 1.f);
+    velo.point_cloud.z.assign(1000, -1.f);
+    velo.point_cloud.intensity.assign(3, 0);  // intensity present but short
+    EXPECT_THROW(gseg::GroundFilter().filter(velo), std::invalid_argument);
+    mrpt::obs::CObservation3DRangeScan range;
+    range.hasPoints3D = true;
+    range.points3D_x.assign(50, 1.f);
+    range.points3D_y.assign(5, 1.f);
+    range.points3D_z.assign(5, 1.f);
+    EXPECT_THROW(gseg::GroundFilter().filter(range), std::invalid_argument);
+}
+
+TEST(GroundFilterHostile, NonFinitePointsAreLabelledNonGroundCountedAndLeftOutOfTheClouds) {
+    const auto scan = streetScan();
+    gseg::mrpt::LoadedConfig cfg;
+    cfg.params.distToGround = 1.73;
+    gseg::GroundFilter filter(cfg);
+    const auto clean = filter.filter(simulatedCloud(scan));
+    // The same scan with a no-return NaN, an infinity and a NaN z inserted at the front, middle and end.
+    auto withHoles = simulatedCloud(scan);
+    auto holed = mrpt::maps::CPointsMapXYZI::Create();
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    std::vector<std::size_t> holes;
+    for (std::size_t i = 0; i <= scan.size(); ++i) {
+        if (i == 0 || i == scan.size() / 2 || i == scan.size()) {
+            holes.push_back(holed->size());
+            holed->insertPoint(i == 0 ? nan : 1.f, i == scan.size() / 2 ? inf : 2.f, i == scan.size() ? nan : -1.7f);
+        }
+        if (i < scan.size()) holed->insertPoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2]);
+    }
+    withHoles.pointcloud = holed;
+    const auto out = filter.filter(withHoles);
+    EXPECT_EQ(out.nonFinitePoints, 3u);
+    ASSERT_EQ(out.result.labels.size(), scan.size() + 3);
+    std::vector<std::uint8_t> finiteLabels;
+    for (std::size_t i = 0; i < out.result.labels.size(); ++i) {
+        if (std::find(holes.begin(), holes.end(), i) != holes.end()) EXPECT_EQ(out.result.labels[i], 0) << i;
+        else finiteLabels.push_back(out.result.labels[i]);
+    }
+    EXPECT_EQ(finiteLabels, clean.result.labels);  // the holes change nothing else
+    EXPECT_EQ(out.result.numGround + out.result.numNonGround, scan.size() + 3);
+    EXPECT_EQ(out.ground->pointcloud->size() + out.obstacles->pointcloud->size(), scan.size());
+    // A scan of nothing but no-returns: all non-ground, both clouds empty, no error.
+    auto allNan = mrpt::maps::CSimplePointsMap::Create();
+    for (int i = 0; i < 5; ++i) allNan->insertPoint(nan, nan, nan);
+    withHoles.pointcloud = allNan;
+    const auto none = filter.filter(withHoles);
+    EXPECT_EQ(none.result.labels, std::vector<std::uint8_t>(5, 0));
+    EXPECT_EQ(none.ground->pointcloud->size() + none.obstacles->pointcloud->size(), 0u);
+}
+
+TEST(GroundFilterHostile, RotatingScanPointsMatchTheSameVelodyneScan) {
+    if (!fs::exists(kRotScan) || !fs::exists(kVlp16)) GTEST_SKIP() << "mrpt-common sample rawlogs absent";
+    // rot_scan_velodyne.rawlog is test_velodyne_VLP16.rawlog converted by MRPT: the range image and
+    // the VLP-16 beam angles must give the points MRPT generates from the packets, point for point.
+    const auto rot = firstLidar(kRotScan), velo = firstLidar(kVlp16);
+    ASSERT_NE(std::dynamic_pointer_cast<mrpt::obs::CObservationRotatingScan>(rot), nullptr);
+    const auto a = gseg::mrpt::sensorFramePoints(*rot), b = gseg::mrpt::sensorFramePoints(*velo);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_EQ(a.size(), 4u * 11305);
+    std::vector<double> d;
+    for (std::size_t i = 0; i < a.size(); i += 4) d.push_back(std::hypot(a[i] - b[i], a[i + 1] - b[i + 1], a[i + 2] - b[i + 2]));
+    std::sort(d.begin(), d.end());
+    // Measured: median 2.2 cm, 99 % 16 cm, max 49 cm (the firing-time azimuth offsets within a
+    // block, which a range image does not keep).
+    EXPECT_LT(d[d.size() / 2], 0.05);
+    EXPECT_LT(d[d.size() * 99 / 100], 0.25);
+    EXPECT_LT(d.back(), 0.6);
+    // Segmented like the Velodyne scan.
+    gseg::mrpt::LoadedConfig cfg;
+    cfg.params.distToGround = 2.1;
+    const auto fromRot = gseg::GroundFilter(cfg).filter(*rot), fromVelo = gseg::GroundFilter(cfg).filter(*velo);
+    EXPECT_EQ(fromRot.ground->sensorLabel, "Velodyne1_SCAN_ground");
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < fromRot.result.labels.size(); ++i) same += fromRot.result.labels[i] == fromVelo.result.labels[i];
+    EXPECT_GT(double(same) / 11305.0, 0.95);
+    EXPECT_GT(fromRot.result.numGround, 11305u / 10);
+}
+
+TEST(GroundFilterHostile, MalformedRotatingScansAreRejectedWithAReason) {
+    mrpt::obs::CObservationRotatingScan rot;
+    rot.sensorLabel = "ROT";
+    rot.lidarModel = "VLP-16";
+    rot.rangeResolution = 0.002;
+    EXPECT_THROW(gseg::GroundFilter().filter(rot), std::invalid_argument);  // empty image
+    rot.rowCount = 16, rot.columnCount = 100;
+    rot.rangeImage.setZero(16, 100);
+    rot.rangeImage(3, 7) = 1000;
+    EXPECT_EQ(gseg::mrpt::sensorFramePoints(rot).size(), 4u);
+    rot.columnCount = 99;  // header disagrees with the image
+    EXPECT_THROW(gseg::GroundFilter().filter(rot), std::invalid_argument);
+    rot.columnCount = 100;
+    rot.lidarModel = "Unknown";
+    try {
+        gseg::mrpt::sensorFramePoints(rot);
+        ADD_FAILURE() << "unknown model accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("no beam angles known"), std::string::npos) << e.what();
+    }
+    rot.lidarModel = "HDL-32E";  // 32 beams, 16 rows
+    EXPECT_THROW(gseg::mrpt::sensorFramePoints(rot), std::invalid_argument);
+    rot.lidarModel = "VLP16";
+    rot.rangeResolution = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(gseg::mrpt::sensorFramePoints(rot), std::invalid_argument);
 }

@@ -1,11 +1,12 @@
+#include <gseg/io/float_cast.hpp>
 #include <gseg/mrpt/ground_filter.hpp>
 #include <gseg/mrpt/observation_points.hpp>
-#include <gseg/sensor_height.hpp>
 
 #include <mrpt/core/initializer.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include <cmath>
 #include <stdexcept>
 
 INTERNAL_IMPLEMENTS_MRPT_OBJECT(GroundFilter, mrpt::rtti::CObject, gseg_filters, "gseg::GroundFilter")
@@ -16,22 +17,15 @@ MRPT_INITIALIZER(gseg_register_ground_filter) {
 
 namespace gseg_filters {
 
-using gseg::Params;
 using gseg::PointCloudView;
-using gseg::SensorHeightEstimate;
 namespace gm = gseg::mrpt;
 
 GroundFilter::GroundFilter() : GroundFilter(gm::LoadedConfig()) {}
 
 GroundFilter::GroundFilter(const gm::LoadedConfig& config, OutputFrame frame)
-    : outputFrame(frame), config_(config) {
-    config_.params.validate();
-}
+    : outputFrame(frame), segmenter_(config) {}
 
-void GroundFilter::loadConfig(const std::string& path) {
-    config_ = gm::loadConfig(path);
-    segmenter_.reset();
-}
+void GroundFilter::loadConfig(const std::string& path) { segmenter_ = gm::ScanSegmenter(gm::loadConfig(path)); }
 
 GroundFilter::Output GroundFilter::filter(const ::mrpt::obs::CObservation& obs) {
     ::mrpt::poses::CPose3D sensorPose;
@@ -55,31 +49,26 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     gm::levelPoints(levelled, sensorPose);
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 16);
 
+    const gm::ScanSegmentation seg = segmenter_.segment(cloud, false);
     Output out;
-    Params params = config_.params;
-    if (config_.distToGroundAuto) {
-        const SensorHeightEstimate h = gseg::estimateSensorHeight(cloud);
-        if (!h.valid)
-            throw std::runtime_error(label + ": distToGround: auto found no ground level around the sensor");
-        params.distToGround = h.height;
-        out.distToGroundEstimated = true;
-    }
-    out.distToGround = params.distToGround;
-    if (!segmenter_ || segmenter_->params().distToGround != params.distToGround)
-        segmenter_ = std::make_unique<gseg::GroundSegmenter>(params);
-    out.result = segmenter_->segment(cloud, false);
+    out.result = seg.result;
+    out.distToGround = seg.distToGround;
+    out.distToGroundEstimated = seg.distToGroundEstimated;
+    out.nonFinitePoints = seg.nonFinitePoints;
 
     // The two halves, in the frame asked for.
     const bool vehicle = outputFrame == OutputFrame::Vehicle;
     auto ground = ::mrpt::maps::CPointsMapXYZI::Create(), obstacles = ::mrpt::maps::CPointsMapXYZI::Create();
     ground->reserve(out.result.numGround);
-    obstacles->reserve(out.result.numNonGround);
+    obstacles->reserve(out.result.numNonGround - out.nonFinitePoints);
     for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const float* q = cloud.point(i);
+        if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) continue;  // labelled 0, kept out
         const float* p = &sensorXyzi[4 * i];
         double x = p[0], y = p[1], z = p[2];
         if (vehicle) sensorPose.composePoint(p[0], p[1], p[2], x, y, z);
         auto& dst = out.result.labels[i] ? *ground : *obstacles;
-        dst.insertPointFast(float(x), float(y), float(z));
+        dst.insertPointFast(gseg::io::toFloat(x), gseg::io::toFloat(y), gseg::io::toFloat(z));
         dst.setPointIntensity(dst.size() - 1, p[3]);
     }
     auto make = [&](const ::mrpt::maps::CPointsMapXYZI::Ptr& pts, const char* suffix) {
