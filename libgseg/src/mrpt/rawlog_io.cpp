@@ -3,8 +3,12 @@
 #include <gseg/mrpt/rawlog_io.hpp>
 
 #include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CStream.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <zlib.h>
+
+#include <algorithm>
 #include <stdexcept>
 #include <sys/stat.h>
 
@@ -57,5 +61,85 @@ void forEachRawlogEntry(const std::string& path, const RawlogVisitor& visit) {
     if (!opened) throw std::runtime_error(path + ": cannot open the rawlog");
     forEachRawlogEntry(file, path, visit);
 }
+
+// --- RawlogWriter ------------------------------------------------------------------------------
+
+namespace {
+
+// An MRPT output stream that gzips into an AtomicFile.
+class GzipAtomicStream : public ::mrpt::io::CStream {
+public:
+    explicit GzipAtomicStream(const std::string& path) : file_(path) {
+        // windowBits 15 + 16: gzip wrapper, which MRPT's readers detect; level 1 as MRPT writes.
+        if (deflateInit2(&z_, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+            throw std::runtime_error(path + ": cannot start the gzip compressor");
+    }
+    ~GzipAtomicStream() override { deflateEnd(&z_); }
+
+    size_t Read(void*, size_t) override { throw std::logic_error("GzipAtomicStream is write-only"); }
+    size_t Write(const void* buffer, size_t count) override {
+        const auto* p = static_cast<const Bytef*>(buffer);
+        for (size_t left = count; left > 0;) {
+            const uInt chunk = uInt(std::min<size_t>(left, 1u << 30));
+            pump(p, chunk, Z_NO_FLUSH);
+            p += chunk, left -= chunk;
+        }
+        position_ += count;
+        return count;
+    }
+    uint64_t Seek(int64_t, TSeekOrigin) override { throw std::logic_error("GzipAtomicStream cannot seek"); }
+    uint64_t getTotalBytesCount() const override { return position_; }
+    uint64_t getPosition() const override { return position_; }
+    std::string getStreamDescription() const override { return "gzip rawlog " + file_.path(); }
+
+    void commit() {
+        pump(nullptr, 0, Z_FINISH);
+        file_.commit();
+    }
+
+private:
+    void pump(const Bytef* data, uInt size, int flush) {
+        z_.next_in = const_cast<Bytef*>(data);
+        z_.avail_in = size;
+        for (;;) {
+            Bytef out[1 << 16];
+            z_.next_out = out;
+            z_.avail_out = sizeof out;
+            const int r = deflate(&z_, flush);
+            if (r == Z_STREAM_ERROR) throw std::runtime_error(file_.path() + ": gzip compression failed");
+            file_.write(out, sizeof out - z_.avail_out);
+            if (flush == Z_FINISH ? r == Z_STREAM_END : z_.avail_out != 0) break;
+        }
+    }
+
+    gseg::io::AtomicFile file_;
+    z_stream z_{};
+    uint64_t position_ = 0;
+};
+
+}  // namespace
+
+struct RawlogWriter::Impl {
+    explicit Impl(const std::string& path) : stream(path), archive(::mrpt::serialization::archiveFrom(stream)) {}
+    GzipAtomicStream stream;
+    ::mrpt::serialization::CArchiveStreamBase<GzipAtomicStream> archive;
+    std::size_t entries = 0;
+};
+
+RawlogWriter::RawlogWriter(const std::string& path) : impl_(std::make_unique<Impl>(path)) {}
+RawlogWriter::~RawlogWriter() = default;
+
+void RawlogWriter::write(const ::mrpt::serialization::CSerializable& object) {
+    try {
+        impl_->archive << object;
+    } catch (const std::exception& e) {
+        throw std::runtime_error(errorReason(e));  // MRPT wraps our AtomicFile error in its banner
+    }
+    ++impl_->entries;
+}
+
+void RawlogWriter::commit() { impl_->stream.commit(); }
+
+std::size_t RawlogWriter::entries() const { return impl_->entries; }
 
 }  // namespace gseg::mrpt

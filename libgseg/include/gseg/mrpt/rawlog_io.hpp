@@ -4,6 +4,7 @@
 /// CSensoryFrame + CActionCollection pairs). Objects are read one at a time: constant memory.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -31,5 +32,32 @@ void forEachRawlogEntry(const std::string& path, const RawlogVisitor& visit);
 
 /// The same from an open stream (plain or already decompressed); `name` stands for it in messages.
 void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, const RawlogVisitor& visit);
+
+/// A gzip rawlog written completely or not at all: objects are serialized by MRPT, compressed
+/// with zlib and written through gseg::io::AtomicFile, so every write and the close are checked
+/// (MRPT's CFileGZOutputStream ignores a failed final flush: a full disk gave a truncated file and
+/// exit 0). Nothing appears at `path` before commit(); a writer destroyed without commit() leaves
+/// nothing behind.
+class RawlogWriter {
+public:
+    /// Creates the temporary output; throws std::runtime_error naming `path` if it cannot.
+    explicit RawlogWriter(const std::string& path);
+    ~RawlogWriter();
+    RawlogWriter(const RawlogWriter&) = delete;
+    RawlogWriter& operator=(const RawlogWriter&) = delete;
+
+    /// Appends one object (an observation, a sensory frame, an action collection, ...). Throws
+    /// std::runtime_error naming the file and the reason (e.g. "No space left on device").
+    void write(const ::mrpt::serialization::CSerializable& object);
+
+    /// Finishes the gzip stream and renames the file into place. Throws std::runtime_error.
+    void commit();
+
+    std::size_t entries() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace gseg::mrpt
