@@ -3,6 +3,7 @@
 #include <gseg/mrpt/ground_filter.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
+#include <support/child.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/paths.hpp>
 
@@ -23,6 +24,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -417,4 +424,196 @@ TEST(GroundFilterHostile, MalformedRotatingScansAreRejectedWithAReason) {
     rot.lidarModel = "VLP16";
     rot.rangeResolution = std::numeric_limits<double>::quiet_NaN();
     EXPECT_THROW(gseg::mrpt::sensorFramePoints(rot), std::invalid_argument);
+}
+
+// --- rawlog-gseg on hostile runs (issue #9 items 6 to 9, 11; #10 item 5) ----------------------------
+
+namespace {
+
+gseg::test::CommandResult rawlogGseg(const std::string& args) {
+    return gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' " + args);
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+/// sensorLabels of every observation, entry by entry (a sensory frame's joined by '+').
+std::vector<std::string> entryLabels(const std::string& rawlog) {
+    std::vector<std::string> out;
+    gseg::mrpt::forEachRawlogEntry(rawlog, [&](std::size_t, const auto& obj) {
+        if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) out.push_back(o->sensorLabel);
+        else if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
+            std::string all;
+            for (const auto& o : *sf) all += (all.empty() ? "" : "+") + o->sensorLabel;
+            out.push_back(all);
+        } else out.push_back(obj->GetRuntimeClass()->className);
+        return true;
+    });
+    return out;
+}
+
+fs::path freshDir(const std::string& name) {
+    const fs::path d = kDir / name;
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+std::string fileBytes(const fs::path& p) { return gseg::test::readText(p.string()); }
+
+}  // namespace
+
+TEST(RawlogGsegHostile, InputAsOutputIsRefusedBeforeAnythingIsWritten) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = freshDir("same");
+    fs::copy_file(kVlp16, dir / "x.rawlog");
+    fs::create_hard_link(dir / "x.rawlog", dir / "hard.rawlog");
+    fs::create_symlink(dir / "x.rawlog", dir / "soft.rawlog");
+    const std::string before = fileBytes(dir / "x.rawlog");
+    for (const char* out : {"x.rawlog", "hard.rawlog", "soft.rawlog", "./x.rawlog"}) {
+        const auto r = rawlogGseg("-i " + q(dir / "x.rawlog") + " -o " + q(dir / out) + " --replace");
+        EXPECT_EQ(r.status, 2) << out << "\n" << r.output;
+        EXPECT_NE(r.output.find("refusing to overwrite an input"), std::string::npos) << r.output;
+    }
+    EXPECT_EQ(fileBytes(dir / "x.rawlog"), before);
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(RawlogGsegHostile, FullDiskIsAnErrorAndLeavesNothing) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = freshDir("full");
+    // A file-size limit of 40 blocks: the output cannot be written completely, exactly as on a full
+    // disk (before: "wrote ..." and exit 0 with a truncated gzip).
+    const auto r = gseg::test::runCommand("ulimit -f 40; exec '" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 +
+                                          "' -o " + q(dir / "out.rawlog"));
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("File too large"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("wrote"), std::string::npos) << r.output;
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ""), "");
+}
+
+TEST(RawlogGsegHostile, OneBadScanDoesNotSinkTheRun) {
+    const fs::path dir = freshDir("badscan");
+    const auto scan = streetScan();
+    // Observation layout: a good scan, a scan with no-return NaNs, a Velodyne scan whose vectors
+    // differ in length (cannot be segmented), a 2D scan (not LiDAR), another good scan.
+    auto good = std::make_shared<mrpt::obs::CObservationPointCloud>(simulatedCloud(scan));
+    good->sensorLabel = "GOOD";
+    auto holed = std::make_shared<mrpt::obs::CObservationPointCloud>(simulatedCloud(scan));
+    holed->sensorLabel = "HOLES";
+    for (int k = 0; k < 4; ++k) holed->pointcloud->insertPoint(std::numeric_limits<float>::quiet_NaN(), 0, 0);
+    auto broken = std::make_shared<mrpt::obs::CObservationVelodyneScan>();
+    broken->sensorLabel = "BROKEN";
+    broken->point_cloud.x.assign(1000, 1.f);
+    broken->point_cloud.y.assign(10, 1.f);
+    broken->point_cloud.z.assign(10, 1.f);
+    auto laser = std::make_shared<mrpt::obs::CObservation2DRangeScan>();
+    laser->sensorLabel = "LASER";
+    {
+        gseg::mrpt::RawlogWriter w((dir / "in.rawlog").string());
+        for (const mrpt::obs::CObservation* o : std::initializer_list<const mrpt::obs::CObservation*>{
+                 good.get(), holed.get(), broken.get(), laser.get(), good.get()})
+            w.write(*o);
+        // Sensory-frame layout: one frame holding a broken and a good scan.
+        mrpt::obs::CSensoryFrame sf;
+        sf.insert(broken);
+        sf.insert(good);
+        w.write(sf);
+        w.commit();
+    }
+    std::ofstream(dir / "c.yaml") << "distToGround: 1.73\n";
+    const auto r = rawlogGseg("-i " + q(dir / "in.rawlog") + " -o " + q(dir / "out.rawlog") + " -c " + q(dir / "c.yaml"));
+    EXPECT_EQ(r.status, 3) << r.output;  // finished, but something was skipped
+    EXPECT_NE(r.output.find("entry 2 ('BROKEN') skipped, passed through unchanged: "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("entry 5 ('BROKEN') skipped"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("4 scans segmented"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("4 non-finite points labelled non-ground"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("2 skipped"), std::string::npos) << r.output;
+    EXPECT_EQ(entryLabels((dir / "out.rawlog").string()),
+              (std::vector<std::string>{"GOOD", "GOOD_ground", "GOOD_obstacles", "HOLES", "HOLES_ground",
+                                        "HOLES_obstacles", "BROKEN", "LASER", "GOOD", "GOOD_ground", "GOOD_obstacles",
+                                        "BROKEN+GOOD+GOOD_ground+GOOD_obstacles"}));
+    // --replace still passes the unsegmentable scan through.
+    const auto rep = rawlogGseg("-i " + q(dir / "in.rawlog") + " -o " + q(dir / "rep.rawlog") + " --replace -c " +
+                                q(dir / "c.yaml"));
+    EXPECT_EQ(rep.status, 3) << rep.output;
+    const auto replaced = entryLabels((dir / "rep.rawlog").string());
+    EXPECT_EQ(std::count(replaced.begin(), replaced.end(), "BROKEN"), 1) << "the broken scan must be kept";
+    EXPECT_EQ(std::count(replaced.begin(), replaced.end(), "GOOD"), 0);
+}
+
+TEST(RawlogGsegHostile, ItsOwnOutputIsNeverSplitAgain) {
+    if (!fs::exists(kVlp16) || !fs::exists(kKfSlam)) GTEST_SKIP() << "mrpt-common sample rawlogs absent";
+    const fs::path dir = freshDir("twice");
+    // Observation layout: scan, scan_ground, scan_obstacles read again.
+    ASSERT_EQ(rawlogGseg("-i '" + kVlp16 + "' -o " + q(dir / "once.rawlog")).status, 0);
+    const auto again = rawlogGseg("-i " + q(dir / "once.rawlog") + " -o " + q(dir / "twice.rawlog"));
+    ASSERT_EQ(again.status, 0) << again.output;
+    EXPECT_NE(again.output.find("0 scans segmented"), std::string::npos) << again.output;
+    EXPECT_NE(again.output.find("1 already split"), std::string::npos) << again.output;
+    const auto labels = entryLabels((dir / "twice.rawlog").string());
+    EXPECT_EQ(labels, entryLabels((dir / "once.rawlog").string()));
+    EXPECT_EQ(labels, (std::vector<std::string>{"Velodyne1_SCAN", "Velodyne1_SCAN_ground", "Velodyne1_SCAN_obstacles"}));
+    // --replace output: only the halves, which are never split.
+    ASSERT_EQ(rawlogGseg("-i '" + kVlp16 + "' -o " + q(dir / "rep.rawlog") + " --replace").status, 0);
+    const auto rep = rawlogGseg("-i " + q(dir / "rep.rawlog") + " -o " + q(dir / "rep2.rawlog"));
+    EXPECT_NE(rep.output.find("0 scans segmented"), std::string::npos) << rep.output;
+    EXPECT_EQ(entryLabels((dir / "rep2.rawlog").string()), entryLabels((dir / "rep.rawlog").string()));
+    // Sensory-frame layout: a frame holding a point cloud scan, segmented once, then passed through.
+    const auto scan = streetScan();
+    {
+        gseg::mrpt::RawlogWriter w((dir / "sf.rawlog").string());
+        mrpt::obs::CSensoryFrame sf;
+        sf.insert(std::make_shared<mrpt::obs::CObservationPointCloud>(simulatedCloud(scan)));
+        w.write(sf);
+        w.commit();
+    }
+    ASSERT_EQ(rawlogGseg("-i " + q(dir / "sf.rawlog") + " -o " + q(dir / "sf1.rawlog")).status, 0);
+    const auto sf2 = rawlogGseg("-i " + q(dir / "sf1.rawlog") + " -o " + q(dir / "sf2.rawlog"));
+    EXPECT_NE(sf2.output.find("1 already split"), std::string::npos) << sf2.output;
+    EXPECT_EQ(entryLabels((dir / "sf2.rawlog").string()), (std::vector<std::string>{"SIM+SIM_ground+SIM_obstacles"}));
+}
+
+TEST(RawlogGsegHostile, RotatingScansAreSegmented) {
+    if (!fs::exists(kRotScan)) GTEST_SKIP() << kRotScan << " absent (package mrpt-common)";
+    const fs::path dir = freshDir("rot");
+    const auto r = rawlogGseg("-i '" + kRotScan + "' -o " + q(dir / "rot.rawlog") + " -c '" GSEG_SOURCE_DIR
+                              "/config/vlp16.yaml'");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("1 scans segmented, 11305 points"), std::string::npos) << r.output;  // before: 0 scans
+    EXPECT_EQ(entryLabels((dir / "rot.rawlog").string()),
+              (std::vector<std::string>{"Velodyne1_SCAN", "Velodyne1_SCAN_ground", "Velodyne1_SCAN_obstacles"}));
+}
+
+TEST(RawlogGsegHostile, InterruptedRunLeavesNoTemporary) {
+    if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
+    const fs::path dir = freshDir("interrupted");
+    // The input is a pipe: the tool has created its temporary output and is reading (it cannot
+    // finish before we close the pipe) when SIGTERM arrives. No sleeps: the write below returns
+    // only once the tool has read most of what was written.
+    ASSERT_EQ(std::system(("gzip -dc '" + kKfSlam + "' > " + q(dir / "plain.rawlog")).c_str()), 0);
+    const auto plain = gseg::io::readFileBytes((dir / "plain.rawlog").string());
+    ASSERT_GT(plain.size(), 300000u);
+    const fs::path fifo = dir / "in.rawlog";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    ::alarm(120);  // a tool that died before opening its input would leave open() below blocked
+    const std::string tool = gseg::test::tool("rawlog-gseg"), out = (dir / "out.rawlog").string();
+    const char* argv[] = {tool.c_str(), "-i", fifo.c_str(), "-o", out.c_str(), nullptr};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT, 0644);
+    pid_t pid = 0;
+    ASSERT_EQ(::posix_spawn(&pid, tool.c_str(), &actions, nullptr, const_cast<char**>(argv), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    const int fd = ::open(fifo.c_str(), O_WRONLY);  // returns once the tool opened its input
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::write(fd, plain.data(), 300000), 300000);  // 300 kB: most of it consumed by the tool
+    EXPECT_NE(gseg::test::entriesContaining(dir.string(), "out.rawlog.tmp"), "");  // mid-run: the temporary exists
+    ::kill(pid, SIGTERM);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ::close(fd);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "out.rawlog"), "");
+    EXPECT_NE(gseg::test::readText((dir / "stderr.txt").string()).find("interrupted (SIGTERM)"), std::string::npos);
+    ::alarm(0);
 }

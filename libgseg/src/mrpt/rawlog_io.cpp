@@ -2,13 +2,14 @@
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CStream.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <zlib.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 #include <sys/stat.h>
 
@@ -49,20 +50,53 @@ void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, co
     }
 }
 
+namespace {
+
+// An MRPT input stream over zlib's gzread: gzip or plain files, and pipes (MRPT's
+// CFileGZInputStream refuses a named pipe or /dev/stdin).
+class GzipInputStream : public ::mrpt::io::CStream {
+public:
+    explicit GzipInputStream(const std::string& path) : path_(path), file_(gzopen(path.c_str(), "rb")) {
+        if (!file_) throw std::runtime_error(path + ": cannot open the rawlog (" + std::strerror(errno) + ")");
+        gzbuffer(file_, 1 << 17);
+    }
+    ~GzipInputStream() override { gzclose_r(file_); }
+
+    size_t Read(void* buffer, size_t count) override {
+        size_t done = 0;
+        while (done < count) {
+            const int n = gzread(file_, static_cast<char*>(buffer) + done, unsigned(std::min<size_t>(count - done, 1u << 30)));
+            if (n < 0) {
+                int err = 0;
+                const char* msg = gzerror(file_, &err);
+                throw std::runtime_error(path_ + ": read failed (" + (err == Z_ERRNO ? std::strerror(errno) : msg) + ")");
+            }
+            if (n == 0) break;  // end of the data: MRPT turns a short read into its EOF exception
+            done += size_t(n);
+        }
+        position_ += done;
+        return done;
+    }
+    size_t Write(const void*, size_t) override { throw std::logic_error("GzipInputStream is read-only"); }
+    uint64_t Seek(int64_t, TSeekOrigin) override { throw std::logic_error("GzipInputStream cannot seek"); }
+    uint64_t getTotalBytesCount() const override { return 0; }
+    uint64_t getPosition() const override { return position_; }
+    std::string getStreamDescription() const override { return "rawlog " + path_; }
+
+private:
+    std::string path_;
+    gzFile file_;
+    uint64_t position_ = 0;
+};
+
+}  // namespace
+
 void forEachRawlogEntry(const std::string& path, const RawlogVisitor& visit) {
     struct stat st {};
     if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) throw std::runtime_error(path + ": is a folder, not a rawlog");
-    ::mrpt::io::CFileGZInputStream file;
-    bool opened = false;
-    try {
-        opened = file.open(path);
-    } catch (const std::exception&) {  // MRPT reports a missing file with a multi-line trace
-    }
-    if (!opened) throw std::runtime_error(path + ": cannot open the rawlog");
+    GzipInputStream file(path);
     forEachRawlogEntry(file, path, visit);
 }
-
-// --- RawlogWriter ------------------------------------------------------------------------------
 
 namespace {
 
