@@ -180,8 +180,8 @@ std::vector<float> readPly(const std::string& path) {
     return parsePly(bytes.data(), bytes.size(), path);
 }
 
-void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                      const PlyColours& colours) {
+std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                             const PlyColours& colours) {
     if (labels.size() != cloud.size())
         throw std::invalid_argument("writeLabelledPly: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(cloud.size()) + " points");
@@ -196,7 +196,13 @@ void writeLabelledPly(const std::string& path, const PointCloudView& cloud, cons
         std::memcpy(p, cloud.point(i), 12);
         std::memcpy(p + 12, labels[i] ? colours.ground : colours.nonGround, 3);
     }
-    writeFileAtomic(path, out.data(), out.size());
+    return out;
+}
+
+void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                      const PlyColours& colours) {
+    const std::string bytes = labelledPlyBytes(cloud, labels, colours);
+    writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
 }  // namespace gseg::io

@@ -38,11 +38,11 @@ double fitRange(const PointCloudView& cloud) {
 
 }  // namespace
 
-void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
+std::string encodePng(const ::mrpt::img::CImage& image) {
     const std::size_t w = image.getWidth(), h = image.getHeight();
     const bool colour = image.isColor();
     if (w == 0 || h == 0 || image.getPixelDepth() != ::mrpt::img::PixelDepth::D8U)
-        throw std::invalid_argument(path + ": writePng needs a non-empty 8-bit image");
+        throw std::invalid_argument("encodePng: needs a non-empty 8-bit image");
     const bool bgr = colour && image.getChannelsOrder() == "BGR";
     const std::size_t channels = colour ? 3 : 1;
     // Rows, each led by filter type 0 (none), RGB or grey.
@@ -61,7 +61,7 @@ void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
     std::string packed(packedSize, '\0');
     if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packedSize, reinterpret_cast<const Bytef*>(raw.data()),
                   uLong(raw.size()), 6) != Z_OK)
-        throw std::runtime_error(path + ": PNG compression failed");
+        throw std::runtime_error("encodePng: compression failed");
     packed.resize(packedSize);
     std::string header;
     putBigEndian(header, std::uint32_t(w));
@@ -71,13 +71,23 @@ void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
     putChunk(png, "IHDR", header);
     putChunk(png, "IDAT", packed);
     putChunk(png, "IEND", "");
+    return png;
+}
+
+void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
+    const std::string png = encodePng(image);
     gseg::io::writeFileAtomic(path, png.data(), png.size());
 }
 
 void writeTopDownPng(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                     const RenderOptions& opt) {
+                     const RenderOptions& options) {
+    const std::string png = topDownPng(cloud, labels, options);
+    gseg::io::writeFileAtomic(path, png.data(), png.size());
+}
+
+std::string topDownPng(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels, const RenderOptions& opt) {
     if (labels.size() != cloud.size())
-        throw std::invalid_argument("writeTopDownPng: " + std::to_string(labels.size()) + " labels for " +
+        throw std::invalid_argument("topDownPng: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(cloud.size()) + " points");
     const int size = std::max(100, opt.sizePx);
     const double range = opt.rangeM > 0 ? opt.rangeM : fitRange(cloud);
@@ -110,7 +120,7 @@ void writeTopDownPng(const std::string& path, const PointCloudView& cloud, const
     if (!opt.title.empty()) img.textOut(8, 8, opt.title, ::mrpt::img::TColor(230, 230, 230));
     img.textOut(8, size - 20, legend, ::mrpt::img::TColor(230, 230, 230));
 
-    writePng(path, img);
+    return encodePng(img);
 }
 
 }  // namespace gseg::mrpt

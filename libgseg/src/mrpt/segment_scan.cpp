@@ -1,5 +1,4 @@
 #include <gseg/mrpt/segment_scan.hpp>
-#include <gseg/sensor_height.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -36,11 +35,11 @@ std::vector<std::uint8_t> FinitePoints::toInputOrder(const std::vector<std::uint
 
 ScanSegmenter::ScanSegmenter(const LoadedConfig& config) : config_(config) { config_.params.validate(); }
 
-Params ScanSegmenter::paramsFor(const PointCloudView& finitePoints, bool* estimated) const {
+Params ScanSegmenter::paramsFor(const PointCloudView& finitePoints, SensorHeightEstimate* estimate) const {
     Params params = config_.params;
-    if (estimated) *estimated = config_.distToGroundAuto;
     if (!config_.distToGroundAuto) return params;
     const SensorHeightEstimate h = estimateSensorHeight(finitePoints);
+    if (estimate) *estimate = h;
     if (!h.valid)
         throw std::runtime_error("distToGround: auto found no ground level around the sensor (" +
                                  std::to_string(h.columns) + " usable columns); give the height in metres");
@@ -58,7 +57,8 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
         out.result.numNonGround = cloud.size();
         return out;
     }
-    const Params params = paramsFor(finite.view(), &out.distToGroundEstimated);
+    const Params params = paramsFor(finite.view(), &out.heightEstimate);
+    out.distToGroundEstimated = config_.distToGroundAuto;
     out.distToGround = params.distToGround;
     if (!segmenter_ || segmenter_->params().distToGround != params.distToGround)
         segmenter_ = std::make_unique<GroundSegmenter>(params);

@@ -35,4 +35,8 @@ struct PlyColours {
 void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                       const PlyColours& colours = PlyColours());
 
+/// The bytes writeLabelledPly() writes (to commit several outputs together).
+std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                             const PlyColours& colours = PlyColours());
+
 }  // namespace gseg::io

@@ -20,6 +20,9 @@ namespace gseg::mrpt {
 /// std::runtime_error naming `path`.
 void writePng(const std::string& path, const ::mrpt::img::CImage& image);
 
+/// The PNG file writePng() writes, in memory (to commit several outputs together).
+std::string encodePng(const ::mrpt::img::CImage& image);
+
 /// How the picture is drawn. The sensor is at the centre; x (forward) points up, y (left) points left.
 struct RenderOptions {
     int sizePx = 800;          ///< [px] width and height
@@ -35,5 +38,9 @@ struct RenderOptions {
 /// the file cannot be written.
 void writeTopDownPng(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                      const RenderOptions& options = RenderOptions());
+
+/// The PNG file writeTopDownPng() writes, in memory.
+std::string topDownPng(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                       const RenderOptions& options = RenderOptions());
 
 }  // namespace gseg::mrpt

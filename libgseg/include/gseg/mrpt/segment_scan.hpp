@@ -7,6 +7,7 @@
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/point_cloud.hpp>
+#include <gseg/sensor_height.hpp>
 
 #include <cstdint>
 #include <memory>
@@ -42,6 +43,7 @@ struct ScanSegmentation {
     std::size_t nonFinitePoints = 0;     ///< input points with a NaN or infinite coordinate
     double distToGround = 0;             ///< [m] the sensor height used
     bool distToGroundEstimated = false;  ///< from `distToGround: auto`
+    SensorHeightEstimate heightEstimate; ///< the estimate, when distToGroundEstimated
 };
 
 /// Segments scans with one configuration, reusing its GroundSegmenter while the sensor height
@@ -50,9 +52,10 @@ class ScanSegmenter {
 public:
     explicit ScanSegmenter(const LoadedConfig& config);
 
-    /// The parameters for a scan's finite points: `distToGround: auto` estimated from them.
-    /// Throws std::runtime_error if no ground level is found around the sensor.
-    Params paramsFor(const PointCloudView& finitePoints, bool* estimated = nullptr) const;
+    /// The parameters for a scan's finite points: `distToGround: auto` estimated from them (the
+    /// estimate in `*estimate` if given). Throws std::runtime_error if no ground level is found
+    /// around the sensor.
+    Params paramsFor(const PointCloudView& finitePoints, SensorHeightEstimate* estimate = nullptr) const;
 
     /// Labels every point of `cloud` (levelled frame, sensor at the origin). A scan without finite
     /// points gets all labels 0 without being segmented. Throws std::runtime_error (auto height
