@@ -2,7 +2,6 @@
 #include <gseg/mrpt/ground_filter.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 
-#include <mrpt/core/initializer.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/poses/CPose3D.h>
 
@@ -11,9 +10,14 @@
 
 INTERNAL_IMPLEMENTS_MRPT_OBJECT(GroundFilter, mrpt::rtti::CObject, gseg_filters, "gseg::GroundFilter")
 
-MRPT_INITIALIZER(gseg_register_ground_filter) {
-    mrpt::rtti::registerClass(CLASS_ID_NAMESPACE(GroundFilter, gseg_filters));
-}
+// Registered by an ordinary static object defined after the class id above, so the id is set
+// when this runs (MRPT_INITIALIZER's constructor function ran before it in clang's sanitizer
+// builds: "registerClass invoked with a nullptr classname").
+namespace {
+struct RegisterGroundFilter {
+    RegisterGroundFilter() { mrpt::rtti::registerClass(CLASS_ID_NAMESPACE(GroundFilter, gseg_filters)); }
+} registerGroundFilter;
+}  // namespace
 
 namespace gseg_filters {
 
