@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -616,4 +617,101 @@ TEST(RawlogGsegHostile, InterruptedRunLeavesNoTemporary) {
     EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "out.rawlog"), "");
     EXPECT_NE(gseg::test::readText((dir / "stderr.txt").string()).find("interrupted (SIGTERM)"), std::string::npos);
     ::alarm(0);
+}
+
+namespace {
+
+/// A plain (uncompressed) rawlog of `n` point-cloud observations, as bytes.
+std::vector<std::uint8_t> plainRawlog(const fs::path& dir, std::size_t n) {
+    {
+        gseg::mrpt::RawlogWriter w((dir / "gz.rawlog").string());
+        for (std::size_t k = 0; k < n; ++k) {
+            auto pc = mrpt::maps::CSimplePointsMap::Create();
+            for (int i = 0; i < 3; ++i) pc->insertPoint(1234.5f + float(i), 2.f, -1.7f);
+            mrpt::obs::CObservationPointCloud obs;
+            obs.pointcloud = pc;
+            obs.sensorLabel = "PC" + std::to_string(k);
+            w.write(obs);
+        }
+        w.commit();
+    }
+    EXPECT_EQ(std::system(("gzip -dc " + q(dir / "gz.rawlog") + " > " + q(dir / "plain.rawlog")).c_str()), 0);
+    return gseg::io::readFileBytes((dir / "plain.rawlog").string());
+}
+
+void writeBytes(const fs::path& p, const std::vector<std::uint8_t>& b) {
+    std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
+}
+
+}  // namespace
+
+TEST(RawlogGsegHostile, ErrorsSayWhatIsWrongInOneLineWithTheEntry) {
+    const fs::path dir = freshDir("errors");
+    std::ofstream(dir / "text.rawlog") << "not a rawlog, just text";
+    auto r = rawlogGseg("-i " + q(dir / "text.rawlog") + " -o " + q(dir / "o.rawlog"));
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("entry 0 is unreadable, not an MRPT rawlog?"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("===="), std::string::npos) << r.output;  // before: "(==== MRPT exception ====)"
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    // Cut inside the second entry: that entry, the class MRPT was reading, and MRPT's own reason.
+    auto bytes = plainRawlog(dir, 3);
+    bytes.resize(bytes.size() / 2);
+    writeBytes(dir / "cut.rawlog", bytes);
+    r = rawlogGseg("-i " + q(dir / "cut.rawlog") + " -o " + q(dir / "o.rawlog"));
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("entry 1 (mrpt::obs::CObservationPointCloud) is corrupt or truncated ("), std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("===="), std::string::npos) << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "o.rawlog"));
+}
+
+TEST(RawlogGsegHostile, ASizeFieldAskingForGigabytesNamesTheEntryAndLeavesNothing) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
+#else
+    // MRPT's deserializer trusts the point count of a CSimplePointsMap: 3 patched to 2^30 makes it
+    // allocate 12 GB. Under a memory limit (README: reading untrusted rawlogs) MRPT 2.5.8 then
+    // crashes (its aligned allocation returns null) or throws std::bad_alloc. Either way the entry
+    // is named and nothing is left behind.
+    const fs::path dir = freshDir("huge");
+    auto bytes = plainRawlog(dir, 2);
+    const float x0 = 1234.5f;
+    std::uint8_t pattern[8] = {3, 0, 0, 0};
+    std::memcpy(pattern + 4, &x0, 4);
+    const auto second = std::search(std::search(bytes.begin(), bytes.end(), pattern, pattern + 8) + 1, bytes.end(),
+                                    pattern, pattern + 8);
+    ASSERT_NE(second, bytes.end());
+    const std::uint32_t huge = 1u << 30;
+    std::memcpy(&*second, &huge, 4);
+    writeBytes(dir / "huge.rawlog", bytes);
+    const auto r = gseg::test::runCommand("ulimit -v 4000000; exec '" + gseg::test::tool("rawlog-gseg") + "' -i " +
+                                          q(dir / "huge.rawlog") + " -o " + q(dir / "o.rawlog"));
+    EXPECT_NE(r.status, 0) << r.output;
+    const bool named = r.output.find("crashed (SIGSEGV) while reading entry 1 of") != std::string::npos ||
+                       r.output.find("entry 1 (mrpt::obs::CObservationPointCloud) is corrupt") != std::string::npos;
+    EXPECT_TRUE(named) << r.output;
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "o.rawlog"), "");
+#endif
+}
+
+TEST(SegmentFromRawlog, AScanThatCannotBeReadNamesItsEntryInOneLine) {
+    const fs::path dir = freshDir("segment_errors");
+    {
+        gseg::mrpt::RawlogWriter w((dir / "broken.rawlog").string());
+        mrpt::obs::CObservationVelodyneScan broken;
+        broken.sensorLabel = "BROKEN";
+        broken.point_cloud.x.assign(100, 1.f);
+        broken.point_cloud.y.assign(10, 1.f);
+        broken.point_cloud.z.assign(10, 1.f);
+        w.write(broken);
+        w.commit();
+    }
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' segment " + q(dir / "broken.rawlog"));
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("rawlog entry 0: CObservationVelodyneScan 'BROKEN': point_cloud vectors differ in length "
+                            "(x 100, y 10, z 10"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }

@@ -4,6 +4,7 @@
 
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 
@@ -232,7 +233,7 @@ int runBench(int argc, char** argv) {
     try {
         return run(scans, config, repeat, threads);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg bench: %s\n", e.what());
+        std::fprintf(stderr, "gseg bench: %s\n", ::gseg::mrpt::errorReason(e).c_str());
         return 1;
     }
 }

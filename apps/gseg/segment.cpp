@@ -5,6 +5,7 @@
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/ply.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/render.hpp>
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
@@ -101,7 +102,7 @@ int runSegment(int argc, char** argv) {
     try {
         return run(cli);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg segment: %s\n", e.what());
+        std::fprintf(stderr, "gseg segment: %s\n", mrpt::errorReason(e).c_str());
         return 1;
     }
 }

@@ -8,6 +8,7 @@
 // through a temporary file (every write checked) and renamed only when complete; an interrupted or
 // crashed run removes the temporary.
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/rawlog_segmenter.hpp>
 
@@ -122,9 +123,8 @@ int main(int argc, char** argv) {
     try {
         return run(cli);
     } catch (const std::exception& e) {
-        std::string what = e.what();
         std::fprintf(stderr, "%srawlog-gseg: %s\n", ::isatty(::fileno(stderr)) ? "\n" : "",
-                     what.substr(0, what.find('\n')).c_str());
+                     gseg::mrpt::errorReason(e).c_str());
         return kBadInput;
     }
 }
