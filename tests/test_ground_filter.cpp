@@ -278,7 +278,8 @@ TEST(RawlogGseg, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
     fs::create_directories(kDir);
     const std::string out = (kDir / "plugin.rawlog").string();
     ASSERT_EQ(gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out + "'").status, 0);
-    const auto r = gseg::test::runCommand("rawlog-edit -p '" GSEG_BINARY_DIR "/lib/libgseg_mrpt.so' --info -i '" + out + "'");
+    const auto r = gseg::test::runCommand(GSEG_PLUGIN_HOST_ENV "rawlog-edit -p '" GSEG_BINARY_DIR
+                                          "/lib/libgseg_mrpt.so' --info -i '" + out + "'");
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("Velodyne1_SCAN_ground"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("Velodyne1_SCAN_obstacles"), std::string::npos) << r.output;
