@@ -333,6 +333,22 @@ TEST(GroundFilterHostile, VelodynePointVectorsOfDifferentLengthsAreRejected) {
     range.points3D_y.assign(5, 1.f);
     range.points3D_z.assign(5, 1.f);
     EXPECT_THROW(gseg::GroundFilter().filter(range), std::invalid_argument);
+    // A range image whose camera has another resolution (MRPT would print a warning and "autofix"
+    // it into wrong geometry).
+    mrpt::obs::CObservation3DRangeScan image;
+    image.hasRangeImage = true;
+    image.rangeImage.setConstant(20, 30, 1000);
+    image.cameraParams.ncols = 40;
+    image.cameraParams.nrows = 20;
+    try {
+        gseg::mrpt::sensorFramePoints(image);
+        ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("range image 30 x 20 but camera 40 x 20"), std::string::npos) << e.what();
+    }
+    image.cameraParams.ncols = 30;
+    image.cameraParams.setIntrinsicParamsFromValues(25, 25, 15, 10);
+    EXPECT_EQ(gseg::mrpt::sensorFramePoints(image).size(), 4u * 600);
 }
 
 TEST(GroundFilterHostile, NonFinitePointsAreLabelledNonGroundCountedAndLeftOutOfTheClouds) {
