@@ -8,6 +8,7 @@
 #include <support/paths.hpp>
 
 #include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
@@ -334,6 +335,22 @@ TEST(GroundFilterHostile, VelodynePointVectorsOfDifferentLengthsAreRejected) {
     range.points3D_y.assign(5, 1.f);
     range.points3D_z.assign(5, 1.f);
     EXPECT_THROW(gseg::GroundFilter().filter(range), std::invalid_argument);
+    // A range image whose camera has another resolution (MRPT would print a warning and "autofix"
+    // it into wrong geometry).
+    mrpt::obs::CObservation3DRangeScan image;
+    image.hasRangeImage = true;
+    image.rangeImage.setConstant(20, 30, 1000);
+    image.cameraParams.ncols = 40;
+    image.cameraParams.nrows = 20;
+    try {
+        gseg::mrpt::sensorFramePoints(image);
+        ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("range image 30 x 20 but camera 40 x 20"), std::string::npos) << e.what();
+    }
+    image.cameraParams.ncols = 30;
+    image.cameraParams.setIntrinsicParamsFromValues(25, 25, 15, 10);
+    EXPECT_EQ(gseg::mrpt::sensorFramePoints(image).size(), 4u * 600);
 }
 
 TEST(GroundFilterHostile, NonFinitePointsAreLabelledNonGroundCountedAndLeftOutOfTheClouds) {
@@ -455,12 +472,7 @@ std::vector<std::string> entryLabels(const std::string& rawlog) {
     return out;
 }
 
-fs::path freshDir(const std::string& name) {
-    const fs::path d = kDir / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+fs::path freshDir(const std::string& name) { return gseg::test::freshDir("ground_filter", name); }
 
 std::string fileBytes(const fs::path& p) { return gseg::test::readText(p.string()); }
 
@@ -717,4 +729,33 @@ TEST(SegmentFromRawlog, AScanThatCannotBeReadNamesItsEntryInOneLine) {
               std::string::npos)
         << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+}
+
+TEST(RawlogGsegHostile, AFileCutInsideASizeFieldIsTruncatedNotAGarbageSize) {
+    // Found by fuzz_rawlog: MRPT 2.5.8 accepts a short read, so a rawlog cut inside a 4-byte count
+    // left 3 bytes of garbage in it (2.8 GB allocated for a 265-byte file). Now: truncated, named.
+    const fs::path dir = freshDir("cut_field");
+    {
+        gseg::mrpt::RawlogWriter w((dir / "gz.rawlog").string());
+        w.write(mrpt::obs::CActionCollection());
+        w.write(mrpt::obs::CActionCollection());
+        w.commit();
+    }
+    ASSERT_EQ(std::system(("gzip -dc " + q(dir / "gz.rawlog") + " > " + q(dir / "plain.rawlog")).c_str()), 0);
+    auto bytes = gseg::io::readFileBytes((dir / "plain.rawlog").string());
+    bytes.resize(bytes.size() - 3);  // inside the second collection's count
+    writeBytes(dir / "cut.rawlog", bytes);
+#if defined(__SANITIZE_ADDRESS__)
+    const std::string limit;  // ASan reserves more address space than any ulimit -v allows
+#else
+    const std::string limit = "ulimit -v 1500000; ";  // before: the garbage count had to fit in this
+#endif
+    const auto r = gseg::test::runCommand(limit + "exec '" + gseg::test::tool("rawlog-gseg") + "' -i " +
+                                          q(dir / "cut.rawlog") + " -o " + q(dir / "o.rawlog"));
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("entry 1 (mrpt::obs::CActionCollection) is corrupt or truncated"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("(the file ends inside an entry ("), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" bytes of a field): truncated)"), std::string::npos) << r.output;
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "o.rawlog"), "");
 }

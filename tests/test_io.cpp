@@ -19,7 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "io";
 
 std::vector<float> ply(const std::string& text) {
     return gseg::io::parsePly(reinterpret_cast<const std::uint8_t*>(text.data()), text.size(), "t.ply");
@@ -36,12 +35,7 @@ std::string plyError(const std::string& text) {
 
 const std::string kXyz = "property float x\nproperty float y\nproperty float z\n";
 
-fs::path freshDir(const std::string& name) {
-    const fs::path d = kDir / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+fs::path freshDir(const std::string& name) { return gseg::test::freshDir("io", name); }
 
 }  // namespace
 

@@ -18,14 +18,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "writers";
 
-fs::path freshDir(const std::string& name) {
-    const fs::path d = kDir / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+fs::path freshDir(const std::string& name) { return gseg::test::freshDir("writers", name); }
 
 /// Runs `body` in a child whose files may not exceed `bytes` (a full disk for write()). The child
 /// returns 7 if `body` threw std::runtime_error naming the limit's errno text, 0 if it did not throw.

@@ -1,6 +1,8 @@
 // gseg: GSeg3D ground segmentation tools (segment one scan, evaluate, benchmark).
 #include "commands.hpp"
 
+#include <gseg/io/atomic_file.hpp>
+
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -40,6 +42,8 @@ int main(int argc, char** argv) {
         if (cmd == c.name) {
             std::string name = std::string("gseg ") + c.name;
             argv[1] = name.data();
+            // An interrupted or crashed run removes its temporary outputs (every sub-command).
+            gseg::io::installTemporaryCleanup(name);
             return c.run(argc - 1, argv + 1);
         }
     std::fprintf(stderr, "gseg: unknown command '%s'\n", cmd.c_str());

@@ -96,7 +96,6 @@ int runSegment(int argc, char** argv) {
         std::fprintf(stderr, "gseg segment: %s\n", e.what());
         return 2;
     }
-    io::installTemporaryCleanup("gseg segment");
     try {
         return run(cli);
     } catch (const std::exception& e) {

@@ -40,4 +40,11 @@ std::string entriesContaining(const std::string& dir, const std::string& part) {
     return out;
 }
 
+std::filesystem::path freshDir(const std::string& group, const std::string& name) {
+    const std::filesystem::path d = std::filesystem::path(GSEG_BINARY_DIR) / "tests" / group / name;
+    std::filesystem::remove_all(d);
+    std::filesystem::create_directories(d);
+    return d;
+}
+
 }  // namespace gseg::test

@@ -1,8 +1,9 @@
 #pragma once
 /// \file child.hpp
-/// Runs test code in a forked child process: for signals, resource limits and crashes that must
-/// not touch the test process itself.
+/// Runs test code in a forked child process (for signals, resource limits and crashes that must
+/// not touch the test process itself), and the folders such tests look into.
 
+#include <filesystem>
 #include <functional>
 #include <string>
 
@@ -19,7 +20,10 @@ struct ChildResult {
 /// with 99). The parent waits and returns how the child ended.
 ChildResult runInChild(const std::function<int()>& body);
 
-/// The names of the entries of `dir` that contain `part` (e.g. ".tmp"), sorted.
+/// The names of the entries of `dir` that contain `part` (e.g. ".tmp"), sorted, space-separated.
 std::string entriesContaining(const std::string& dir, const std::string& part);
+
+/// `<build>/tests/<group>/<name>`, emptied and created.
+std::filesystem::path freshDir(const std::string& group, const std::string& name);
 
 }  // namespace gseg::test

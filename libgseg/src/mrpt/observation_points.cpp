@@ -177,6 +177,14 @@ std::vector<float> sensorFramePoints(const ::mrpt::obs::CObservation& obs) {
                 out[4 * i] = r->points3D_x[i], out[4 * i + 1] = r->points3D_y[i], out[4 * i + 2] = r->points3D_z[i];
             return out;
         }
+        // MRPT "autofixes" a camera whose resolution differs from the image (a warning on stderr, then
+        // the intrinsics of one size applied to the other): refuse instead.
+        const auto& cam = r->cameraParams;
+        if (r->rangeImage.rows() == 0 || r->rangeImage.cols() == 0 || cam.ncols != std::uint32_t(r->rangeImage.cols()) ||
+            cam.nrows != std::uint32_t(r->rangeImage.rows()))
+            throw std::invalid_argument(describe(obs) + ": range image " + std::to_string(r->rangeImage.cols()) + " x " +
+                                        std::to_string(r->rangeImage.rows()) + " but camera " + std::to_string(cam.ncols) +
+                                        " x " + std::to_string(cam.nrows));
         ::mrpt::obs::CObservation3DRangeScan copy = *r;  // unprojectInto() is not const
         ::mrpt::maps::CSimplePointsMap pts;
         ::mrpt::obs::T3DPointsProjectionParams pp;

@@ -30,8 +30,42 @@ std::string classBeingRead(const std::string& what) {
 
 }  // namespace
 
+namespace {
+
+// Reads that deliver everything asked for, or nothing at a clean end. MRPT 2.5.8's
+// CArchive::ReadBuffer only fails when a read returns 0 bytes: a file cut inside a size field
+// returns the few bytes left, and the rest of the field stays garbage (found by fuzz_rawlog: a
+// cut CActionCollection asked for 2.8 GB). Here a short read is an error.
+class ExactReads : public ::mrpt::io::CStream {
+public:
+    explicit ExactReads(::mrpt::io::CStream& inner) : inner_(inner) {}
+
+    size_t Read(void* buffer, size_t count) override {
+        size_t done = 0;
+        while (done < count) {
+            const size_t n = inner_.Read(static_cast<char*>(buffer) + done, count - done);
+            if (n == 0) break;
+            done += n;
+        }
+        if (done != 0 && done < count)
+            throw std::runtime_error("the file ends inside an entry (" + std::to_string(done) + " of " +
+                                     std::to_string(count) + " bytes of a field): truncated");
+        return done;
+    }
+    size_t Write(const void*, size_t) override { throw std::logic_error("ExactReads is read-only"); }
+    uint64_t Seek(int64_t, TSeekOrigin) override { throw std::logic_error("ExactReads cannot seek"); }
+    uint64_t getTotalBytesCount() const override { return inner_.getTotalBytesCount(); }
+    uint64_t getPosition() const override { return inner_.getPosition(); }
+
+private:
+    ::mrpt::io::CStream& inner_;
+};
+
+}  // namespace
+
 void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, const RawlogVisitor& visit) {
-    auto archive = ::mrpt::serialization::archiveFrom(stream);
+    ExactReads exact(stream);
+    auto archive = ::mrpt::serialization::archiveFrom(exact);
     for (std::size_t index = 0;; ++index) {
         ::mrpt::serialization::CSerializable::Ptr obj;
         gseg::io::setActivity("reading entry " + std::to_string(index) + " of " + name);
