@@ -204,9 +204,7 @@ TEST(EvalTool, BreakdownCountsAgreeWithTheScoresAndDrawOnePicturePerFrame) {
 }
 
 TEST(EvalTool, TwoMpiRanksWriteTheReportsOfASerialRun) {
-    std::string whyNot;
-    const std::string mpirun = gseg::test::mpirun(2, whyNot);
-    if (mpirun.empty()) GTEST_SKIP() << whyNot;
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string root = gseg::test::sharedData("semantickitti");
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
     const fs::path dir = kDir / "mpi";
@@ -241,9 +239,7 @@ TEST(EvalTool, TwoMpiRanksWriteTheReportsOfASerialRun) {
 }
 
 TEST(EvalTool, UnderMpiAnErrorIsOneLineFromRankZeroAndOneExitCode) {
-    std::string whyNot;
-    const std::string mpirun = gseg::test::mpirun(2, whyNot);
-    if (mpirun.empty()) GTEST_SKIP() << whyNot;
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string gseg = "'" + gseg::test::tool("gseg") + "'";
     auto r = gseg::test::runCommand(mpirun + gseg + " eval '" + (kDir / "mpi_missing_root").string() + "' --threads 1");
     EXPECT_NE(r.status, 0);

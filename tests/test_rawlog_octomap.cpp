@@ -450,9 +450,7 @@ TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
 
 // #12: the other ranks' threads are more workers of rank 0's pipeline; rank 0 alone maps, in order.
 TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
-    std::string whyNot;
-    const std::string mpirun = gseg::test::mpirun(2, whyNot);
-    if (mpirun.empty()) GTEST_SKIP() << whyNot;
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string dir = tempDir("mpi");
     writeDrive(dir + "/drive.rawlog");
     std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
@@ -477,9 +475,7 @@ TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
 }
 
 TEST(RawlogOctomap, KittiSequence00MapsAreTheSameBytesOnTwoRanks) {
-    std::string whyNot;
-    const std::string mpirun = gseg::test::mpirun(2, whyNot);
-    if (mpirun.empty()) GTEST_SKIP() << whyNot;
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
     if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
     const std::string dir = tempDir("mpi_kitti"), config = std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml";
@@ -496,9 +492,7 @@ TEST(RawlogOctomap, KittiSequence00MapsAreTheSameBytesOnTwoRanks) {
 }
 
 TEST(RawlogOctomap, UnderMpiASkippedOrFailingScanOnAnotherRankIsNamedAndNothingHangs) {
-    std::string whyNot;
-    const std::string mpirun = gseg::test::mpirun(2, whyNot);
-    if (mpirun.empty()) GTEST_SKIP() << whyNot;
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string dir = tempDir("mpi_bad");
     std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
     // A scan without points, worked on by rank 1: skipped and named as in one process, the others mapped.
