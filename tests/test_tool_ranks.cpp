@@ -19,6 +19,17 @@ std::vector<std::uint64_t> loads(const std::vector<std::uint64_t>& work, const s
     return l;
 }
 
+/// The ranks of this test process, started without a launcher (one object per process, as MPI
+/// can only be initialised once).
+gseg::tools::Ranks& alone() {
+    for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"}) ::unsetenv(v);
+    static int argc = 1;
+    static char name[] = "test", *args[] = {name, nullptr};
+    static char** argv = args;
+    static gseg::tools::Ranks ranks(argc, argv);
+    return ranks;
+}
+
 }  // namespace
 
 TEST(SplitByWork, LargestFirstToTheLeastLoadedRank) {
@@ -48,6 +59,25 @@ TEST(SplitByWork, OneHugeItemDoesNotDragOthersAlong) {
         }
     }
     EXPECT_EQ(loads(work, owner, 3)[1] + loads(work, owner, 3)[2], 19u);
+}
+
+TEST(ShareItems, OneProcessDoesEveryItemAndGetsThemBackByIndex) {
+    gseg::tools::Ranks& ranks = alone();
+    std::vector<int> owner;
+    std::vector<std::size_t> asked;
+    const auto all = gseg::tools::shareItems(ranks, {5, 9, 1}, [&](const std::vector<std::size_t>& mine) {
+        asked = mine;
+        std::vector<std::string> out;
+        for (std::size_t i : mine) out.push_back("item " + std::to_string(i));
+        return out;
+    }, &owner);
+    EXPECT_EQ(asked, (std::vector<std::size_t>{0, 1, 2})) << "ascending";
+    EXPECT_EQ(all, (std::vector<std::string>{"item 0", "item 1", "item 2"}));
+    EXPECT_EQ(owner, (std::vector<int>{0, 0, 0}));
+    auto throws = [](const std::vector<std::size_t>&) -> std::vector<std::string> { throw std::runtime_error("disk gone"); };
+    EXPECT_THROW(gseg::tools::shareItems(ranks, {1, 2}, throws), std::runtime_error);
+    auto short_ = [](const std::vector<std::size_t>&) { return std::vector<std::string>{"only one"}; };
+    EXPECT_THROW(gseg::tools::shareItems(ranks, {1, 2}, short_), std::runtime_error) << "one result per item";
 }
 
 TEST(Bytes, ValuesRoundTripBitForBit) {
@@ -84,15 +114,10 @@ TEST(Bytes, AShortOrLyingMessageThrows) {
 }
 
 TEST(Ranks, WithoutALauncherTheToolIsOneProcess) {
-    for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"}) ::unsetenv(v);
-    int argc = 1;
-    char name[] = "test", *args[] = {name, nullptr};
-    char** argv = args;
-    gseg::tools::Ranks ranks(argc, argv);
+    gseg::tools::Ranks& ranks = alone();
     EXPECT_EQ(ranks.rank(), 0);
     EXPECT_EQ(ranks.size(), 1);
     EXPECT_TRUE(ranks.root());
-    EXPECT_EQ(argc, 1);
     EXPECT_EQ(ranks.gather("mine"), (std::vector<std::string>{"mine"}));
     EXPECT_EQ(ranks.broadcast("value"), "value");
     EXPECT_EQ(ranks.firstError(""), "");

@@ -12,7 +12,9 @@
 /// Only rank 0 prints: the other ranks' stdout and stderr go to /dev/null, everything they have to
 /// say (results, errors naming the item) is sent to rank 0.
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -55,6 +57,18 @@ private:
     int rank_ = 0, size_ = 1;
     bool mpi_ = false;  ///< MPI initialised by this object
 };
+
+/// Has the ranks share items 0..n-1: split by `work` (splitByWork()), each rank does its own with
+/// `doMine` (their indices, ascending; it returns one byte string per item, in that order), and
+/// rank 0 gets every item's bytes by index (the other ranks get an empty vector). `owner`, if
+/// given, receives each item's rank. Collective. If `doMine` throws on any rank, every rank throws
+/// std::runtime_error with the first rank's message (Ranks::firstError()).
+std::vector<std::string> shareItems(Ranks& ranks, const std::vector<std::uint64_t>& work,
+                                    const std::function<std::vector<std::string>(const std::vector<std::size_t>&)>& doMine,
+                                    std::vector<int>* owner = nullptr);
+
+/// The work of files for shareItems(): their sizes in bytes (0 where a size cannot be read).
+std::vector<std::uint64_t> fileSizes(const std::vector<std::string>& paths);
 
 /// Splits items over `ranks` by their work (e.g. bytes or points): the largest first, each to the
 /// rank with the least work so far (on ties the one with fewer items, then the lowest rank). Deterministic; returns the rank of

@@ -1,7 +1,10 @@
 // What the ranks agree on, in terms of gather and broadcast (the same with and without MPI).
 #include "ranks.hpp"
 
+#include "bytes.hpp"
+
 #include <algorithm>
+#include <filesystem>
 #include <numeric>
 #include <utility>
 #include <stdexcept>
@@ -21,6 +24,45 @@ int Ranks::exitCode(int mine) {
     for (const std::string& c : gather(std::to_string(mine)))
         if (code == 0) code = std::stoi(c);
     return std::stoi(broadcast(std::to_string(code)));
+}
+
+std::vector<std::string> shareItems(Ranks& ranks, const std::vector<std::uint64_t>& work,
+                                    const std::function<std::vector<std::string>(const std::vector<std::size_t>&)>& doMine,
+                                    std::vector<int>* owner) {
+    const std::vector<int> split = splitByWork(work, ranks.size());
+    if (owner) *owner = split;
+    std::vector<std::size_t> mine;
+    for (std::size_t i = 0; i < split.size(); ++i)
+        if (split[i] == ranks.rank()) mine.push_back(i);
+    ByteWriter out;
+    std::string error;
+    try {
+        const std::vector<std::string> done = doMine(mine);
+        if (done.size() != mine.size()) throw std::logic_error("shareItems: one result per item expected");
+        for (std::size_t k = 0; k < mine.size(); ++k) out.u64(mine[k]).str(done[k]);
+    } catch (const std::exception& e) {
+        error = e.what();
+    }
+    if (const std::string first = ranks.firstError(error); !first.empty()) throw std::runtime_error(first);
+    std::vector<std::string> all(ranks.root() ? split.size() : 0);
+    for (const std::string& part : ranks.gather(out.bytes())) {
+        ByteReader in(part);
+        while (!in.done()) {
+            const std::uint64_t i = in.u64();
+            all.at(std::size_t(i)) = in.str();
+        }
+    }
+    return all;
+}
+
+std::vector<std::uint64_t> fileSizes(const std::vector<std::string>& paths) {
+    std::vector<std::uint64_t> sizes;
+    for (const std::string& p : paths) {
+        std::error_code ec;
+        const std::uintmax_t n = std::filesystem::file_size(p, ec);
+        sizes.push_back(ec ? 0 : std::uint64_t(n));
+    }
+    return sizes;
 }
 
 std::vector<int> splitByWork(const std::vector<std::uint64_t>& work, int ranks) {

@@ -144,38 +144,24 @@ std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const std
 /// them in frame order (the other ranks return nothing). One process: all frames here.
 std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const Setup& setup, int threads,
                                          tools::Ranks& ranks) {
-    std::vector<std::uint64_t> work;
-    for (const Frame& f : frames) {
-        std::error_code ec;
-        const auto bytes = fs::file_size(f.scan, ec);
-        work.push_back(ec ? 0 : bytes);
-    }
-    const std::vector<int> owner = tools::splitByWork(work, ranks.size());
-    std::vector<std::size_t> mine;
-    for (std::size_t i = 0; i < frames.size(); ++i)
-        if (owner[i] == ranks.rank()) mine.push_back(i);
-    tools::ByteWriter out;
-    std::string error;
-    try {
+    std::vector<std::string> scans;
+    for (const Frame& f : frames) scans.push_back(f.scan);
+    std::vector<int> owner;
+    const std::vector<std::string> all = tools::shareItems(ranks, tools::fileSizes(scans), [&](const std::vector<std::size_t>& mine) {
         const std::vector<FrameResult> results = evaluateAll(frames, mine, setup, threads);
+        std::vector<std::string> bytes;
         for (const std::size_t i : mine) {
-            out.u64(i);
+            tools::ByteWriter out;
             writeRow(out, results[i].row);
-            out.str(results[i].skipped).str(results[i].heightNote);
+            bytes.push_back(out.str(results[i].skipped).str(results[i].heightNote).bytes());
         }
-    } catch (const std::exception& e) {
-        error = e.what();
-    }
-    if (const std::string first = ranks.firstError(error); !first.empty()) throw std::runtime_error(first);
-    std::vector<FrameResult> results(ranks.root() ? frames.size() : 0);
-    for (const std::string& bytes : ranks.gather(out.bytes())) {
-        tools::ByteReader in(bytes);
-        while (!in.done()) {
-            const std::uint64_t i = in.u64();
-            if (i >= results.size()) throw std::runtime_error("frame " + std::to_string(i) + " out of range in a rank's results");
-            results[i].row = readRow(in);
-            results[i].skipped = in.str(), results[i].heightNote = in.str();
-        }
+        return bytes;
+    }, &owner);
+    std::vector<FrameResult> results(all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        tools::ByteReader in(all[i]);
+        results[i].row = readRow(in);
+        results[i].skipped = in.str(), results[i].heightNote = in.str();
     }
     if (ranks.size() > 1 && ranks.root()) {
         std::string counts;
