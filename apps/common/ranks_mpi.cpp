@@ -48,7 +48,8 @@ private:
 };
 
 void sendBytes(int to, int tag, const std::string& bytes) {
-    if (bytes.size() > std::size_t(INT_MAX)) throw std::length_error("message of " + std::to_string(bytes.size()) + " bytes: too large to send");
+    if (bytes.size() > std::size_t(INT_MAX))
+        throw std::length_error("message of " + std::to_string(bytes.size()) + " bytes: too large to send");
     MPI_Request request;
     {
         std::lock_guard<std::mutex> lock(mpiLock());
@@ -81,7 +82,8 @@ std::string receiveBytes(int from, int tag) {
 }
 
 void checkTag(int tag) {
-    if (tag < Ranks::kFirstToolTag) throw std::logic_error("Ranks: tags below " + std::to_string(Ranks::kFirstToolTag) + " are reserved");
+    if (tag < Ranks::kFirstToolTag)
+        throw std::logic_error("Ranks: tags below " + std::to_string(Ranks::kFirstToolTag) + " are reserved");
 }
 
 }  // namespace

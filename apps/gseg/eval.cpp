@@ -147,7 +147,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
     std::vector<std::string> scans;
     for (const Frame& f : frames) scans.push_back(f.scan);
     std::vector<int> owner;
-    const std::vector<std::string> all = tools::shareItems(ranks, tools::fileSizes(scans), [&](const std::vector<std::size_t>& mine) {
+    auto evaluateMine = [&](const std::vector<std::size_t>& mine) {
         const std::vector<FrameResult> results = evaluateAll(frames, mine, setup, threads);
         std::vector<std::string> bytes;
         for (const std::size_t i : mine) {
@@ -156,7 +156,8 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
             bytes.push_back(out.str(results[i].skipped).str(results[i].heightNote).bytes());
         }
         return bytes;
-    }, &owner);
+    };
+    const std::vector<std::string> all = tools::shareItems(ranks, tools::fileSizes(scans), evaluateMine, &owner);
     std::vector<FrameResult> results(all.size());
     for (std::size_t i = 0; i < all.size(); ++i) {
         tools::ByteReader in(all[i]);

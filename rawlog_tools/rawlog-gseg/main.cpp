@@ -233,7 +233,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
     std::vector<std::string> inputs;
     for (const auto& job : jobs) inputs.push_back(job.first);
     std::vector<int> owner;
-    const std::vector<std::string> all = gseg::tools::shareItems(ranks, gseg::tools::fileSizes(inputs), [&](const std::vector<std::size_t>& mine) {
+    auto segmentMine = [&](const std::vector<std::size_t>& mine) {
         std::vector<std::string> done;
         for (const std::size_t i : mine) {
             FileResult r;
@@ -246,7 +246,8 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
             done.push_back(gseg::tools::ByteWriter().u64(r.failed).str(r.message).bytes());
         }
         return done;
-    }, &owner);
+    };
+    const std::vector<std::string> all = gseg::tools::shareItems(ranks, gseg::tools::fileSizes(inputs), segmentMine, &owner);
     std::vector<FileResult> results;
     for (const std::string& one : all) {
         gseg::tools::ByteReader in(one);
