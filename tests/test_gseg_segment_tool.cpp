@@ -1,5 +1,6 @@
 // `gseg segment` end to end: the built executable on real and broken inputs.
 #include <gseg/io/kitti.hpp>
+#include <support/child.hpp>
 #include <support/paths.hpp>
 
 #include <mrpt/img/CImage.h>
@@ -12,6 +13,7 @@
 #include <fstream>
 #include <limits>
 #include <sys/stat.h>
+#include <unistd.h>
 
 namespace {
 
@@ -96,8 +98,6 @@ TEST(SegmentTool, RawlogIndexPastTheEndIsAnError) {
 TEST(SegmentTool, BadInputsFailWithOneLineAndWriteNothing) {
     std::vector<float> good;
     for (int i = 0; i < 200; ++i) good.insert(good.end(), {float(i % 20), float(i / 20), -1.7f, 0.f});
-    std::vector<float> nan = good;
-    nan[4 * 17 + 1] = std::numeric_limits<float>::quiet_NaN();
     const std::string badYaml = kDir + "/bad.yaml", unknownYaml = kDir + "/unknown.yaml";
     writeBin("dummy", {});
     std::ofstream(badYaml) << "cellSizeX: -1.5\n";
@@ -122,13 +122,6 @@ TEST(SegmentTool, BadInputsFailWithOneLineAndWriteNothing) {
         EXPECT_FALSE(exists(png)) << c.args;
     }
     EXPECT_EQ(segmentTool("").status, 2);  // usage error
-    // A point without a return (NaN) is not an error: it is labelled non-ground.
-    const std::string nanLabels = out("nan.labels");
-    const ToolRun r = segmentTool("'" + writeBin("nan.bin", nan) + "' --labels-out '" + nanLabels + "'");
-    ASSERT_EQ(r.status, 0) << r.output;
-    const auto bytes = gseg::io::readFileBytes(nanLabels);
-    ASSERT_EQ(bytes.size(), 200u);
-    EXPECT_EQ(bytes[17], 0);
 }
 
 TEST(SegmentTool, AutomaticSensorHeightOnTheRealVlp16Scan) {
@@ -142,4 +135,64 @@ TEST(SegmentTool, AutomaticSensorHeightOnTheRealVlp16Scan) {
     const double h = std::stod(r.output.substr(at + 19));
     EXPECT_GT(h, 1.9);  // measured 2.08; by hand from the data about 2.2 (config/vlp16.yaml)
     EXPECT_LT(h, 2.4);
+}
+
+// --- Hostile runs (issue #9 items 6 to 9) --------------------------------------------------------------
+
+namespace {
+
+std::vector<float> flatScan() {
+    std::vector<float> v;
+    for (int i = 0; i < 400; ++i) v.insert(v.end(), {float(i % 20) - 10.f, float(i / 20) - 10.f, -1.7f, 0.f});
+    return v;
+}
+
+}  // namespace
+
+TEST(SegmentToolHostile, NonFinitePointsAreLabelledNonGroundAndCounted) {
+    std::vector<float> pts = flatScan();
+    pts[4 * 17 + 1] = std::numeric_limits<float>::quiet_NaN();
+    pts[4 * 33] = std::numeric_limits<float>::infinity();
+    const std::string labels = out("nan.labels"), png = out("nan.png");
+    const ToolRun r = segmentTool("'" + writeBin("nan.bin", pts) + "' --labels-out '" + labels + "' --png-out '" + png + "'");
+    ASSERT_EQ(r.status, 0) << r.output;  // before: the whole scan was refused ("point 17")
+    EXPECT_NE(r.output.find("2 non-finite point(s)"), std::string::npos) << r.output;
+    const auto bytes = gseg::io::readFileBytes(labels);
+    ASSERT_EQ(bytes.size(), 400u);
+    EXPECT_EQ(bytes[17], 0);
+    EXPECT_EQ(bytes[33], 0);
+    EXPECT_TRUE(exists(png));
+}
+
+TEST(SegmentToolHostile, AnOutputThatIsTheInputIsRefusedBeforeWriting) {
+    const std::string scan = writeBin("in.bin", flatScan());
+    const std::string link = kDir + "/in-link.bin";
+    std::remove(link.c_str());
+    ASSERT_EQ(::link(scan.c_str(), link.c_str()), 0);
+    const auto before = gseg::io::readFileBytes(scan);
+    for (const std::string& args : {"--labels-out '" + scan + "'", "--png-out '" + link + "'",
+                                    "--ply-out '" + kDir + "/./in.bin'"}) {
+        const ToolRun r = segmentTool("'" + scan + "' " + args);
+        EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find("refusing to overwrite an input"), std::string::npos) << r.output;
+    }
+    EXPECT_EQ(gseg::io::readFileBytes(scan), before);
+    const std::string both = out("both.out");
+    const ToolRun r = segmentTool("'" + scan + "' --ply-out '" + both + "' --png-out '" + both + "'");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_FALSE(exists(both));
+}
+
+TEST(SegmentToolHostile, FullDiskWritesNoOutputAtAll) {
+    // 4 blocks fit the labels (400 bytes) but not the PLY: nothing may be left, not even the labels
+    // (before: the labels were written, and a cut PNG reported as written with exit 0).
+    const std::string scan = writeBin("full.bin", flatScan());
+    const std::string labels = out("full.labels"), ply = out("full.ply"), png = out("full.png");
+    const ToolRun r = gseg::test::runCommand("ulimit -f 4; exec '" + gseg::test::tool("gseg") + "' segment '" + scan +
+                                             "' --labels-out '" + labels + "' --ply-out '" + ply + "' --png-out '" + png + "'");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("File too large"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("wrote"), std::string::npos) << r.output;
+    for (const std::string& p : {labels, ply, png}) EXPECT_FALSE(exists(p)) << p;
+    EXPECT_EQ(gseg::test::entriesContaining(kDir, ".tmp"), "");
 }

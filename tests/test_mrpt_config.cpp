@@ -1,11 +1,16 @@
 // YAML and INI configuration files, PLY reading/writing.
 #include <gseg/io/ply.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <support/child.hpp>
+
+#include <mrpt/containers/yaml.h>
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <unistd.h>
 
 namespace {
 
@@ -113,4 +118,121 @@ TEST(Ply, TruncatedOrGarbageFilesThrow) {
     EXPECT_THROW(gseg::io::readPly(writeTemp("garbage.ply", "this is not a ply\n")), std::runtime_error);
     EXPECT_THROW(gseg::io::readPly(writeTemp("noend.ply", "ply\nformat ascii 1.0\n")), std::runtime_error);
     EXPECT_THROW(gseg::io::readPly(writeTemp("empty.ply", "")), std::runtime_error);
+}
+
+// --- Hostile configuration files (issue #9 items 12 to 14) ------------------------------------------
+
+namespace {
+
+// loadConfig() in a child with a time limit: a hang ends as SIGALRM instead of a stuck test.
+// Returns the child's exit code: 0 loaded, 1 std::runtime_error naming `path`, 2 any other error.
+int loadWithin(const std::string& path, unsigned seconds) {
+    return gseg::test::runInChild([&] {
+               ::alarm(seconds);
+               try {
+                   gseg::mrpt::loadConfig(path);
+               } catch (const std::runtime_error& e) {
+                   return std::string(e.what()).find(path) != std::string::npos ? 1 : 3;
+               } catch (...) {
+                   return 2;
+               }
+               return 0;
+           }).code;
+}
+
+}  // namespace
+
+TEST(ConfigHostile, YamlDirectivesThatHangLibfyamlAreRefusedAtOnce) {
+    // Both hang libfyaml 0.7.12 forever (found by fuzzing); the first is 16 bytes with a NUL.
+    const std::string nul("%Y;ML 1.1\0" "1\n%-\xb5\na:", 16);
+    for (const std::string& text : {nul, std::string("%-\xb5\na:"), std::string("%YAML 1.1\n%-\xb5\na: 1\n")}) {
+        const std::string path = writeTemp("hang.yaml", text);
+        EXPECT_EQ(loadWithin(path, 20), 1) << "hang or wrong error type";
+    }
+    EXPECT_NE(errorOf(writeTemp("dir.yaml", "%YAML 1.2\n---\ncellSizeX: 1\n")).find("directives"), std::string::npos);
+}
+
+TEST(ConfigHostile, ValidButUnboundedParametersAreRefusedByTheLoader) {
+    const std::string path = writeTemp("iter.yaml", "ransacMaxIterations: 2147483647\nminGroundInlierRatio: 0\n");
+    const std::string err = errorOf(path);
+    EXPECT_NE(err.find("ransacMaxIterations"), std::string::npos) << err;
+    EXPECT_NE(err.find("bounded time"), std::string::npos) << err;
+    EXPECT_NE(errorOf(writeTemp("radius.ini", "[gseg]\ncentroidSearchRadius = 1e9\n")).find("centroidSearchRadius"),
+              std::string::npos);
+    // The shipped files stay within the limits.
+    for (const char* f : {"kitti_hdl64.yaml", "vlp16.yaml"})
+        EXPECT_NO_THROW(gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/" + f)) << f;
+}
+
+TEST(ConfigHostile, KeysBesideTheGsegMapAreAnError) {
+    for (const std::string& text : {std::string("gseg:\n  heightGate: 0.4\ncellSizeX: 0\n"),
+                                    std::string("cellSizeX: 0\ngseg:\n  heightGate: 0.4\n")}) {
+        const std::string err = errorOf(writeTemp("beside.yaml", text));
+        EXPECT_NE(err.find("beside the 'gseg:' map"), std::string::npos) << err;
+    }
+    // The same through an already parsed document.
+    const auto doc = mrpt::containers::yaml::FromText("gseg:\n  heightGate: 0.4\ncellSizeX: 0\n");
+    EXPECT_THROW(gseg::mrpt::loadConfigFromYaml(doc, "doc"), std::runtime_error);
+}
+
+TEST(ConfigHostile, ContentAfterANulByteIsNotIgnored) {
+    const std::string yaml = writeTemp("nul.yaml", std::string("heightGate: 0.4\n\0cellSizeX: 0\n", 30));
+    EXPECT_NE(errorOf(yaml).find("NUL byte at offset 16"), std::string::npos) << errorOf(yaml);
+    const std::string ini = writeTemp("nul.ini", std::string("[gseg]\nheightGate = 0.4\n\0cellSizeX = 0\n", 38));
+    EXPECT_NE(errorOf(ini).find("NUL byte"), std::string::npos) << errorOf(ini);
+}
+
+TEST(ConfigHostile, YamlBeyondFlatKeyValueLinesIsRefusedWithItsLine) {
+    const struct {
+        std::string text, expect;
+    } cases[] = {
+        {"cellSizeX: [1, 2\n", ":1: 'cellSizeX': '[1, 2' is not a single plain value"},
+        {"heightGate: 0.4\nheightGate: 0.5\n", ":2: 'heightGate' given twice (also on line 1)"},
+        {"a: &x 1\n", "not a single plain value"},
+        {"gseg:\n  heightGate: 0.4\n    cellSizeX: 1\n", ":3: unexpected indentation"},
+        {"heightGate 0.4\n", ":1: expected 'key: value'"},
+        {"heightGate: '0.4\n", "unbalanced quotes"},
+        {"\theightGate: 0.4\n", "tabs"},
+        {"heightGate:\n", "has no value"},
+        {"---\nheightGate: 0.4\n---\ncellSizeX: 1\n", "only one YAML document"},
+    };
+    for (const auto& c : cases) {
+        const std::string err = errorOf(writeTemp("flat.yaml", c.text));
+        EXPECT_NE(err.find(c.expect), std::string::npos) << c.text << " -> " << err;
+    }
+    // What the format does allow: comments, quotes, a document marker, a BOM, CRLF.
+    const auto cfg = gseg::mrpt::loadConfig(writeTemp("ok.yaml", "\xEF\xBB\xBF---\r\n# comment\r\nheightGate: '0.4'  # m\r\n"
+                                                                 "cellSizeX: \"1.25\"\r\ndistToGround: auto\r\n...\r\n"));
+    EXPECT_DOUBLE_EQ(cfg.params.heightGate, 0.4);
+    EXPECT_DOUBLE_EQ(cfg.params.cellSizeX, 1.25);
+    EXPECT_TRUE(cfg.distToGroundAuto);
+}
+
+TEST(ConfigHostile, IniPreprocessorErrorsAreRuntimeErrorsNamingTheFileInOneLine) {
+    for (const std::string& text : {std::string("[gseg]\nheightGate = $eval{1+}\n"),
+                                    std::string("[gseg]\nheightGate = ${NO_SUCH_VARIABLE}\n")}) {
+        const std::string path = writeTemp("eval.ini", text);
+        std::string what;
+        try {
+            gseg::mrpt::loadConfig(path);
+        } catch (const std::runtime_error& e) {  // the documented type: nothing else may escape
+            what = e.what();
+        }
+        EXPECT_NE(what.find(path), std::string::npos) << what;
+        EXPECT_EQ(what.find("==== MRPT exception"), std::string::npos) << what;
+        EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+        EXPECT_NE(what.find("Line 2"), std::string::npos) << what;
+    }
+    // Evaluated expressions still work.
+    EXPECT_DOUBLE_EQ(gseg::mrpt::loadConfig(writeTemp("ok.ini", "[gseg]\nheightGate = $eval{0.2*2}\n")).params.heightGate,
+                     0.4);
+}
+
+TEST(ConfigHostile, IniLoopsThatWouldNeverEndAreRefused) {
+    const std::string loop = writeTemp("loop.ini", "[gseg]\nheightGate = $eval{var x:=0; while(x<1e12)(x+=1); 1}\n");
+    EXPECT_EQ(loadWithin(loop, 20), 1) << "hang or wrong error type";
+    EXPECT_NE(errorOf(loop).find("loops are not allowed"), std::string::npos) << errorOf(loop);
+    ::setenv("GSEG_TEST_SELF", "$env{GSEG_TEST_SELF}", 1);
+    const std::string self = writeTemp("self.ini", "[gseg]\nheightGate = $env{GSEG_TEST_SELF}\n");
+    EXPECT_EQ(loadWithin(self, 20), 1) << "hang or wrong error type";
 }

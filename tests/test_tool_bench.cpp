@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -90,4 +91,31 @@ TEST(BenchPerScan, BadConfigAndArguments) {
     EXPECT_EQ(status, 2) << out;
     out = runBench("", status);
     EXPECT_EQ(status, 2) << out;
+}
+
+TEST(BenchHostile, NanPointsAndEmptyScansNeverAbort) {
+    // Before: an exception escaped a worker thread and aborted the process (issue #9 item 4).
+    const fs::path dir = kDir / "hostile";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scan = writeScan(dir, "nan.bin", 1.73);
+    {
+        std::fstream f(scan, std::ios::in | std::ios::out | std::ios::binary);
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        f.seekp(16 * 5 + 4);
+        f.write(reinterpret_cast<const char*>(&nan), 4);
+    }
+    std::ofstream(dir / "empty.ply") << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                                        "property float z\nend_header\n";
+    int status = -1;
+    std::string out = runBench("'" + scan + "' --repeat 1 --threads 2", status);
+    EXPECT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("nan.bin: 1 non-finite point(s) left out"), std::string::npos) << out;
+    out = runBench("'" + scan + "' '" + (dir / "empty.ply").string() + "' --repeat 1 --threads 2", status);
+    EXPECT_EQ(status, 3) << out;  // done, one scan could not be timed
+    EXPECT_NE(out.find("empty.ply: skipped: no finite point"), std::string::npos) << out;
+    EXPECT_FALSE(rowOf(out, "nan.bin").empty()) << out;
+    out = runBench("'" + (dir / "empty.ply").string() + "' --repeat 1", status);
+    EXPECT_EQ(status, 1) << out;
+    EXPECT_NE(out.find("gseg bench: no scan to time"), std::string::npos) << out;
 }

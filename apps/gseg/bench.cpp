@@ -4,12 +4,15 @@
 
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/scan_source.hpp>
-#include <gseg/sensor_height.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <sys/resource.h>
 #include <thread>
@@ -51,47 +54,83 @@ struct Input {
     Params params;  ///< with the scan's own distToGround when the config says auto
 };
 
-std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config) {
+/// The scans to time, with their parameters (with `distToGround: auto` the height estimated for the
+/// scan, outside the timing; points with NaN or infinite coordinates are labelled non-ground by
+/// the segmenter, uncounted in its work). A scan with no point cannot be timed and is listed in
+/// `skipped`.
+std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config,
+                              std::vector<std::string>& skipped) {
     ::gseg::mrpt::LoadedConfig cfg;
     if (!config.empty()) cfg = ::gseg::mrpt::loadConfig(config);
     std::vector<Input> inputs;
     for (const auto& path : paths) {
         Input in{std::filesystem::path(path).filename().string(), ::gseg::mrpt::loadScan(path), cfg.params};
+        std::size_t nonFinite = 0;
+        for (std::size_t i = 0; i < in.scan.size(); ++i)
+            nonFinite += !std::isfinite(in.scan.xyzi[4 * i]) || !std::isfinite(in.scan.xyzi[4 * i + 1]) ||
+                         !std::isfinite(in.scan.xyzi[4 * i + 2]);
+        if (nonFinite == in.scan.size()) {
+            skipped.push_back(in.name + ": no finite point to segment");
+            std::printf("%s: skipped: no finite point to segment\n", in.name.c_str());
+            continue;
+        }
+        if (nonFinite)
+            std::printf("%s: %zu non-finite point(s) left out (labelled non-ground, not segmented)\n", in.name.c_str(),
+                        nonFinite);
         if (cfg.distToGroundAuto) {
-            const auto h = estimateSensorHeight(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16));
-            if (!h.valid) throw std::runtime_error(path + ": distToGround: auto: no ground level found");
-            in.params.distToGround = h.height;
-            std::printf("%s: distToGround auto %.3f m\n", in.name.c_str(), h.height);
+            AutoHeightSegmenter height(cfg.params);
+            height.segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16), false);
+            in.params.distToGround = height.lastDecision().height;
+            std::printf("%s: distToGround auto %s\n", in.name.c_str(), height.lastDecision().describe().c_str());
         }
         inputs.push_back(std::move(in));
     }
     return inputs;
 }
 
-/// Every thread: its own segmenter(s), one warm-up pass over all scans, then `repeat` timed passes.
-/// Returns the samples per scan (all threads) and the wall time of the whole run [s].
+/// One thread's work: its own segmenter(s), one warm-up pass over all scans, then `repeat` timed
+/// passes; samples[i] gets scan i's. A failure names the scan.
+void timeOnThread(const std::vector<Input>& inputs, int repeat, bool perScanParams,
+                  std::vector<std::vector<Sample>>& samples) {
+    std::vector<GroundSegmenter> segs;
+    for (std::size_t i = 0; i < (perScanParams ? inputs.size() : 1); ++i) segs.emplace_back(inputs[i].params);
+    auto run = [&](std::size_t i) {
+        const auto& s = inputs[i].scan;
+        try {
+            return segs[perScanParams ? i : 0].segment(PointCloudView(s.xyzi.data(), s.size(), 16), false);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(inputs[i].name + ": " + e.what());
+        }
+    };
+    for (std::size_t i = 0; i < inputs.size(); ++i) run(i);  // warm-up
+    for (int r = 0; r < repeat; ++r)
+        for (std::size_t i = 0; i < inputs.size(); ++i) {
+            const Result res = run(i);
+            samples[i].push_back({res.totalMs, res.phase1.ms, res.phase2.ms});
+        }
+}
+
+/// timeOnThread() on `threads` threads. Returns the samples per scan (all threads) and the wall
+/// time of the whole run [s]. An exception in a thread is carried out and rethrown here (one
+/// escaping a thread would abort the process).
 std::vector<std::vector<Sample>> timeAll(const std::vector<Input>& inputs, int repeat, int threads, bool perScanParams,
                                          double& wallS) {
     std::vector<std::vector<std::vector<Sample>>> byThread(std::size_t(threads),
                                                            std::vector<std::vector<Sample>>(inputs.size()));
+    std::vector<std::exception_ptr> failures(static_cast<std::size_t>(threads));
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t)
+    for (std::size_t t = 0; t < std::size_t(threads); ++t)
         pool.emplace_back([&, t] {
-            std::vector<GroundSegmenter> segs;
-            for (std::size_t i = 0; i < (perScanParams ? inputs.size() : 1); ++i) segs.emplace_back(inputs[i].params);
-            auto run = [&](std::size_t i) {
-                const auto& s = inputs[i].scan;
-                return segs[perScanParams ? i : 0].segment(PointCloudView(s.xyzi.data(), s.size(), 16), false);
-            };
-            for (std::size_t i = 0; i < inputs.size(); ++i) run(i);  // warm-up
-            for (int r = 0; r < repeat; ++r)
-                for (std::size_t i = 0; i < inputs.size(); ++i) {
-                    const Result res = run(i);
-                    byThread[std::size_t(t)][i].push_back({res.totalMs, res.phase1.ms, res.phase2.ms});
-                }
+            try {
+                timeOnThread(inputs, repeat, perScanParams, byThread[t]);
+            } catch (...) {
+                failures[t] = std::current_exception();
+            }
         });
     for (auto& th : pool) th.join();
+    for (const auto& f : failures)
+        if (f) std::rethrow_exception(f);
     wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::vector<std::vector<Sample>> perScan(inputs.size());
     for (const auto& thread : byThread)
@@ -133,7 +172,9 @@ void printSteps(const std::vector<Sample>& all) {
 }
 
 int run(const std::vector<std::string>& paths, const std::string& config, int repeat, int threads) {
-    const std::vector<Input> inputs = loadInputs(paths, config);
+    std::vector<std::string> skipped;
+    const std::vector<Input> inputs = loadInputs(paths, config, skipped);
+    if (inputs.empty()) throw std::runtime_error("no scan to time (" + std::to_string(skipped.size()) + " skipped)");
     std::size_t points = 0;
     for (const auto& in : inputs) points += in.scan.size();
     const bool perScanParams = std::any_of(inputs.begin(), inputs.end(), [&](const Input& in) {
@@ -158,7 +199,8 @@ int run(const std::vector<std::string>& paths, const std::string& config, int re
     rusage ru{};
     ::getrusage(RUSAGE_SELF, &ru);
     std::printf("peak memory (ru_maxrss, scans loaded included): %.1f MB\n", double(ru.ru_maxrss) / 1024.0);
-    return 0;
+    if (!skipped.empty()) std::printf("%zu scan(s) skipped (named above)\n", skipped.size());
+    return skipped.empty() ? 0 : 3;
 }
 
 }  // namespace
@@ -170,7 +212,8 @@ int runBench(int argc, char** argv) {
     try {
         TCLAP::CmdLine cmd("Time GSeg3D on scans: one warm-up pass, then median / p90 / min of the segment() call per "
                            "scan over N repeats, per phase and step, points per second, peak memory. Without "
-                           "--config: the library defaults.",
+                           "--config: the library defaults. Exit code: 0 done, 1 bad input, 2 bad usage, 3 done but "
+                           "some scans could not be timed (named).",
                            ' ', "0.1");
         TCLAP::UnlabeledMultiArg<std::string> scanArgs("scans", "KITTI .bin, PLY or rawlog files", true, "SCAN", cmd);
         TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file", false, "", "FILE", cmd);
@@ -190,7 +233,7 @@ int runBench(int argc, char** argv) {
     try {
         return run(scans, config, repeat, threads);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg bench: %s\n", e.what());
+        std::fprintf(stderr, "gseg bench: %s\n", ::gseg::mrpt::errorReason(e).c_str());
         return 1;
     }
 }

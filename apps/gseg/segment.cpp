@@ -2,16 +2,18 @@
 #include "cli.hpp"
 #include "commands.hpp"
 
-#include <gseg/ground_segmenter.hpp>
-#include <gseg/sensor_height.hpp>
-#include <gseg/io/kitti.hpp>
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/io/ply.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/render.hpp>
 #include <gseg/mrpt/scan_source.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <memory>
 
 namespace gseg::app {
 namespace {
@@ -31,33 +33,37 @@ void printPhase(const char* name, const PhaseReport& r) {
 int run(const Cli& cli) {
     mrpt::LoadedConfig cfg;
     if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
-    Params params = cfg.params;
     const mrpt::Scan scan = mrpt::loadScan(cli.scan, cli.index);
     const PointCloudView cloud(scan.xyzi.data(), scan.size(), 4 * sizeof(float));
-    Result r;
-    if (cfg.distToGroundAuto) {
-        AutoHeightSegmenter segmenter(params);  // never refuses: falls back to distToGround's default
-        r = segmenter.segment(cloud, false);
-        std::printf("distToGround auto: %s\n", segmenter.lastDecision().describe().c_str());
-    } else {
-        r = GroundSegmenter(params).segment(cloud, false);
-    }
+    mrpt::ScanSegmenter segmenter(cfg);
+    const mrpt::ScanSegmentation s = segmenter.segment(cloud, false);
+    const Result& r = s.result;
+    if (cfg.distToGroundAuto) std::printf("distToGround auto: %s\n", s.height.describe().c_str());
 
     std::printf("%s\n", scan.description.c_str());
     std::printf("points %zu, ground %zu (%.1f %%), non-ground %zu; segmentation %.2f ms\n", cloud.size(), r.numGround,
-                100.0 * double(r.numGround) / double(cloud.size()), r.numNonGround, r.totalMs);
+                100.0 * double(r.numGround) / double(std::max<std::size_t>(1, cloud.size())), r.numNonGround, r.totalMs);
+    if (s.nonFinitePoints)
+        std::printf("%zu non-finite point(s) (NaN or infinite coordinates) labelled non-ground\n", s.nonFinitePoints);
     printPhase("phase I ", r.phase1);
     printPhase("phase II", r.phase2);
 
-    if (!cli.labelsOut.empty()) io::writeFileAtomic(cli.labelsOut, r.labels.data(), r.labels.size());
-    if (!cli.plyOut.empty()) io::writeLabelledPly(cli.plyOut, cloud, r.labels);
+    // Every output to its temporary first; renamed only when all are complete.
+    std::vector<std::unique_ptr<io::AtomicFile>> outputs;
+    auto add = [&](const std::string& path, const std::string& bytes) {
+        if (path.empty()) return;
+        outputs.push_back(std::make_unique<io::AtomicFile>(path));
+        outputs.back()->write(bytes.data(), bytes.size());
+    };
+    add(cli.labelsOut, std::string(r.labels.begin(), r.labels.end()));
+    if (!cli.plyOut.empty()) add(cli.plyOut, io::labelledPlyBytes(cloud, r.labels));
     if (!cli.pngOut.empty()) {
         mrpt::RenderOptions ro;
         ro.title = scan.description;
-        mrpt::writeTopDownPng(cli.pngOut, cloud, r.labels, ro);
+        add(cli.pngOut, mrpt::topDownPng(cloud, r.labels, ro));
     }
-    for (const std::string* out : {&cli.labelsOut, &cli.plyOut, &cli.pngOut})
-        if (!out->empty()) std::printf("wrote %s\n", out->c_str());
+    for (auto& out : outputs) out->commit();
+    for (const auto& out : outputs) std::printf("wrote %s\n", out->path().c_str());
     return 0;
 }
 
@@ -81,14 +87,20 @@ int runSegment(int argc, char** argv) {
                                    "first)", false, -1, "N", cmd);
         if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
         cli = {scan.getValue(), config.getValue(), labels.getValue(), ply.getValue(), png.getValue(), index.getValue()};
+        io::checkOutputsAreNotInputs({{"scan", cli.scan}, {"--config", cli.config}},
+                                     {{"--labels-out", cli.labelsOut}, {"--ply-out", cli.plyOut}, {"--png-out", cli.pngOut}});
     } catch (const TCLAP::ArgException& e) {
         std::fprintf(stderr, "gseg segment: %s (%s); see gseg segment --help\n", e.error().c_str(), e.argId().c_str());
         return 2;
+    } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "gseg segment: %s\n", e.what());
+        return 2;
     }
+    io::installTemporaryCleanup("gseg segment");
     try {
         return run(cli);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg segment: %s\n", e.what());
+        std::fprintf(stderr, "gseg segment: %s\n", mrpt::errorReason(e).c_str());
         return 1;
     }
 }

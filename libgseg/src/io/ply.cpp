@@ -1,7 +1,9 @@
+#include <gseg/io/float_cast.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cstring>
 #include <sstream>
 #include <stdexcept>
@@ -51,46 +53,66 @@ struct Header {
     std::size_t dataOffset = 0;
 };
 
-Header parseHeader(const std::vector<std::uint8_t>& bytes, const std::string& path) {
+// A vertex count: decimal digits only (no sign, exponent or trailing text), at most 2^62.
+std::size_t parseCount(const std::string& text, const std::string& name) {
+    unsigned long long v = 0;
+    const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (text.empty() || ec != std::errc() || ptr != text.data() + text.size() || v > (1ull << 62))
+        throw std::runtime_error(name + ": malformed PLY element count '" + text + "'");
+    return std::size_t(v);
+}
+
+Header parseHeader(const std::uint8_t* data, std::size_t size, const std::string& name) {
+    constexpr std::size_t kMaxLine = 4096;
     Header h;
     std::size_t pos = 0;
-    bool inVertex = false, sawVertex = false, sawFormat = false;
+    bool inVertex = false, sawVertex = false, sawFormat = false, sawElement = false;
     auto nextLine = [&]() -> std::string {
-        const std::size_t end = std::find(bytes.begin() + pos, bytes.end(), '\n') - bytes.begin();
-        if (end >= bytes.size()) throw std::runtime_error(path + ": PLY header has no end_header line");
-        std::string line(bytes.begin() + pos, bytes.begin() + end);
+        const std::size_t end = std::size_t(std::find(data + pos, data + size, '\n') - data);
+        if (end >= size) throw std::runtime_error(name + ": PLY header has no end_header line");
+        if (end - pos > kMaxLine) throw std::runtime_error(name + ": PLY header line longer than 4096 bytes");
+        std::string line(data + pos, data + end);
         pos = end + 1;
         if (!line.empty() && line.back() == '\r') line.pop_back();
         return line;
     };
-    if (nextLine() != "ply") throw std::runtime_error(path + ": not a PLY file (no 'ply' magic line)");
+    if (nextLine() != "ply") throw std::runtime_error(name + ": not a PLY file (no 'ply' magic line)");
     for (;;) {
         std::istringstream in(nextLine());
         std::string word;
         in >> word;
         if (word == "end_header") break;
+        if (word.empty() || word == "comment" || word == "obj_info") continue;
         if (word == "format") {
             std::string fmt;
             in >> fmt;
+            if (sawFormat) throw std::runtime_error(name + ": a second PLY format line");
             if (fmt == "binary_little_endian") h.binary = true;
-            else if (fmt != "ascii") throw std::runtime_error(path + ": unsupported PLY format '" + fmt + "'");
+            else if (fmt != "ascii") throw std::runtime_error(name + ": unsupported PLY format '" + fmt + "'");
             sawFormat = true;
         } else if (word == "element") {
-            std::string name;
-            long long count = -1;
-            in >> name >> count;
-            if (!in || count < 0) throw std::runtime_error(path + ": malformed PLY element line");
-            inVertex = name == "vertex";
-            if (inVertex) h.vertices = std::size_t(count), sawVertex = true;
-            else if (!sawVertex) throw std::runtime_error(path + ": the PLY vertex element must come first");
-        } else if (word == "property" && inVertex) {
-            std::string type, name;
-            in >> type >> name;
-            if (type == "list") throw std::runtime_error(path + ": list properties on vertices are not supported");
-            h.props.push_back(makeProperty(type, name, path));
+            std::string element, count;
+            in >> element >> count;
+            const std::size_t n = parseCount(count, name);
+            inVertex = element == "vertex";
+            sawElement = true;
+            if (inVertex && sawVertex) throw std::runtime_error(name + ": a second 'element vertex' line");
+            if (inVertex) h.vertices = n, sawVertex = true;
+            else if (!sawVertex) throw std::runtime_error(name + ": the PLY vertex element must come first");
+        } else if (word == "property") {
+            if (!sawElement) throw std::runtime_error(name + ": PLY property before any element");
+            if (!inVertex) continue;
+            std::string type, prop;
+            in >> type >> prop;
+            if (type == "list") throw std::runtime_error(name + ": list properties on vertices are not supported");
+            for (const Property& p : h.props)
+                if (p.name == prop) throw std::runtime_error(name + ": PLY vertex property '" + prop + "' given twice");
+            h.props.push_back(makeProperty(type, prop, name));
+        } else {
+            throw std::runtime_error(name + ": unknown PLY header line starting with '" + word + "'");
         }
     }
-    if (!sawFormat || !sawVertex) throw std::runtime_error(path + ": PLY header lacks a format or a vertex element");
+    if (!sawFormat || !sawVertex) throw std::runtime_error(name + ": PLY header lacks a format or a vertex element");
     h.dataOffset = pos;
     return h;
 }
@@ -101,46 +123,65 @@ int indexOf(const Header& h, const char* name) {
     return -1;
 }
 
+bool isBlank(std::uint8_t c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+// Reads the next whitespace-separated number of an ascii PLY body; false at the end of the data.
+bool nextNumber(const std::uint8_t*& p, const std::uint8_t* end, double& value) {
+    while (p < end && isBlank(*p)) ++p;
+    if (p == end) return false;
+    const std::uint8_t* start = p;
+    while (p < end && !isBlank(*p)) ++p;
+    const char* first = reinterpret_cast<const char*>(start);
+    const char* last = reinterpret_cast<const char*>(p);
+    if (last - first > 1 && *first == '+') ++first;
+    const auto [ptr, ec] = std::from_chars(first, last, value);
+    return ec == std::errc() && ptr == last;
+}
+
 }  // namespace
 
-std::vector<float> readPly(const std::string& path) {
-    const std::vector<std::uint8_t> bytes = readFileBytes(path);
-    if (bytes.empty()) throw std::runtime_error(path + ": empty file");
-    const Header h = parseHeader(bytes, path);
+std::vector<float> parsePly(const std::uint8_t* data, std::size_t size, const std::string& name) {
+    if (size == 0) throw std::runtime_error(name + ": empty file");
+    const Header h = parseHeader(data, size, name);
     const int ix = indexOf(h, "x"), iy = indexOf(h, "y"), iz = indexOf(h, "z"), ii = indexOf(h, "intensity");
-    if (ix < 0 || iy < 0 || iz < 0) throw std::runtime_error(path + ": PLY vertices lack x, y or z");
+    if (ix < 0 || iy < 0 || iz < 0) throw std::runtime_error(name + ": PLY vertices lack x, y or z");
+    const std::size_t remaining = size - h.dataOffset;
+    std::size_t stride = 0;
+    for (const Property& p : h.props) stride += std::size_t(p.size);
+    // What the rest of the file can hold: `stride` bytes per binary vertex; in ascii at least one
+    // character and one separator per value (the last value needs no separator).
+    const std::size_t capacity = h.binary ? remaining / stride : (remaining + 1) / (2 * h.props.size());
+    if (h.vertices > capacity)
+        throw std::runtime_error(name + ": truncated PLY: " + std::to_string(h.vertices) + " vertices announced, the " +
+                                 std::to_string(remaining) + " bytes after the header hold at most " +
+                                 std::to_string(capacity));
     std::vector<float> out(4 * h.vertices, 0.f);
     std::vector<double> values(h.props.size());
     const int wanted[4] = {ix, iy, iz, ii};
-    if (h.binary) {
-        std::size_t stride = 0;
-        for (const Property& p : h.props) stride += std::size_t(p.size);
-        if (bytes.size() - h.dataOffset < stride * h.vertices)
-            throw std::runtime_error(path + ": truncated PLY: " + std::to_string(h.vertices) + " vertices of " +
-                                     std::to_string(stride) + " bytes announced, " +
-                                     std::to_string(bytes.size() - h.dataOffset) + " bytes present");
-        const std::uint8_t* p = bytes.data() + h.dataOffset;
-        for (std::size_t v = 0; v < h.vertices; ++v) {
-            for (std::size_t k = 0; k < h.props.size(); ++k) values[k] = decode(p, h.props[k]), p += h.props[k].size;
-            for (int a = 0; a < 4; ++a)
-                if (wanted[a] >= 0) out[4 * v + a] = float(values[std::size_t(wanted[a])]);
+    const std::uint8_t* p = data + h.dataOffset;
+    const std::uint8_t* const end = data + size;
+    for (std::size_t v = 0; v < h.vertices; ++v) {
+        for (std::size_t k = 0; k < h.props.size(); ++k) {
+            if (h.binary) {
+                values[k] = decode(p, h.props[k]);
+                p += h.props[k].size;
+            } else if (!nextNumber(p, end, values[k])) {
+                throw std::runtime_error(name + ": truncated or malformed PLY at vertex " + std::to_string(v));
+            }
         }
-    } else {
-        std::istringstream in(std::string(bytes.begin() + long(h.dataOffset), bytes.end()));
-        in.imbue(std::locale::classic());
-        for (std::size_t v = 0; v < h.vertices; ++v) {
-            for (double& value : values)
-                if (!(in >> value))
-                    throw std::runtime_error(path + ": truncated or malformed PLY at vertex " + std::to_string(v));
-            for (int a = 0; a < 4; ++a)
-                if (wanted[a] >= 0) out[4 * v + a] = float(values[std::size_t(wanted[a])]);
-        }
+        for (int a = 0; a < 4; ++a)
+            if (wanted[a] >= 0) out[4 * v + std::size_t(a)] = toFloat(values[std::size_t(wanted[a])]);
     }
     return out;
 }
 
-void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                      const PlyColours& colours) {
+std::vector<float> readPly(const std::string& path) {
+    const std::vector<std::uint8_t> bytes = readFileBytes(path);
+    return parsePly(bytes.data(), bytes.size(), path);
+}
+
+std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                             const PlyColours& colours) {
     if (labels.size() != cloud.size())
         throw std::invalid_argument("writeLabelledPly: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(cloud.size()) + " points");
@@ -155,7 +196,13 @@ void writeLabelledPly(const std::string& path, const PointCloudView& cloud, cons
         std::memcpy(p, cloud.point(i), 12);
         std::memcpy(p + 12, labels[i] ? colours.ground : colours.nonGround, 3);
     }
-    writeFileAtomic(path, out.data(), out.size());
+    return out;
+}
+
+void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                      const PlyColours& colours) {
+    const std::string bytes = labelledPlyBytes(cloud, labels, colours);
+    writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
 }  // namespace gseg::io

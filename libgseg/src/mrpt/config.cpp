@@ -1,10 +1,14 @@
+#include <gseg/io/kitti.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/errors.hpp>
 
-#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/containers/yaml.h>
 
 #include <algorithm>
-#include <fstream>
+#include <cstdlib>
+#include <cstring>
+#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -18,6 +22,12 @@ std::string lower(std::string s) {
 
 bool endsWith(const std::string& s, const std::string& suffix) {
     return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string trim(const std::string& s) {
+    const auto b = s.find_first_not_of(" \t");
+    if (b == std::string::npos) return "";
+    return s.substr(b, s.find_last_not_of(" \t") - b + 1);
 }
 
 // Applies one key = value pair; the single place both formats go through.
@@ -34,15 +44,181 @@ void apply(LoadedConfig& cfg, const std::string& key, const std::string& value, 
     }
 }
 
+// Bounds the loader adds to Params::validate(): values that are valid but would make one scan run
+// for hours (see configLimits()).
+void checkLimits(const gseg::Params& p) {
+    for (const ConfigLimit& l : configLimits()) {
+        const double v = std::stod(p.get(l.key));
+        if (v < l.min || v > l.max)
+            throw std::invalid_argument("parameter '" + std::string(l.key) + "' = " + p.get(l.key) +
+                                        " is outside what gseg runs in bounded time: " + l.why);
+    }
+}
+
 void finish(LoadedConfig& cfg, const std::string& where) {
     try {
         cfg.params.validate();
+        checkLimits(cfg.params);
     } catch (const std::exception& e) {
         throw std::runtime_error(where + ": " + e.what());
     }
 }
 
+// --- The YAML subset of configuration files ---------------------------------------------------------
+// `key: value` lines, comments, blank lines, an optional `---` first, and either every key at the
+// top level or every key indented under one top-level `gseg:`. Everything else is refused with its
+// line number, before any YAML library sees the text (libfyaml hangs on some `%` directives and
+// accepts unclosed brackets, duplicate keys and text after a NUL byte with a warning on stderr).
+struct YamlEntry {
+    std::string key, value;
+    int line = 0;
+};
+
+bool isKeyChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// Removes a comment (`#` at the start or after a blank, outside quotes) and trailing blanks.
+std::string stripComment(const std::string& line) {
+    char quote = 0;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+        const char c = line[i];
+        if (quote) {
+            if (c == quote) quote = 0;
+        } else if (c == '\'' || c == '"') {
+            quote = c;
+        } else if (c == '#' && (i == 0 || line[i - 1] == ' ' || line[i - 1] == '\t')) {
+            return trim(line.substr(0, i)) == "" ? "" : line.substr(0, line.find_last_not_of(" \t", i - 1) + 1);
+        }
+    }
+    return line.substr(0, line.find_last_not_of(" \t") + 1);
+}
+
+std::string yamlValue(std::string v, const std::string& where) {
+    v = trim(v);
+    if (v.empty()) throw std::runtime_error(where + ": the key has no value");
+    if (v.front() == '\'' || v.front() == '"') {
+        if (v.size() < 2 || v.back() != v.front() || v.find(v.front(), 1) != v.size() - 1)
+            throw std::runtime_error(where + ": unbalanced quotes in " + v);
+        return v.substr(1, v.size() - 2);
+    }
+    if (std::strchr("[]{}&*!|>%@`,?", v.front()) || (v.front() == '-' && (v.size() == 1 || v[1] == ' ')) ||
+        v.find(": ") != std::string::npos)
+        throw std::runtime_error(where + ": '" + v + "' is not a single plain value (gseg reads flat 'key: value' lines)");
+    return v;
+}
+
+std::vector<YamlEntry> parseFlatYaml(const std::string& text, const std::string& path) {
+    std::vector<YamlEntry> entries;
+    std::map<std::string, int> seen;
+    int gsegLine = 0, topLevelLine = 0;  // where `gseg:` and the first top-level parameter are
+    std::size_t indent = 0;              // of the lines under `gseg:` (0: none yet)
+    bool contentSeen = false, ended = false;
+    std::size_t pos = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;  // UTF-8 byte order mark
+    for (int number = 1; pos <= text.size(); ++number) {
+        std::size_t end = text.find('\n', pos);
+        if (end == std::string::npos) end = text.size();
+        std::string raw = text.substr(pos, end - pos);
+        pos = end + 1;
+        if (!raw.empty() && raw.back() == '\r') raw.pop_back();
+        const std::string where = path + ":" + std::to_string(number);
+        const std::string line = stripComment(raw);
+        if (trim(line).empty()) continue;
+        if (ended) throw std::runtime_error(where + ": text after the end of the document ('...')");
+        if (line[0] == '%') throw std::runtime_error(where + ": YAML directives ('%...') are not supported");
+        if (line == "---") {
+            if (contentSeen) throw std::runtime_error(where + ": only one YAML document per file");
+            contentSeen = true;
+            continue;
+        }
+        if (line == "...") {
+            ended = true;
+            continue;
+        }
+        contentSeen = true;
+        const std::size_t lead = line.find_first_not_of(' ');
+        if (line[lead] == '\t') throw std::runtime_error(where + ": tabs are not allowed for indentation");
+        std::size_t k = lead;
+        while (k < line.size() && isKeyChar(line[k])) ++k;
+        if (k == lead || k >= line.size() || line[k] != ':' || (k + 1 < line.size() && line[k + 1] != ' ' && line[k + 1] != '\t'))
+            throw std::runtime_error(where + ": expected 'key: value', found '" + trim(line) + "'");
+        const std::string key = line.substr(lead, k - lead), rest = line.substr(k + 1);
+        if (lead == 0 && key == "gseg" && trim(rest).empty()) {
+            if (gsegLine) throw std::runtime_error(where + ": a second 'gseg:' map");
+            gsegLine = number, indent = 0;
+            continue;
+        }
+        if (lead > 0) {
+            if (!gsegLine || (indent && lead != indent))
+                throw std::runtime_error(where + ": unexpected indentation (only the keys under 'gseg:' are indented, "
+                                                 "all by the same amount)");
+            indent = lead;
+        } else if (!topLevelLine) {
+            topLevelLine = number;
+        }
+        if (auto [it, fresh] = seen.emplace(key, number); !fresh)
+            throw std::runtime_error(where + ": '" + key + "' given twice (also on line " + std::to_string(it->second) + ")");
+        entries.push_back({key, yamlValue(rest, where + ": '" + key + "'"), number});
+    }
+    if (gsegLine && topLevelLine)
+        throw std::runtime_error(path + ":" + std::to_string(topLevelLine) +
+                                 ": a parameter beside the 'gseg:' map (line " + std::to_string(gsegLine) +
+                                 "): put every parameter inside it, or drop 'gseg:'");
+    return entries;
+}
+
+// --- INI ---------------------------------------------------------------------------------------------
+// MRPT's INI preprocessor evaluates `$eval{...}` with exprtk, which has loops, and expands
+// `$env{VAR}` repeatedly: `$eval{var x:=0; while(x<1e12)(x+=1); 1}` or a variable whose value holds
+// `$env{...}` again would run forever. Both are refused before the preprocessor runs.
+void refuseUnboundedIni(const std::string& text, const std::string& path) {
+    int number = 1;
+    for (std::size_t pos = 0; pos < text.size(); ++number) {
+        std::size_t end = text.find('\n', pos);
+        if (end == std::string::npos) end = text.size();
+        const std::string line = text.substr(pos, end - pos);
+        pos = end + 1;
+        const std::string where = path + ":" + std::to_string(number);
+        if (line.find("$eval{") != std::string::npos || line.find("@define") != std::string::npos) {
+            for (std::size_t i = 0; i < line.size();) {
+                if (!std::isalpha(static_cast<unsigned char>(line[i]))) {
+                    ++i;
+                    continue;
+                }
+                std::size_t j = i;
+                while (j < line.size() && isKeyChar(line[j])) ++j;
+                const std::string word = lower(line.substr(i, j - i));
+                if (word == "while" || word == "for" || word == "repeat" || word == "until")
+                    throw std::runtime_error(where + ": '" + word + "' loops are not allowed in $eval{} (a configuration "
+                                                     "must not be able to hang a tool)");
+                i = j;
+            }
+        }
+        for (std::size_t at = line.find("$env{"); at != std::string::npos; at = line.find("$env{", at + 1)) {
+            const std::size_t close = line.find('}', at);
+            if (close == std::string::npos) continue;  // MRPT reports it
+            const char* value = std::getenv(line.substr(at + 5, close - at - 5).c_str());
+            if (value && (std::strstr(value, "$env{") || std::strstr(value, "$eval{")))
+                throw std::runtime_error(where + ": the environment variable " + line.substr(at + 5, close - at - 5) +
+                                         " holds $env{} or $eval{} itself (it would expand forever)");
+        }
+    }
+}
+
 }  // namespace
+
+const std::vector<ConfigLimit>& configLimits() {
+    static const std::vector<ConfigLimit> limits = {
+        {"ransacMaxIterations", 1, 10000,
+         "at most 10000 RANSAC iterations per cell (with minGroundInlierRatio 0 every planar cell runs them all)"},
+        {"distToGround", -100, 100, "a sensor within 100 m of the ground"},
+        {"robotRadius", 0, 100, "a seed disc of at most 100 m"},
+        {"centroidSearchRadius", 0, 100, "expansion radius of at most 100 m (each search may return every cell)"},
+        {"cellSizeX", 0.05, 100, "cells of 0.05 to 100 m across"},
+        {"cellSizeY", 0.05, 100, "cells of 0.05 to 100 m across"},
+        {"minPointsPerCell", 3, 1000000, "at most 10^6 points per cell"},
+        {"minPointsForPca", 3, 1000000, "at most 10^6 points per cell"},
+    };
+    return limits;
+}
 
 LoadedConfig loadConfigFromYaml(const ::mrpt::containers::yaml& root, const std::string& where) {
     LoadedConfig cfg;
@@ -53,7 +229,13 @@ LoadedConfig loadConfigFromYaml(const ::mrpt::containers::yaml& root, const std:
     if (!root.isMap()) throw std::runtime_error(where + ": expected a map of 'key: value' lines");
     const ::mrpt::containers::yaml::map_t* map = &root.asMap();
     const auto nested = map->find(::mrpt::containers::yaml::node_t(std::string("gseg")));
-    if (nested != map->end() && nested->second.isMap()) map = &nested->second.asMap();
+    if (nested != map->end() && nested->second.isMap()) {
+        for (const auto& [k, v] : *map)
+            if (k.as<std::string>() != "gseg")
+                throw std::runtime_error(where + ": '" + k.as<std::string>() +
+                                         "' beside the 'gseg:' map: put every parameter inside it, or drop 'gseg:'");
+        map = &nested->second.asMap();
+    }
     for (const auto& [k, v] : *map) {
         const std::string key = k.as<std::string>();
         if (!v.isScalar()) throw std::runtime_error(where + ": parameter '" + key + "' must be a single value");
@@ -69,7 +251,12 @@ LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const
     std::vector<std::string> keys;
     ini.getAllKeys(section, keys);
     for (const std::string& key : keys) {
-        std::string value = ini.read_string(section, key, "", true);
+        std::string value;
+        try {
+            value = ini.read_string(section, key, "", true);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(where + ": " + key + ": " + errorReason(e));
+        }
         value = value.substr(0, value.find_first_of(";#"));  // inline comment
         value.erase(value.find_last_not_of(" \t") + 1);
         apply(cfg, key, value, where);
@@ -78,26 +265,42 @@ LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const
     return cfg;
 }
 
+LoadedConfig loadConfigFromText(const std::string& text, ConfigFormat format, const std::string& where) {
+    if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
+        throw std::runtime_error(where + ": a NUL byte at offset " + std::to_string(nul) +
+                                 ": not a text configuration file");
+    if (format == ConfigFormat::Yaml) {
+        LoadedConfig cfg;
+        for (const YamlEntry& e : parseFlatYaml(text, where)) apply(cfg, e.key, e.value, where + ":" + std::to_string(e.line));
+        finish(cfg, where);
+        return cfg;
+    }
+    refuseUnboundedIni(text, where);
+    ::mrpt::config::CConfigFileMemory ini;
+    try {
+        ini.setContent(text);
+    } catch (const std::exception& e) {  // the preprocessor's $eval{}, ${} and $env{} errors
+        throw std::runtime_error(where + ": " + errorReason(e));
+    }
+    if (!ini.sectionExists("gseg")) throw std::runtime_error(where + ": no [gseg] section");
+    return loadConfigFromIni(ini, "gseg", where);
+}
+
 LoadedConfig loadConfig(const std::string& path) {
-    if (!std::ifstream(path)) throw std::runtime_error(path + ": cannot open the configuration file");
     const std::string ext = lower(path);
-    if (endsWith(ext, ".yaml") || endsWith(ext, ".yml")) {
-        ::mrpt::containers::yaml doc;
-        try {
-            doc = ::mrpt::containers::yaml::FromFile(path);
-        } catch (const std::exception& e) {
-            std::string what = e.what();
-            what = what.substr(0, what.find('\n'));
-            throw std::runtime_error(path + ": not valid YAML (" + what + ")");
-        }
-        return loadConfigFromYaml(doc, path);
+    ConfigFormat format;
+    if (endsWith(ext, ".yaml") || endsWith(ext, ".yml")) format = ConfigFormat::Yaml;
+    else if (endsWith(ext, ".ini") || endsWith(ext, ".cfg")) format = ConfigFormat::Ini;
+    else throw std::runtime_error(path + ": unknown configuration format (use .yaml/.yml or .ini/.cfg)");
+    std::vector<std::uint8_t> bytes;
+    try {
+        bytes = gseg::io::readFileBytes(path);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(path + ": cannot open the configuration file (" +
+                                 std::string(e.what()).substr(path.size() + 2) + ")");
     }
-    if (endsWith(ext, ".ini") || endsWith(ext, ".cfg")) {
-        const ::mrpt::config::CConfigFile ini(path);
-        if (!ini.sectionExists("gseg")) throw std::runtime_error(path + ": no [gseg] section");
-        return loadConfigFromIni(ini, "gseg", path);
-    }
-    throw std::runtime_error(path + ": unknown configuration format (use .yaml/.yml or .ini/.cfg)");
+    if (bytes.size() > (1u << 20)) throw std::runtime_error(path + ": larger than 1 MiB: not a configuration file");
+    return loadConfigFromText(std::string(bytes.begin(), bytes.end()), format, path);
 }
 
 std::string toYaml(const LoadedConfig& config) {

@@ -1,38 +1,35 @@
+#include <gseg/io/float_cast.hpp>
 #include <gseg/mrpt/ground_filter.hpp>
 #include <gseg/mrpt/observation_points.hpp>
-#include <gseg/sensor_height.hpp>
 
-#include <mrpt/core/initializer.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include <cmath>
 #include <stdexcept>
 
 INTERNAL_IMPLEMENTS_MRPT_OBJECT(GroundFilter, mrpt::rtti::CObject, gseg_filters, "gseg::GroundFilter")
 
-MRPT_INITIALIZER(gseg_register_ground_filter) {
-    mrpt::rtti::registerClass(CLASS_ID_NAMESPACE(GroundFilter, gseg_filters));
-}
+// Registered by an ordinary static object defined after the class id above, so the id is set
+// when this runs (MRPT_INITIALIZER's constructor function ran before it in clang's sanitizer
+// builds: "registerClass invoked with a nullptr classname").
+namespace {
+struct RegisterGroundFilter {
+    RegisterGroundFilter() { mrpt::rtti::registerClass(CLASS_ID_NAMESPACE(GroundFilter, gseg_filters)); }
+} registerGroundFilter;
+}  // namespace
 
 namespace gseg_filters {
 
-using gseg::Params;
 using gseg::PointCloudView;
-using gseg::SensorHeightEstimate;
 namespace gm = gseg::mrpt;
 
 GroundFilter::GroundFilter() : GroundFilter(gm::LoadedConfig()) {}
 
 GroundFilter::GroundFilter(const gm::LoadedConfig& config, OutputFrame frame)
-    : outputFrame(frame), config_(config) {
-    config_.params.validate();
-}
+    : outputFrame(frame), segmenter_(config) {}
 
-void GroundFilter::loadConfig(const std::string& path) {
-    config_ = gm::loadConfig(path);
-    segmenter_.reset();
-    autoSegmenter_.reset();
-}
+void GroundFilter::loadConfig(const std::string& path) { segmenter_ = gm::ScanSegmenter(gm::loadConfig(path)); }
 
 GroundFilter::Output GroundFilter::filter(const ::mrpt::obs::CObservation& obs) {
     ::mrpt::poses::CPose3D sensorPose;
@@ -56,30 +53,32 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     gm::levelPoints(levelled, sensorPose);
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 16);
 
+    const gm::ScanSegmentation seg = segmenter_.segment(cloud, false);
     Output out;
-    if (config_.distToGroundAuto) {
-        // Never refuses a scan: without an estimate, the previous scan's height or the fallback.
-        if (!autoSegmenter_) autoSegmenter_ = std::make_unique<gseg::AutoHeightSegmenter>(config_.params);
-        out.result = autoSegmenter_->segment(cloud, false);
-        out.distToGround = autoSegmenter_->lastDecision().height;
-        out.distToGroundEstimated = autoSegmenter_->lastDecision().source == gseg::HeightDecision::Source::Estimated;
-    } else {
-        if (!segmenter_) segmenter_ = std::make_unique<gseg::GroundSegmenter>(config_.params);
-        out.distToGround = config_.params.distToGround;
-        out.result = segmenter_->segment(cloud, false);
-    }
+    out.result = seg.result;
+    out.distToGround = seg.distToGround;
+    out.distToGroundEstimated = seg.distToGroundEstimated;
+    out.nonFinitePoints = seg.nonFinitePoints;
 
     // The two halves, in the frame asked for.
     const bool vehicle = outputFrame == OutputFrame::Vehicle;
     auto ground = ::mrpt::maps::CPointsMapXYZI::Create(), obstacles = ::mrpt::maps::CPointsMapXYZI::Create();
     ground->reserve(out.result.numGround);
-    obstacles->reserve(out.result.numNonGround);
+    out.reflections = out.result.belowGround.size();
+    obstacles->reserve(out.result.numNonGround - out.nonFinitePoints - out.reflections);
+    std::size_t next = 0;  // into result.belowGround (ascending)
     for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (next < out.result.belowGround.size() && out.result.belowGround[next] == i) {
+            ++next;  // a reflection: labelled 0, kept out
+            continue;
+        }
+        const float* q = cloud.point(i);
+        if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) continue;  // labelled 0, kept out
         const float* p = &sensorXyzi[4 * i];
         double x = p[0], y = p[1], z = p[2];
         if (vehicle) sensorPose.composePoint(p[0], p[1], p[2], x, y, z);
         auto& dst = out.result.labels[i] ? *ground : *obstacles;
-        dst.insertPointFast(float(x), float(y), float(z));
+        dst.insertPointFast(gseg::io::toFloat(x), gseg::io::toFloat(y), gseg::io::toFloat(z));
         dst.setPointIntensity(dst.size() - 1, p[3]);
     }
     auto make = [&](const ::mrpt::maps::CPointsMapXYZI::Ptr& pts, const char* suffix) {

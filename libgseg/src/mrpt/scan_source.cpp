@@ -1,5 +1,6 @@
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/scan_source.hpp>
@@ -25,9 +26,13 @@ Scan fromRawlog(const std::string& path, int index) {
     bool found = false;
     auto consider = [&](std::size_t entry, const ::mrpt::obs::CObservation& obs) {
         if (!isLidarObservation(obs) || seen++ != wanted) return;
-        scan.xyzi = levelledPoints(obs);
         scan.description = "rawlog entry " + std::to_string(entry) + ": " + obs.GetRuntimeClass()->className + " '" +
                            obs.sensorLabel + "'";
+        try {
+            scan.xyzi = levelledPoints(obs);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(path + ": rawlog entry " + std::to_string(entry) + ": " + errorReason(e));
+        }
         found = true;
     };
     forEachRawlogEntry(path, [&](std::size_t entry, const auto& obj) {

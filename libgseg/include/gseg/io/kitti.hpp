@@ -3,6 +3,8 @@
 /// KITTI / SemanticKITTI files: velodyne scans (.bin), point labels (.label) and gseg's own
 /// prediction files (one byte per point).
 
+#include <gseg/io/atomic_file.hpp>  // writeFileAtomic
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -14,15 +16,19 @@ namespace gseg::io {
 /// missing, unreadable, empty, or its size is not a multiple of 16 bytes.
 std::vector<float> readKittiBin(const std::string& path);
 
+/// The same for a scan already in memory; `name` stands for it in messages.
+std::vector<float> parseKittiBin(const std::uint8_t* data, std::size_t size, const std::string& name);
+
 /// Reads a SemanticKITTI .label file (one uint32 per point). If `expectedPoints` is not
 /// SIZE_MAX, throws std::runtime_error if the count differs (the message gives both counts).
 std::vector<std::uint32_t> readKittiLabels(const std::string& path, std::size_t expectedPoints = SIZE_MAX);
 
-/// Writes `bytes` to `path` atomically: to a temporary file beside it, then renamed. Throws
-/// std::runtime_error on failure (and leaves no partial file).
-void writeFileAtomic(const std::string& path, const void* bytes, std::size_t size);
+/// The same for labels already in memory; `name` stands for them in messages.
+std::vector<std::uint32_t> parseKittiLabels(const std::uint8_t* data, std::size_t size, const std::string& name,
+                                            std::size_t expectedPoints = SIZE_MAX);
 
-/// Reads a whole file as bytes; throws std::runtime_error naming the file on failure.
+/// Reads a whole regular file as bytes (memory: the file's size); throws std::runtime_error naming
+/// the file if it is missing, not a regular file (a folder, a pipe, a device) or unreadable.
 std::vector<std::uint8_t> readFileBytes(const std::string& path);
 
 }  // namespace gseg::io

@@ -7,6 +7,7 @@
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/sensor_height.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 
 #include <mrpt/maps/CPointsMap.h>
 #include <mrpt/obs/CObservation.h>
@@ -22,7 +23,7 @@
 namespace gseg_filters {
 
 /// Splits LiDAR observations (CObservationVelodyneScan, CObservationPointCloud,
-/// CObservation3DRangeScan) and point maps into ground and obstacles.
+/// CObservation3DRangeScan, CObservationRotatingScan) and point maps into ground and obstacles.
 ///
 /// Frames: segmentation runs in the levelled sensor frame (the rotation of `sensorPose` applied:
 /// pitch and roll of the mounting are undone, so z is up; origin at the sensor, so distToGround is
@@ -35,14 +36,19 @@ class GroundFilter : public ::mrpt::rtti::CObject {
 public:
     enum class OutputFrame { Sensor, Vehicle };
 
-    /// The two halves of one scan. ground->pointcloud->size() + obstacles->...size() equals the
-    /// input's point count; both keep the input's timestamp, sensorPose (in Sensor frame) and
-    /// intensity, and are labelled "<sensorLabel>_ground" / "<sensorLabel>_obstacles".
+    /// The two halves of one scan. ground->pointcloud->size() + obstacles->...size() +
+    /// nonFinitePoints + reflections equals the input's point count; both keep the input's
+    /// timestamp, sensorPose (in Sensor frame) and intensity, and are labelled
+    /// "<sensorLabel>_ground" / "<sensorLabel>_obstacles". Points with a NaN or infinite coordinate
+    /// (no return) and reflections far below the ground (result.belowGround) are labelled
+    /// non-ground in `result.labels` but kept out of both clouds (no map wants them).
     struct Output {
         ::mrpt::obs::CObservationPointCloud::Ptr ground, obstacles;
         double distToGround = 0;  ///< [m] the sensor height used (estimated if `auto`)
         bool distToGroundEstimated = false;
-        gseg::Result result;      ///< labels, counters and timing of the segmentation
+        std::size_t nonFinitePoints = 0;  ///< input points with a NaN or infinite coordinate
+        std::size_t reflections = 0;      ///< points more than belowGroundMargin below the ground (result.belowGround)
+        gseg::Result result;      ///< labels (one per input point), counters and timing of the segmentation
     };
 
     GroundFilter();
@@ -50,11 +56,12 @@ public:
 
     /// Configuration from a YAML or INI file (see gseg/mrpt/config.hpp); throws on bad keys.
     void loadConfig(const std::string& path);
-    const gseg::mrpt::LoadedConfig& config() const { return config_; }
+    const gseg::mrpt::LoadedConfig& config() const { return segmenter_.config(); }
     OutputFrame outputFrame = OutputFrame::Sensor;
 
     /// Segments one observation. Throws std::invalid_argument for unsupported kinds (a 2D laser
-    /// scan has no ground to find) and for bad points (NaN, inf: the message names the point).
+    /// scan has no ground to find) and malformed observations (e.g. point vectors of different
+    /// lengths), std::runtime_error if `distToGround: auto` finds no ground.
     Output filter(const ::mrpt::obs::CObservation& obs);
 
     /// Segments a point map given in a levelled frame with the sensor at the origin.
@@ -64,9 +71,7 @@ private:
     Output split(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& sensorPose,
                  const ::mrpt::obs::CObservation* source, const std::string& label);
 
-    gseg::mrpt::LoadedConfig config_;
-    std::unique_ptr<gseg::GroundSegmenter> segmenter_;        // fixed distToGround
-    std::unique_ptr<gseg::AutoHeightSegmenter> autoSegmenter_;  // distToGround: auto (keeps the previous scan's height)
+    gseg::mrpt::ScanSegmenter segmenter_;
 };
 
 /// Name under which MRPT's class factory knows GroundFilter.

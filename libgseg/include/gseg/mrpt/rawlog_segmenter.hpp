@@ -1,0 +1,92 @@
+#pragma once
+/// \file rawlog_segmenter.hpp
+/// What rawlog-gseg does to a stream of rawlog entries: every LiDAR scan followed by its
+/// `<label>_ground` and `<label>_obstacles` point clouds, every other entry passed through
+/// unchanged and in order, in both rawlog layouts. One bad scan does not sink the run: a scan that
+/// cannot be segmented is passed through unchanged, named and counted; its non-finite points are
+/// labelled non-ground and counted. A scan that already has its pair (a rawlog-gseg output read
+/// again) is passed through, and a `_ground` / `_obstacles` cloud is never split again.
+
+#include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/ground_filter.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mrpt::serialization {
+class CSerializable;
+}
+
+namespace gseg::mrpt {
+
+/// Options of RawlogSegmenter (rawlog-gseg's command line).
+struct RawlogSegmenterOptions {
+    std::vector<std::string> sensors;  ///< segment only these sensorLabels (empty: every LiDAR observation)
+    bool replace = false;              ///< drop the segmented scans, keep only their two halves
+    gseg::GroundFilter::OutputFrame frame = gseg::GroundFilter::OutputFrame::Sensor;
+};
+
+/// What happened to one scan.
+struct ScanReport {
+    std::size_t entry = 0;     ///< index of the rawlog entry (a sensory frame holds several scans)
+    std::string label;         ///< the scan's sensorLabel
+    std::size_t points = 0;    ///< input points
+    std::size_t ground = 0;    ///< points labelled ground
+    std::size_t nonFinite = 0; ///< points with a NaN or infinite coordinate (labelled non-ground)
+    double distToGround = 0;   ///< [m] sensor height used
+    bool distToGroundEstimated = false;
+    double ms = 0;             ///< segmentation time
+    std::string skipped;       ///< why it could not be segmented ("" if it was)
+};
+
+/// Totals of a run.
+struct RawlogTotals {
+    std::size_t entries = 0;       ///< input entries seen
+    std::size_t scans = 0;         ///< scans segmented
+    std::size_t points = 0, ground = 0, nonFinite = 0;
+    std::size_t alreadySplit = 0;  ///< scans passed through because their pair was already there
+    double ms = 0;                 ///< segmentation time of all scans
+    std::vector<ScanReport> skipped;  ///< scans that could not be segmented (passed through)
+};
+
+/// Turns input entries into output entries. Output order is input order; an observation-layout
+/// scan is held until the next entry shows whether its pair follows, so call finish() at the end.
+class RawlogSegmenter {
+public:
+    using Emit = std::function<void(const ::mrpt::serialization::CSerializable&)>;
+    using OnScan = std::function<void(const ScanReport&)>;
+
+    /// `emit` receives the output entries; `onScan` (optional) each scan's report.
+    RawlogSegmenter(const LoadedConfig& config, RawlogSegmenterOptions options, Emit emit, OnScan onScan = {});
+    ~RawlogSegmenter();
+
+    /// One input entry.
+    void push(std::size_t entry, const std::shared_ptr<::mrpt::serialization::CSerializable>& object);
+    /// Emits what is still held; call once after the last entry.
+    void finish();
+
+    const RawlogTotals& totals() const { return totals_; }
+
+private:
+    struct Pending;
+    bool wanted(const ::mrpt::obs::CObservation& obs) const;
+    /// The entries that replace `obs`: itself (unless replaced) and its two halves, or itself alone.
+    std::vector<std::shared_ptr<::mrpt::obs::CObservation>> process(const std::shared_ptr<::mrpt::obs::CObservation>& obs,
+                                                                    std::size_t entry);
+    void flushPending(const ::mrpt::obs::CObservation* next);
+
+    RawlogSegmenterOptions options_;
+    Emit emit_;
+    OnScan onScan_;
+    gseg::GroundFilter filter_;
+    RawlogTotals totals_;
+    std::unique_ptr<Pending> pending_;
+};
+
+/// True for a `<label>_ground` or `<label>_obstacles` point cloud (a half made by gseg).
+bool isSegmentedHalf(const ::mrpt::obs::CObservation& obs);
+
+}  // namespace gseg::mrpt

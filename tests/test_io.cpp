@@ -1,0 +1,246 @@
+// Readers and writers of the core io/ layer on hostile input: PLY and KITTI from memory, atomic
+// outputs on a full disk, interrupted runs, and outputs that are inputs.
+#include <gseg/io/atomic_file.hpp>
+#include <gseg/io/kitti.hpp>
+#include <gseg/io/ply.hpp>
+#include <support/child.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sys/resource.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "io";
+
+std::vector<float> ply(const std::string& text) {
+    return gseg::io::parsePly(reinterpret_cast<const std::uint8_t*>(text.data()), text.size(), "t.ply");
+}
+
+std::string plyError(const std::string& text) {
+    try {
+        ply(text);
+    } catch (const std::runtime_error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+const std::string kXyz = "property float x\nproperty float y\nproperty float z\n";
+
+fs::path freshDir(const std::string& name) {
+    const fs::path d = kDir / name;
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+}  // namespace
+
+// --- PLY: memory follows what the file can hold ------------------------------------------------
+
+TEST(PlyHostile, VertexCountNearTwoToThe62IsRejectedNotWrapped) {
+    // 2^62 vertices of 12 bytes: the byte count wraps to 0 in 64 bits.
+    const std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 4611686018427387904\n" + kXyz +
+                               "end_header\n" + std::string(24, '\0');
+    EXPECT_NE(plyError(binary).find("truncated PLY"), std::string::npos) << plyError(binary);
+    // In ascii, 4 * 2^62 floats wrap to an empty buffer that the values were written into.
+    const std::string ascii = "ply\nformat ascii 1.0\nelement vertex 4611686018427387904\n" + kXyz + "end_header\n1 2 3\n";
+    EXPECT_NE(plyError(ascii).find("truncated PLY"), std::string::npos) << plyError(ascii);
+}
+
+TEST(PlyHostile, HugeCountInATinyFileFailsBeforeAllocating) {
+    for (const char* count : {"200000000", "1000000000000"}) {
+        const std::string text = std::string("ply\nformat binary_little_endian 1.0\nelement vertex ") + count + "\n" +
+                                 kXyz + "end_header\n" + std::string(12, '\0');
+        const std::string err = plyError(text);
+        // The message states what the file can hold (12 bytes: 1 vertex): nothing was allocated.
+        EXPECT_NE(err.find("hold at most 1"), std::string::npos) << err;
+        const std::string ascii = std::string("ply\nformat ascii 1.0\nelement vertex ") + count + "\n" + kXyz +
+                                  "end_header\n1 2 3\n";
+        EXPECT_NE(plyError(ascii).find("hold at most 1"), std::string::npos) << plyError(ascii);
+    }
+}
+
+TEST(PlyHostile, MalformedHeadersAreRejected) {
+    const struct {
+        std::string text, expect;
+    } cases[] = {
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz + "element vertex 1\n" + kXyz + "end_header\n1 2 3\n4 5 6\n",
+         "second 'element vertex'"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz + "property float x\nend_header\n1 2 3 4\n", "given twice"},
+        {"ply\nformat ascii 1.0\nelement vertex 2e8\n" + kXyz + "end_header\n1 2 3\n", "element count '2e8'"},
+        {"ply\nformat ascii 1.0\nelement vertex -1\n" + kXyz + "end_header\n", "element count '-1'"},
+        {"ply\nformat ascii 1.0\nformat ascii 1.0\nelement vertex 1\n" + kXyz + "end_header\n1 2 3\n", "second PLY format"},
+        {"ply\nformat ascii 1.0\nproperty float x\nelement vertex 1\n" + kXyz + "end_header\n1 2 3\n", "before any element"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\nbogus line\n" + kXyz + "end_header\n1 2 3\n", "unknown PLY header"},
+        {"ply\nformat binary_big_endian 1.0\nelement vertex 1\n" + kXyz + "end_header\n", "unsupported PLY format"},
+        {"ply\nformat ascii 1.0\nelement face 1\nelement vertex 1\n" + kXyz + "end_header\n1 2 3\n", "must come first"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz + "end_header\n1 2 x3\n", "malformed PLY at vertex 0"},
+        {"ply\ncomment " + std::string(5000, 'c') + "\nend_header\n", "longer than 4096"},
+    };
+    for (const auto& c : cases) EXPECT_NE(plyError(c.text).find(c.expect), std::string::npos) << c.text << "\n" << plyError(c.text);
+}
+
+TEST(PlyHostile, ValuesBeyondFloatRangeBecomeInfinityAndPlusSignsParse) {
+    const auto pts = ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+                         "property double z\nend_header\n1e300 -1e300 +1.5\n");
+    ASSERT_EQ(pts.size(), 4u);
+    EXPECT_TRUE(std::isinf(pts[0]) && pts[0] > 0);
+    EXPECT_TRUE(std::isinf(pts[1]) && pts[1] < 0);
+    EXPECT_EQ(pts[2], 1.5f);
+    // Binary doubles too.
+    std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+                      "property double z\nend_header\n";
+    const double v[3] = {1e300, 2.0, -3.0};
+    bin.append(reinterpret_cast<const char*>(v), sizeof v);
+    const auto b = ply(bin);
+    EXPECT_TRUE(std::isinf(b[0]));
+    EXPECT_EQ(b[1], 2.f);
+}
+
+TEST(PlyHostile, ZeroVerticesAndTrailingElementsAreFine) {
+    EXPECT_TRUE(ply("ply\nformat ascii 1.0\nelement vertex 0\n" + kXyz + "end_header\n").empty());
+    const auto pts = ply("ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz +
+                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n1 2 3\n3 0 0 0\n");
+    EXPECT_EQ(pts, (std::vector<float>{1, 2, 3, 0}));
+}
+
+// --- KITTI and files -------------------------------------------------------------------------
+
+TEST(KittiHostile, SizesAndNonRegularFiles) {
+    const std::uint8_t bytes[20] = {};
+    EXPECT_THROW(gseg::io::parseKittiBin(bytes, 20, "x.bin"), std::runtime_error);
+    EXPECT_THROW(gseg::io::parseKittiBin(bytes, 0, "x.bin"), std::runtime_error);
+    EXPECT_EQ(gseg::io::parseKittiBin(bytes, 16, "x.bin").size(), 4u);
+    EXPECT_THROW(gseg::io::parseKittiLabels(bytes, 6, "x.label"), std::runtime_error);
+    EXPECT_THROW(gseg::io::parseKittiLabels(bytes, 8, "x.label", 3), std::runtime_error);
+    const fs::path dir = freshDir("kitti");
+    try {
+        gseg::io::readKittiBin(dir.string());  // a folder
+        ADD_FAILURE() << "a folder was read as a scan";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(gseg::io::readFileBytes("/dev/zero"), std::runtime_error);
+}
+
+// --- Atomic outputs ------------------------------------------------------------------------------
+
+TEST(AtomicFile, CommittedOrNothingAndNoTemporary) {
+    const fs::path dir = freshDir("atomic");
+    const std::string target = (dir / "out.bin").string();
+    {
+        gseg::io::AtomicFile f(target);
+        f.write("abc", 3);
+        EXPECT_EQ(gseg::io::registeredTemporaries().size(), 1u);
+    }  // not committed: nothing
+    EXPECT_FALSE(fs::exists(target));
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+    EXPECT_TRUE(gseg::io::registeredTemporaries().empty());
+    gseg::io::writeFileAtomic(target, "hello", 5);
+    EXPECT_EQ(fs::file_size(target), 5u);
+    EXPECT_THROW(gseg::io::writeFileAtomic((dir / "no" / "such" / "dir").string(), "x", 1), std::runtime_error);
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(AtomicFile, FullDiskIsAnErrorAndLeavesNothing) {
+    // A file-size limit makes write() fail exactly as a full disk does (installTemporaryCleanup
+    // ignores SIGXFSZ so that the failure is reported, not fatal).
+    const fs::path dir = freshDir("full");
+    const std::string target = (dir / "big.bin").string();
+    const auto r = gseg::test::runInChild([&] {
+        gseg::io::installTemporaryCleanup("test");
+        const rlimit lim{8192, 8192};
+        ::setrlimit(RLIMIT_FSIZE, &lim);
+        const std::vector<char> data(100000, 'x');
+        try {
+            gseg::io::writeFileAtomic(target, data.data(), data.size());
+        } catch (const std::runtime_error& e) {
+            return std::string(e.what()).find("write failed after 8192 bytes") != std::string::npos ? 7 : 8;
+        }
+        return 0;
+    });
+    EXPECT_TRUE(r.exited);
+    EXPECT_EQ(r.code, 7);
+    EXPECT_FALSE(fs::exists(target));
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(AtomicFile, InterruptedOrCrashedRunLeavesNoTemporary) {
+    const fs::path dir = freshDir("signals");
+    for (int sig : {SIGTERM, SIGINT, SIGHUP, SIGSEGV, SIGABRT}) {
+        const std::string target = (dir / ("out" + std::to_string(sig))).string();
+        const auto r = gseg::test::runInChild([&] {
+            gseg::io::installTemporaryCleanup("test");
+            gseg::io::setActivity("writing " + target);
+            gseg::io::AtomicFile f(target);
+            f.write("partial", 7);
+            ::raise(sig);
+            return 0;
+        });
+        EXPECT_FALSE(r.exited) << "signal " << sig;
+        EXPECT_EQ(r.signal, sig);
+        EXPECT_FALSE(fs::exists(target));
+    }
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+    // Without the handlers (the state before this helper existed), the temporary stays.
+    const auto r = gseg::test::runInChild([&] {
+        gseg::io::AtomicFile f((dir / "unguarded").string());
+        ::raise(SIGTERM);
+        return 0;
+    });
+    EXPECT_EQ(r.signal, SIGTERM);
+    EXPECT_NE(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(AtomicFile, InheritedIgnoredSigintStaysIgnored) {
+    const fs::path dir = freshDir("ignored");
+    const auto r = gseg::test::runInChild([&] {
+        ::signal(SIGINT, SIG_IGN);  // as for a background job of a non-interactive shell
+        gseg::io::installTemporaryCleanup("test");
+        gseg::io::AtomicFile f((dir / "out").string());
+        ::raise(SIGINT);
+        f.write("done", 4);
+        f.commit();
+        return 3;
+    });
+    EXPECT_TRUE(r.exited);
+    EXPECT_EQ(r.code, 3);
+    EXPECT_TRUE(fs::exists(dir / "out"));
+}
+
+// --- Outputs that are inputs ------------------------------------------------------------------------
+
+TEST(OutputPaths, SameFileByPathHardLinkOrSymlinkIsRefused) {
+    const fs::path dir = freshDir("same");
+    const fs::path in = dir / "scan.bin";
+    std::ofstream(in) << "data";
+    fs::create_hard_link(in, dir / "hard.bin");
+    fs::create_symlink(in, dir / "soft.bin");
+    using gseg::io::NamedPath;
+    const std::vector<NamedPath> inputs = {{"input", in.string()}};
+    for (const fs::path& out : {in, dir / "hard.bin", dir / "soft.bin", dir / "." / "scan.bin"})
+        EXPECT_THROW(gseg::io::checkOutputsAreNotInputs(inputs, {{"--labels-out", out.string()}}), std::invalid_argument)
+            << out;
+    EXPECT_NO_THROW(gseg::io::checkOutputsAreNotInputs(inputs, {{"--labels-out", (dir / "new.labels").string()},
+                                                                {"--ply-out", ""}}));
+    // Two outputs naming one file, existing or not.
+    EXPECT_THROW(gseg::io::checkOutputsAreNotInputs(inputs, {{"--ply-out", (dir / "a.ply").string()},
+                                                             {"--png-out", (dir / "." / "a.ply").string()}}),
+                 std::invalid_argument);
+    try {
+        gseg::io::checkOutputsAreNotInputs(inputs, {{"-o", (dir / "hard.bin").string()}});
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("refusing to overwrite an input"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ""), "hard.bin scan.bin soft.bin");
+}
