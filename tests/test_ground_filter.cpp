@@ -759,3 +759,127 @@ TEST(RawlogGsegHostile, AFileCutInsideASizeFieldIsTruncatedNotAGarbageSize) {
     EXPECT_NE(r.output.find(" bytes of a field): truncated)"), std::string::npos) << r.output;
     EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "o.rawlog"), "");
 }
+
+// --- Batches (#12) ------------------------------------------------------------------------------
+
+namespace {
+
+/// rawlog-gseg batch inputs (#12): three good rawlogs in two folders and a truncated one.
+struct Batch {
+    std::vector<std::string> good;  ///< inputs
+    std::string bad;                ///< the truncated input
+};
+
+Batch makeBatch(const fs::path& dir) {
+    fs::remove_all(dir);
+    fs::create_directories(dir / "a");
+    fs::create_directories(dir / "b");
+    fs::copy_file(kVlp16, dir / "a/test_velodyne_VLP16.rawlog");
+    fs::copy_file(kVlp16, dir / "b/again.rawlog");
+    const std::string plain = (dir / "plain").string(), cut = (dir / "b/cut.rawlog").string();
+    EXPECT_EQ(std::system(("gzip -dc '" + kKfSlam + "' > '" + plain + "' 2>/dev/null || cp '" + kKfSlam + "' '" + plain + "'").c_str()), 0);
+    fs::copy_file(plain, cut);
+    fs::resize_file(cut, fs::file_size(plain) / 2 + 7);
+    return {{(dir / "a/test_velodyne_VLP16.rawlog").string(), kKfSlam, (dir / "b/again.rawlog").string()}, cut};
+}
+
+/// Each output of a batch in `out` is the same bytes as a run on its input alone; the bad input
+/// left nothing behind.
+void expectBatchOutputs(const Batch& batch, const fs::path& out, const fs::path& single) {
+    fs::create_directories(single);
+    for (const std::string& in : batch.good) {
+        const std::string name = fs::path(in).filename().string();
+        const auto alone = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + in + "' -o '" +
+                                                  (single / name).string() + "'");
+        ASSERT_EQ(alone.status, 0) << alone.output;
+        const std::string one = gseg::test::readText((single / name).string());
+        EXPECT_GT(one.size(), 1000u) << name;
+        EXPECT_TRUE(one == gseg::test::readText((out / name).string())) << name << ": batch output differs";
+    }
+    for (const auto& e : fs::directory_iterator(out))
+        EXPECT_EQ(e.path().filename().string().find("cut.rawlog"), std::string::npos) << "left behind: " << e.path();
+}
+
+}  // namespace
+
+TEST(RawlogGseg, ABatchIntoAFolderEqualsOneRunPerInputAndABadInputLosesNothingElse) {
+    if (!fs::exists(kVlp16) || !fs::exists(kKfSlam)) GTEST_SKIP() << "mrpt-common's datasets absent (package mrpt-common)";
+    const fs::path dir = kDir / "batch";
+    const Batch batch = makeBatch(dir);
+    std::string args;
+    for (const std::string& in : {batch.good[0], batch.bad, batch.good[1], batch.good[2]}) args += " -i '" + in + "'";
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "'" + args + " -o '" + (dir / "out").string() + "'");
+    EXPECT_EQ(r.status, 1) << "something failed: " << r.output;
+    EXPECT_NE(r.output.find("rawlog-gseg: " + batch.bad + ": entry "), std::string::npos) << "named: " << r.output;
+    EXPECT_NE(r.output.find("rawlog-gseg: 3 of 4 rawlogs written, failed: " + batch.bad + "\n"), std::string::npos) << r.output;
+    EXPECT_LT(r.output.find("again.rawlog: 1 entries"), r.output.find("3 of 4")) << r.output;
+    expectBatchOutputs(batch, dir / "out", dir / "single");
+}
+
+TEST(RawlogGseg, ABatchThatCannotBeWrittenIsRefusedBeforeAnyWork) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = kDir / "batch_usage";
+    fs::remove_all(dir);
+    fs::create_directories(dir / "x");
+    fs::copy_file(kVlp16, dir / "x/test_velodyne_VLP16.rawlog");
+    const std::string tool = "'" + gseg::test::tool("rawlog-gseg") + "'";
+    auto r = gseg::test::runCommand(tool + " -i '" + kVlp16 + "' -i '" + (dir / "x/test_velodyne_VLP16.rawlog").string() +
+                                    "' -o '" + (dir / "out").string() + "'");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("two inputs named test_velodyne_VLP16.rawlog"), std::string::npos) << r.output;
+    r = gseg::test::runCommand(tool + " -i '" + (dir / "x/test_velodyne_VLP16.rawlog").string() + "' -i '" + kKfSlam +
+                               "' -o '" + (dir / "x").string() + "'");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("is the input"), std::string::npos) << r.output;
+    EXPECT_TRUE(gseg::test::readText((dir / "x/test_velodyne_VLP16.rawlog").string()) == gseg::test::readText(kVlp16));
+    r = gseg::test::runCommand(tool + " -o '" + (dir / "out").string() + "'");
+    EXPECT_EQ(r.status, 2) << r.output;
+    r = gseg::test::runCommand(tool + " --list '" + (dir / "missing.txt").string() + "' -o '" + (dir / "out").string() + "'");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("missing.txt: cannot read the list"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "out")) << "nothing made";
+}
+
+TEST(RawlogGseg, TwoMpiRanksSplitABatchAndWriteWhatOneProcessWrites) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    if (!fs::exists(kVlp16) || !fs::exists(kKfSlam)) GTEST_SKIP() << "mrpt-common's datasets absent (package mrpt-common)";
+    const fs::path dir = kDir / "batch_mpi";
+    const Batch batch = makeBatch(dir);
+    std::ofstream list(dir / "list.txt");
+    list << "# inputs of the batch\n" << batch.good[0] << "\n\n" << batch.bad << "\n  " << batch.good[1] << "  \n" << batch.good[2] << "\n";
+    list.close();
+    const auto r = gseg::test::runCommand(mpirun + "'" + gseg::test::tool("rawlog-gseg") + "' --list '" +
+                                          (dir / "list.txt").string() + "' -o '" + (dir / "out").string() + "'");
+    EXPECT_EQ(r.status, 1) << "something failed: " << r.output;
+    EXPECT_NE(r.output.find("rawlog-gseg: " + batch.bad + ": entry "), std::string::npos) << "named: " << r.output;
+    const std::size_t at = r.output.find("rawlog-gseg: 3 of 4 rawlogs written (inputs per process: ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    int first = 0, second = 0;
+    ASSERT_EQ(std::sscanf(r.output.c_str() + at, "rawlog-gseg: 3 of 4 rawlogs written (inputs per process: %d, %d)", &first, &second), 2);
+    EXPECT_TRUE(first > 0 && second > 0 && first + second == 4) << r.output;
+    expectBatchOutputs(batch, dir / "out", dir / "single");
+}
+
+TEST(RawlogGseg, UnderMpiAScanSkippedOnAnotherRankIsNamedByRankZeroAndExitsThree) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = freshDir("batch_mpi_skip");
+    auto broken = std::make_shared<mrpt::obs::CObservationVelodyneScan>();  // vectors of different lengths
+    broken->sensorLabel = "BROKEN";
+    broken->point_cloud.x.assign(100, 1.f);
+    broken->point_cloud.y.assign(10, 1.f);
+    broken->point_cloud.z.assign(10, 1.f);
+    {
+        gseg::mrpt::RawlogWriter w((dir / "broken.rawlog").string());
+        w.write(*broken);
+        w.commit();
+    }
+    ASSERT_LT(fs::file_size(dir / "broken.rawlog"), fs::file_size(kVlp16)) << "the smaller input goes to rank 1";
+    const auto r = gseg::test::runCommand(mpirun + "'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -i " +
+                                          q(dir / "broken.rawlog") + " -o " + q(dir / "out"));
+    EXPECT_EQ(r.status, 3) << "done, a scan passed through: " << r.output;
+    EXPECT_NE(r.output.find("rawlog-gseg: " + (dir / "broken.rawlog").string() + ": entry 0 ('BROKEN') skipped, passed "
+                            "through unchanged: "), std::string::npos) << "rank 1's skip, named by rank 0: " << r.output;
+    EXPECT_NE(r.output.find("2 of 2 rawlogs written (inputs per process: 1, 1)"), std::string::npos) << r.output;
+    EXPECT_EQ(entryLabels((dir / "out/broken.rawlog").string()), (std::vector<std::string>{"BROKEN"}));
+}

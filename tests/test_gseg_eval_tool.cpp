@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -29,6 +30,32 @@ std::string withoutTimes(const std::string& csv) {
     std::istringstream in(csv);
     std::string out;
     for (std::string line; std::getline(in, line);) out += line.substr(0, line.rfind(',')) + "\n";
+    return out;
+}
+
+// A CSV without its column `name` (timing).
+std::string withoutColumn(const std::string& csv, const std::string& name) {
+    std::istringstream in(csv);
+    std::string out;
+    long skip = -1;
+    for (std::string line; std::getline(in, line);) {
+        std::vector<std::string> cells;
+        std::istringstream cs(line);
+        for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+        if (skip < 0) skip = std::find(cells.begin(), cells.end(), name) - cells.begin();
+        for (long k = 0; k < long(cells.size()); ++k)
+            if (k != skip) out += cells[std::size_t(k)] + ",";
+        out += "\n";
+    }
+    return out;
+}
+
+// A Markdown table without the last cell of each row (ms/scan).
+std::string withoutLastCell(const std::string& markdown) {
+    std::istringstream in(markdown);
+    std::string out;
+    for (std::string line; std::getline(in, line);)
+        out += (line.rfind("| ", 0) == 0 ? line.substr(0, line.rfind(" | ", line.size() - 3)) : line) + "\n";
     return out;
 }
 
@@ -174,4 +201,51 @@ TEST(EvalTool, BreakdownCountsAgreeWithTheScoresAndDrawOnePicturePerFrame) {
         EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
     }
     EXPECT_EQ(fromBreakdown["all/all"].first, allFp);
+}
+
+TEST(EvalTool, TwoMpiRanksWriteTheReportsOfASerialRun) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    const std::string root = gseg::test::sharedData("semantickitti");
+    if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
+    const fs::path dir = kDir / "mpi";
+    fs::remove_all(dir);
+    const std::string args = " eval '" + root + "' --threads 1 --breakdown --report '";
+    auto serial = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "'" + args + (dir / "serial/k").string() + "'");
+    ASSERT_EQ(serial.status, 0) << serial.output;
+    auto ranks = gseg::test::runCommand(mpirun + "'" + gseg::test::tool("gseg") + "'" + args + (dir / "mpi/k").string() + "'");
+    ASSERT_EQ(ranks.status, 0) << ranks.output;
+    // The 7 frames (3 without labels) were split: rank 1 evaluated some of them.
+    EXPECT_NE(ranks.output.find("7 frames split over 2 processes by their points: 4, 3"), std::string::npos) << ranks.output;
+    for (const char* f : {"000003", "000004", "000005"})
+        EXPECT_NE(ranks.output.find(std::string("skipped 00/") + f + ": no label file"), std::string::npos) << ranks.output;
+    EXPECT_NE(ranks.output.find("4 frames evaluated, 3 skipped"), std::string::npos) << ranks.output;
+    auto both = [&](const std::string& name) {
+        return std::make_pair(slurp(dir / "serial" / name), slurp(dir / "mpi" / name));
+    };
+    const auto frames = both("k_frames.csv"), sequences = both("k_sequences.csv"), table = both("k_table.md");
+    EXPECT_EQ(withoutColumn(frames.first, "ms"), withoutColumn(frames.second, "ms"));
+    EXPECT_EQ(withoutColumn(frames.first, "ms").substr(0, 27), "sequence,frame,points,TP,FP") << "the same CSV, ms left out";
+    EXPECT_EQ(std::count(frames.second.begin(), frames.second.end(), '\n'), 5) << frames.second;
+    EXPECT_EQ(withoutColumn(sequences.first, "ms"), withoutColumn(sequences.second, "ms"));
+    EXPECT_EQ(withoutLastCell(table.first), withoutLastCell(table.second));
+    EXPECT_NE(withoutLastCell(table.second).find("| 08 | 1 | 98.19"), std::string::npos) << table.second;
+    for (const char* exact : {"k_breakdown.csv", "k_range.png", "k_breakdown/00_000000.png", "k_breakdown/08_000000.png"}) {
+        const auto [one, two] = both(exact);
+        EXPECT_GT(one.size(), 100u) << exact;
+        EXPECT_TRUE(one == two) << exact << " differs";
+    }
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir / "mpi/k_breakdown"), fs::directory_iterator()), 4)
+        << "one picture per scored frame, drawn by the rank that had it";
+}
+
+TEST(EvalTool, UnderMpiAnErrorIsOneLineFromRankZeroAndOneExitCode) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    const std::string gseg = "'" + gseg::test::tool("gseg") + "'";
+    auto r = gseg::test::runCommand(mpirun + gseg + " eval '" + (kDir / "mpi_missing_root").string() + "' --threads 1");
+    EXPECT_NE(r.status, 0);
+    EXPECT_EQ(r.output.find("gseg eval: "), r.output.rfind("gseg eval: ")) << "printed by one rank only: " << r.output;
+    EXPECT_NE(r.output.find("no sequences/ folder"), std::string::npos) << r.output;
+    r = gseg::test::runCommand(mpirun + gseg + " segment nothing.bin");
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.output.find("gseg segment runs in one process"), std::string::npos) << r.output;
 }

@@ -34,10 +34,12 @@ struct ToolRun {
     std::string out, err;
 };
 
-/// Runs a built tool; `limits` goes before it in bash (e.g. "ulimit -f 64; trap '' XFSZ;").
-ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir, const std::string& limits = "") {
+/// Runs a built tool; `limits` goes before it in bash (e.g. "ulimit -f 64; trap '' XFSZ;"), `launcher`
+/// before the tool (e.g. gseg::test::mpirun()).
+ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir, const std::string& limits = "",
+                const std::string& launcher = "") {
     ToolRun r;
-    const std::string command = limits + " exec " + gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
+    const std::string command = limits + " exec " + launcher + gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
     const int st = std::system(("bash -c \"" + command + "\"").c_str());
     r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);  // a crash is >= 128
     std::ifstream o(dir + "/out.txt"), e(dir + "/err.txt");
@@ -63,6 +65,15 @@ std::vector<std::string> mapFiles(const std::string& prefix) {
     for (const char* s : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png"})
         if (fs::exists(prefix + s)) out.push_back(prefix + s);
     return out;
+}
+
+/// The four map files of two runs are the same bytes.
+void expectSameMaps(const std::string& one, const std::string& two) {
+    for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png"}) {
+        const std::string a = gseg::test::readText(one + f);
+        EXPECT_GT(a.size(), 100u) << one << f;
+        EXPECT_TRUE(a == gseg::test::readText(two + f)) << two << f << " differs from " << one << f;
+    }
 }
 
 /// Vehicle at x = 3k on the road (z = kRoadZ), plus `offset` (e.g. UTM); scans in the sensor frame.
@@ -290,12 +301,8 @@ TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
                                                         "/gseg.yaml --threads " + threads, dir);
         ASSERT_EQ(r.status, 0) << r.err;
     }
-    for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png"}) {
-        const std::string one = gseg::test::readText(dir + "/t0" + f);
-        EXPECT_GT(one.size(), 100u) << f;
-        EXPECT_TRUE(one == gseg::test::readText(dir + "/t1" + f)) << f;
-        EXPECT_TRUE(one == gseg::test::readText(dir + "/t3" + f)) << f;
-    }
+    expectSameMaps(dir + "/t0", dir + "/t1");
+    expectSameMaps(dir + "/t0", dir + "/t3");
     fs::remove_all(dir);
 }
 
@@ -438,6 +445,85 @@ TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
     EXPECT_NE(r.out.find("x faster"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("ray casting"), std::string::npos) << r.out;
     EXPECT_TRUE(fs::exists(dir + "/b_bench_ground.bt") && fs::exists(dir + "/b_bench_plain.bt"));
+    fs::remove_all(dir);
+}
+
+// #12: the other ranks' threads are more workers of rank 0's pipeline; rank 0 alone maps, in order.
+TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    const std::string dir = tempDir("mpi");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
+    const ToolRun one = runTool("rawlog-octomap", args + "/one --threads 1", dir);
+    ASSERT_EQ(one.status, 0) << one.err;
+    // --threads 0: rank 0 reads and maps, rank 1 does every scan's work.
+    const ToolRun remote = runTool("rawlog-octomap", args + "/remote --threads 0", dir, "", mpirun);
+    ASSERT_EQ(remote.status, 0) << remote.err;
+    EXPECT_NE(remote.out.find("scans worked on: 0 on rank 0, 8 on rank 1"), std::string::npos) << remote.out;
+    EXPECT_NE(remote.out.find("(summed over 1 worker thread(s) in 2 processes)"), std::string::npos) << remote.out;
+    expectSameMaps(dir + "/one", dir + "/remote");
+    // --threads 1: both ranks work; whoever is free takes the next scan.
+    const ToolRun both = runTool("rawlog-octomap", args + "/both --threads 1", dir, "", mpirun);
+    ASSERT_EQ(both.status, 0) << both.err;
+    EXPECT_NE(both.out.find("scans worked on: "), std::string::npos) << both.out;
+    expectSameMaps(dir + "/one", dir + "/both");
+    const auto voxels = [](const std::string& out) { return out.substr(out.find("voxels ("), out.find("map memory") - out.find("voxels (")); };
+    EXPECT_EQ(voxels(both.out), voxels(one.out));
+    EXPECT_EQ(messageLines(both.err).size(), 0u) << "progress only, from rank 0: " << both.err;
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, KittiSequence00MapsAreTheSameBytesOnTwoRanks) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    const std::string dir = tempDir("mpi_kitti"), config = std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml";
+    ToolRun r = runTool("kitti2rawlog", fs::path(poses).parent_path().string() + " -o " + dir + "/seq00.rawlog", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string args = "-i " + dir + "/seq00.rawlog -c " + config + " --threads 1 -o " + dir;
+    r = runTool("rawlog-octomap", args + "/one", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = runTool("rawlog-octomap", args + "/two", dir, "", mpirun);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("6 scans (0 from _ground/_obstacles pairs"), std::string::npos) << r.out;
+    expectSameMaps(dir + "/one", dir + "/two");
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, UnderMpiASkippedOrFailingScanOnAnotherRankIsNamedAndNothingHangs) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
+    const std::string dir = tempDir("mpi_bad");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    // A scan without points, worked on by rank 1: skipped and named as in one process, the others mapped.
+    Drive empty;
+    empty.emptyScan = 3;
+    writeDrive(dir + "/empty.rawlog", empty);
+    const std::string args = "-c " + dir + "/gseg.yaml --threads 0 -i " + dir;
+    const ToolRun one = runTool("rawlog-octomap", args + "/empty.rawlog -o " + dir + "/one", dir);
+    const ToolRun two = runTool("rawlog-octomap", args + "/empty.rawlog -o " + dir + "/two", dir, "", mpirun);
+    EXPECT_EQ(one.status, 1);
+    EXPECT_EQ(two.status, 1) << "the exit code says a scan was skipped: " << two.err;
+    EXPECT_NE(two.err.find("skipped scan 3 ('LIDAR' at rawlog entry 7"), std::string::npos) << two.err;
+    EXPECT_NE(two.out.find("scans worked on: 0 on rank 0, 8 on rank 1"), std::string::npos) << two.out;
+    expectSameMaps(dir + "/one", dir + "/two");
+    // Every scan fails on rank 1 (a sensor outside the maps' extent): the first scan's error, one line, no maps.
+    Drive utm;
+    utm.offset = Eigen::Vector3d(500000.0, 5000000.0, 250.0);
+    writeDrive(dir + "/utm.rawlog", utm);
+    const ToolRun bad = runTool("rawlog-octomap", args + "/utm.rawlog -o " + dir + "/m", dir, "", mpirun);
+    EXPECT_EQ(bad.status, 1) << bad.err;
+    const auto lines = messageLines(bad.err);
+    ASSERT_GE(lines.size(), 1u) << bad.err;
+    EXPECT_EQ(lines[0].rfind("rawlog-octomap: scan 0 ('LIDAR' at rawlog entry 1", 0), 0u) << bad.err;
+    EXPECT_NE(lines[0].find("--origin first"), std::string::npos) << bad.err;
+    EXPECT_TRUE(mapFiles(dir + "/m").empty());
+    // A bad argument: every rank refuses alike, exit 2, one message.
+    const ToolRun usage = runTool("rawlog-octomap", args + "/utm.rawlog -o " + dir + "/m --resolution 0", dir, "", mpirun);
+    EXPECT_EQ(usage.status, 2) << usage.err;
+    const std::size_t first = usage.err.find("rawlog-octomap: --resolution needs a number > 0");
+    EXPECT_NE(first, std::string::npos) << usage.err;
+    EXPECT_EQ(first, usage.err.rfind("rawlog-octomap: --resolution")) << "from rank 0 only: " << usage.err;
     fs::remove_all(dir);
 }
 

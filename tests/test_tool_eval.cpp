@@ -121,6 +121,34 @@ TEST(EvalReport, MarkdownTableLikeThePapersTableII) {
     EXPECT_EQ(rows[4], "| **mean** | 2 seq. | **83.75** | **93.75** | **87.50** | 85.00 | 85.00 | 6.5 |");
 }
 
+TEST(EvalReport, RowsSurviveTheBytesBetweenRanksExactly) {
+    // What rank 0 gathers from the others under MPI: every count, the breakdown and the time, bit for bit.
+    std::vector<FrameRow> rows = handMadeFrames();
+    rows[0].ms = 0.1 + 0.2;  // not representable in decimal
+    rows[1].breakdown.falseByClass = {{10, 5}, {50, 7}};
+    rows[1].breakdown.missedByClass = {{72, 123456789012345ull}};
+    rows[1].breakdown.falseByHeight[3] = 4, rows[1].breakdown.falseByRange[4] = 2, rows[1].breakdown.missedByRange[0] = 9;
+    rows[1].breakdown.falseGround = 12, rows[1].breakdown.missedGround = 123456789012345ull, rows[1].breakdown.trueGround = 1;
+    rows[2].score.points = 4, rows[2].score.byRange[9].tn = 99;
+    gseg::tools::ByteWriter out;
+    for (const FrameRow& r : rows) gseg::app::writeRow(out, r);
+    gseg::tools::ByteReader in(out.bytes());
+    std::vector<FrameRow> back;
+    while (!in.done()) back.push_back(gseg::app::readRow(in));
+    ASSERT_EQ(back.size(), rows.size());
+    EXPECT_EQ(back[0].ms, rows[0].ms);
+    EXPECT_EQ(back[1].breakdown.missedByClass, rows[1].breakdown.missedByClass);
+    EXPECT_EQ(back[2].score.byRange[9].tn, 99u);
+    const auto seqs = gseg::app::summarise(rows), seqsBack = gseg::app::summarise(back);
+    EXPECT_EQ(gseg::app::framesCsv(back), gseg::app::framesCsv(rows));
+    EXPECT_EQ(gseg::app::sequencesCsv(seqsBack), gseg::app::sequencesCsv(seqs));
+    EXPECT_EQ(gseg::app::breakdownCsv(back, seqsBack), gseg::app::breakdownCsv(rows, seqs));
+    // A message cut short is an error, not a made-up frame.
+    const std::string cut = out.bytes().substr(0, out.bytes().size() - 3);
+    gseg::tools::ByteReader short_(cut);
+    EXPECT_THROW(for (int i = 0; i < 3; ++i) gseg::app::readRow(short_), std::runtime_error);
+}
+
 TEST(EvalReport, UndefinedFiguresShowAsNotAvailable) {
     FrameRow f;  // nothing predicted ground, no ground: every ratio undefined
     f.sequence = "03", f.name = "000000";

@@ -116,24 +116,60 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
     return out;
 }
 
-/// Frames are handed out one at a time to `threads` workers, each with its own segmenter; the
-/// segmenter is deterministic, so the results equal a serial run's.
-std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const Setup& setup, int threads) {
+/// The frames `todo` (indices into `frames`) are handed out one at a time to `threads` workers,
+/// each with its own segmenter; the segmenter is deterministic, so the results equal a serial run's.
+std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const std::vector<std::size_t>& todo,
+                                     const Setup& setup, int threads) {
     std::vector<FrameResult> results(frames.size());
     std::atomic<std::size_t> next{0};
-    Progress progress("evaluating", frames.size());
+    Progress progress("evaluating", todo.size());
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; ++t)
         pool.emplace_back([&] {
             FrameSegmenter seg(setup);
             bool first = true;
-            for (std::size_t i; (i = next++) < frames.size();) {
+            for (std::size_t k; (k = next++) < todo.size();) {
+                const std::size_t i = todo[k];
                 results[i] = evaluate(seg, frames[i], setup, first);
                 first = first && !results[i].skipped.empty();
                 progress.step();
             }
         });
     for (auto& th : pool) th.join();
+    return results;
+}
+
+/// Under MPI: the frames split over the ranks by their points (the size of the .bin), each rank
+/// evaluating its own with `threads` workers; rank 0 gathers every result, exactly, and returns
+/// them in frame order (the other ranks return nothing). One process: all frames here.
+std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const Setup& setup, int threads,
+                                         tools::Ranks& ranks) {
+    std::vector<std::string> scans;
+    for (const Frame& f : frames) scans.push_back(f.scan);
+    std::vector<int> owner;
+    auto evaluateMine = [&](const std::vector<std::size_t>& mine) {
+        const std::vector<FrameResult> results = evaluateAll(frames, mine, setup, threads);
+        std::vector<std::string> bytes;
+        for (const std::size_t i : mine) {
+            tools::ByteWriter out;
+            writeRow(out, results[i].row);
+            bytes.push_back(out.str(results[i].skipped).str(results[i].heightNote).bytes());
+        }
+        return bytes;
+    };
+    const std::vector<std::string> all = tools::shareItems(ranks, tools::fileSizes(scans), evaluateMine, &owner);
+    std::vector<FrameResult> results(all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        tools::ByteReader in(all[i]);
+        results[i].row = readRow(in);
+        results[i].skipped = in.str(), results[i].heightNote = in.str();
+    }
+    if (ranks.size() > 1 && ranks.root()) {
+        std::string counts;
+        for (int r = 0; r < ranks.size(); ++r)
+            counts += (r ? ", " : "") + std::to_string(std::count(owner.begin(), owner.end(), r));
+        std::printf("%zu frames split over %d processes by their points: %s\n", frames.size(), ranks.size(), counts.c_str());
+    }
     return results;
 }
 
@@ -158,18 +194,26 @@ Setup makeSetup(const Cli& cli) {
     return setup;
 }
 
-int run(const Cli& cli) {
-    const Setup setup = makeSetup(cli);
+int run(const Cli& cli, tools::Ranks& ranks) {
+    Setup setup;
     std::vector<Frame> frames;
-    if (!cli.scan.empty()) {
-        if (cli.labels.empty()) throw std::runtime_error("--scan needs --labels");
-        frames.push_back({"scan", fs::path(cli.scan).stem().string(), cli.scan, cli.labels});
-    } else {
-        frames = findFrames(cli.root, cli.sequences);
+    std::string error;  // every rank finds the frames; any rank's failure stops all alike
+    try {
+        setup = makeSetup(cli);
+        if (!cli.scan.empty()) {
+            if (cli.labels.empty()) throw std::runtime_error("--scan needs --labels");
+            frames.push_back({"scan", fs::path(cli.scan).stem().string(), cli.scan, cli.labels});
+        } else {
+            frames = findFrames(cli.root, cli.sequences);
+        }
+        if (ranks.root() && !cli.predDir.empty()) fs::create_directories(cli.predDir);
+        if (ranks.root() && !setup.pictureDir.empty()) fs::create_directories(setup.pictureDir);
+    } catch (const std::exception& e) {
+        error = e.what();
     }
-    if (!cli.predDir.empty()) fs::create_directories(cli.predDir);
-    if (!setup.pictureDir.empty()) fs::create_directories(setup.pictureDir);
-    const auto results = evaluateAll(frames, setup, cli.threads);
+    if (const std::string first = ranks.firstError(error); !first.empty()) throw std::runtime_error(first);
+    const auto results = evaluateOnRanks(frames, setup, cli.threads, ranks);
+    if (!ranks.root()) return 0;
 
     std::vector<FrameRow> rows;
     std::size_t fallbacks = 0;
@@ -221,13 +265,14 @@ std::vector<std::string> splitCommas(const std::string& s) {
 
 }  // namespace
 
-int runEval(int argc, char** argv) {
+int runEval(int argc, char** argv, tools::Ranks& ranks) {
     Cli cli;
     try {
         TCLAP::CmdLine cmd(
             "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
             "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped. Without "
-            "--config: the library defaults, which are exactly config/kitti_hdl64.yaml.",
+            "--config: the library defaults, which are exactly config/kitti_hdl64.yaml. Under mpirun or srun the frames are "
+            "split over the processes by their points (--threads workers in each) and rank 0 writes the reports.",
             ' ', "0.1");
         TCLAP::UnlabeledValueArg<std::string> root("root", "SemanticKITTI root (sequences/NN/velodyne, labels)", false,
                                                    "", "ROOT", cmd);
@@ -259,7 +304,7 @@ int runEval(int argc, char** argv) {
         return 2;
     }
     try {
-        return run(cli);
+        return run(cli, ranks);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "gseg eval: %s\n", e.what());
         return 1;

@@ -61,6 +61,67 @@ SequenceSummary summariseOne(const std::string& name, const std::vector<const Fr
 
 }  // namespace
 
+namespace {
+
+void writeCounts(tools::ByteWriter& out, const Counts& c) { out.u64(c.tp).u64(c.fp).u64(c.fn).u64(c.tn); }
+Counts readCounts(tools::ByteReader& in) {
+    Counts c;
+    c.tp = in.u64(), c.fp = in.u64(), c.fn = in.u64(), c.tn = in.u64();
+    return c;
+}
+
+void writeClasses(tools::ByteWriter& out, const std::map<std::uint32_t, std::uint64_t>& m) {
+    out.u64(m.size());
+    for (const auto& [id, n] : m) out.u64(id).u64(n);
+}
+std::map<std::uint32_t, std::uint64_t> readClasses(tools::ByteReader& in) {
+    std::map<std::uint32_t, std::uint64_t> m;
+    for (std::uint64_t k = in.u64(); k > 0; --k) {
+        const auto id = std::uint32_t(in.u64());
+        m[id] = in.u64();
+    }
+    return m;
+}
+
+template <std::size_t N>
+void writeBins(tools::ByteWriter& out, const std::array<std::uint64_t, N>& a) {
+    for (const std::uint64_t v : a) out.u64(v);
+}
+template <std::size_t N>
+void readBins(tools::ByteReader& in, std::array<std::uint64_t, N>& a) {
+    for (std::uint64_t& v : a) v = in.u64();
+}
+
+}  // namespace
+
+void writeRow(tools::ByteWriter& out, const FrameRow& row) {
+    out.str(row.sequence).str(row.name).u64(row.points).f64(row.ms);
+    const FrameScore& s = row.score;
+    out.u64(s.points);
+    writeCounts(out, s.withVegetation), writeCounts(out, s.withoutVegetation);
+    for (const Counts& c : s.byRange) writeCounts(out, c);
+    const Breakdown& b = row.breakdown;
+    writeClasses(out, b.falseByClass), writeClasses(out, b.missedByClass);
+    writeBins(out, b.falseByHeight), writeBins(out, b.falseByRange), writeBins(out, b.missedByRange);
+    out.u64(b.falseGround).u64(b.missedGround).u64(b.trueGround);
+}
+
+FrameRow readRow(tools::ByteReader& in) {
+    FrameRow row;
+    row.sequence = in.str(), row.name = in.str();
+    row.points = std::size_t(in.u64());
+    row.ms = in.f64();
+    FrameScore& s = row.score;
+    s.points = std::size_t(in.u64());
+    s.withVegetation = readCounts(in), s.withoutVegetation = readCounts(in);
+    for (Counts& c : s.byRange) c = readCounts(in);
+    Breakdown& b = row.breakdown;
+    b.falseByClass = readClasses(in), b.missedByClass = readClasses(in);
+    readBins(in, b.falseByHeight), readBins(in, b.falseByRange), readBins(in, b.missedByRange);
+    b.falseGround = in.u64(), b.missedGround = in.u64(), b.trueGround = in.u64();
+    return row;
+}
+
 std::vector<SequenceSummary> summarise(const std::vector<FrameRow>& frames) {
     std::map<std::string, std::vector<const FrameRow*>> bySeq;
     for (const FrameRow& f : frames) bySeq[f.sequence].push_back(&f);

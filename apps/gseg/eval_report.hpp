@@ -3,6 +3,8 @@
 /// `gseg eval`: aggregation of scored frames per sequence and the report texts (CSV, Markdown,
 /// printed summary). Core-only (no MRPT), so the tests compile it with hand-made scores.
 
+#include "common/bytes.hpp"
+
 #include <gseg/breakdown.hpp>
 #include <gseg/metrics.hpp>
 
@@ -22,6 +24,11 @@ struct FrameRow {
     double ms = 0;         ///< [ms] time of the segment() call
     Breakdown breakdown;   ///< where the errors are (filled with --breakdown)
 };
+
+/// A scored frame as bytes and back, exactly (the reports of a run spread over MPI ranks equal a
+/// serial run's). readRow() throws std::runtime_error on a short message.
+void writeRow(tools::ByteWriter& out, const FrameRow& row);
+FrameRow readRow(tools::ByteReader& in);
 
 /// One sequence. Precision / recall / F1 are in %, averaged over frames as GSB does (per-frame
 /// ratios, then their mean; frames where a ratio is undefined are left out of that mean).

@@ -11,14 +11,15 @@ namespace {
 
 struct Command {
     const char* name;
-    int (*run)(int, char**);
+    int (*run)(int, char**);                       ///< runs in one process
+    int (*runOnRanks)(int, char**, gseg::tools::Ranks&);  ///< spreads its work over MPI ranks
     const char* summary;
 };
 
 const Command kCommands[] = {
-    {"segment", gseg::app::runSegment, "label one scan (KITTI .bin, PLY or rawlog) as ground / non-ground"},
-    {"eval", gseg::app::runEval, "precision / recall on SemanticKITTI (Ground Segmentation Benchmark protocol)"},
-    {"bench", gseg::app::runBench, "time the segmentation per scan, phase and step"},
+    {"segment", gseg::app::runSegment, nullptr, "label one scan (KITTI .bin, PLY or rawlog) as ground / non-ground"},
+    {"eval", nullptr, gseg::app::runEval, "precision / recall on SemanticKITTI (Ground Segmentation Benchmark protocol)"},
+    {"bench", gseg::app::runBench, nullptr, "time the segmentation per scan, phase and step"},
 };
 
 void usage(std::FILE* out) {
@@ -26,9 +27,7 @@ void usage(std::FILE* out) {
     for (const Command& c : kCommands) std::fprintf(out, "  %-9s %s\n", c.name, c.summary);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int runCommand(int argc, char** argv, gseg::tools::Ranks& ranks) {
     if (argc < 2) {
         usage(stderr);
         return 2;
@@ -44,9 +43,20 @@ int main(int argc, char** argv) {
             argv[1] = name.data();
             // An interrupted or crashed run removes its temporary outputs (every sub-command).
             gseg::io::installTemporaryCleanup(name);
-            return c.run(argc - 1, argv + 1);
+            if (c.runOnRanks) return c.runOnRanks(argc - 1, argv + 1, ranks);
+            if (ranks.size() == 1) return c.run(argc - 1, argv + 1);
+            std::fprintf(stderr, "gseg %s runs in one process (only eval is spread over MPI ranks): start it without mpirun\n",
+                         c.name);
+            return 2;
         }
     std::fprintf(stderr, "gseg: unknown command '%s'\n", cmd.c_str());
     usage(stderr);
     return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    gseg::tools::Ranks ranks(argc, argv);
+    return ranks.exitCode(runCommand(argc, argv, ranks));
 }

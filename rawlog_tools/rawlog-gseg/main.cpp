@@ -7,6 +7,14 @@
 // be segmented is passed through and named, and the exit code is then 3. The output is written
 // through a temporary file (every write checked) and renamed only when complete; an interrupted or
 // crashed run removes the temporary.
+//
+// A batch (#12): several inputs (-i repeated, or --list FILE) into a folder (-o DIR), one output
+// per input under its file name. Each input is done by segmentFile(), exactly as a run on it
+// alone; a failing input is named, leaves no output, and the others go on (exit 1). Under
+// mpirun/srun the inputs are split over the ranks by size, and rank 0 reports on all of them.
+#include "common/bytes.hpp"
+#include "common/ranks.hpp"
+
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
@@ -18,12 +26,19 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
 #include <unistd.h>
+
+namespace fs = std::filesystem;
 
 namespace {
 
 struct Cli {
-    std::string in, out, config, frame = "sensor";
+    std::vector<std::string> inputs;  ///< -i, repeatable
+    std::string list;                 ///< --list: a file with one input rawlog a line
+    std::string out, config, frame = "sensor";
     std::vector<std::string> sensors;
     bool replace = false;
 };
@@ -33,29 +48,46 @@ enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2, kScansSkipped = 3 };
 
 class Reporter {
 public:
-    Reporter() : tty_(::isatty(::fileno(stderr)) != 0) {}
+    /// `name`: the input, shown in the lines of a batch ("" for one input); the skipped scans'
+    /// lines are also kept in `skipped` (for rank 0 to print those of other ranks).
+    Reporter(const std::string& name, std::vector<std::string>& skipped)
+        : tty_(::isatty(::fileno(stderr)) != 0), name_(name.empty() ? "" : name + ": "), skipped_(skipped) {}
 
     void operator()(const gseg::mrpt::ScanReport& r) {
         if (!r.skipped.empty()) {
-            std::fprintf(stderr, "%srawlog-gseg: entry %zu ('%s') skipped, passed through unchanged: %s\n",
-                         tty_ ? "\n" : "", r.entry, r.label.c_str(), r.skipped.c_str());
+            char line[200];
+            std::snprintf(line, sizeof line, "entry %zu ('%s') skipped, passed through unchanged: ", r.entry, r.label.c_str());
+            skipped_.push_back(name_ + line + r.skipped);
+            std::fprintf(stderr, "%srawlog-gseg: %s\n", tty_ ? "\n" : "", skipped_.back().c_str());
             return;
         }
         ++scans_;
         if (tty_)
-            std::fprintf(stderr, "\rrawlog-gseg: entry %zu, %zu scans segmented (last: %zu points, %.1f %% ground%s)   ",
-                         r.entry, scans_, r.points, 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points)),
+            std::fprintf(stderr, "\rrawlog-gseg: %sentry %zu, %zu scans segmented (last: %zu points, %.1f %% ground%s)   ",
+                         name_.c_str(), r.entry, scans_, r.points, 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points)),
                          r.distToGroundEstimated ? (", height " + std::to_string(r.distToGround).substr(0, 5) + " m").c_str() : "");
         else if (scans_ % 100 == 1)
-            std::fprintf(stderr, "rawlog-gseg: entry %zu, %zu scans segmented\n", r.entry, scans_);
+            std::fprintf(stderr, "rawlog-gseg: %sentry %zu, %zu scans segmented\n", name_.c_str(), r.entry, scans_);
     }
 
 private:
     bool tty_;
+    std::string name_;
+    std::vector<std::string>& skipped_;
     std::size_t scans_ = 0;
 };
 
-int run(const Cli& cli) {
+/// What one input gave.
+struct FileResult {
+    int code = kDone;                  ///< kDone, kScansSkipped, or kBadInput (nothing written)
+    std::string message;               ///< the summary, or why it failed
+    std::vector<std::string> skipped;  ///< the lines naming the scans passed through unsegmented
+};
+
+/// Segments the rawlog `in` into `outPath`: what rawlog-gseg does to one input, whole. `name`: the
+/// input in the progress lines of a batch ("" for one input). Throws naming the entry on a bad
+/// input, leaving nothing at `outPath`.
+FileResult segmentFile(const Cli& cli, const std::string& in, const std::string& outPath, const std::string& name) {
     gseg::mrpt::LoadedConfig config;
     if (!cli.config.empty()) config = gseg::mrpt::loadConfig(cli.config);
     gseg::mrpt::RawlogSegmenterOptions options;
@@ -63,10 +95,11 @@ int run(const Cli& cli) {
     options.replace = cli.replace;
     options.frame = cli.frame == "vehicle" ? gseg::GroundFilter::OutputFrame::Vehicle : gseg::GroundFilter::OutputFrame::Sensor;
 
-    gseg::mrpt::RawlogWriter writer(cli.out);
+    FileResult result;
+    gseg::mrpt::RawlogWriter writer(outPath);
     gseg::mrpt::RawlogSegmenter segmenter(
-        config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); }, Reporter());
-    gseg::mrpt::forEachRawlogEntry(cli.in, [&](std::size_t entry, const auto& obj) {
+        config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); }, Reporter(name, result.skipped));
+    gseg::mrpt::forEachRawlogEntry(in, [&](std::size_t entry, const auto& obj) {
         segmenter.push(entry, obj);
         return true;
     });
@@ -75,27 +108,150 @@ int run(const Cli& cli) {
 
     const gseg::mrpt::RawlogTotals& t = segmenter.totals();
     if (::isatty(::fileno(stderr))) std::fprintf(stderr, "\n");
-    std::printf("rawlog-gseg: %zu entries, %zu scans segmented, %zu points, %.1f %% ground, %.2f ms per scan",
-                t.entries, t.scans, t.points, 100.0 * double(t.ground) / double(std::max<std::size_t>(1, t.points)),
-                t.scans ? t.ms / double(t.scans) : 0.0);
-    if (t.nonFinite) std::printf(", %zu non-finite points labelled non-ground", t.nonFinite);
-    if (t.alreadySplit) std::printf(", %zu already split (passed through)", t.alreadySplit);
-    if (!t.skipped.empty()) std::printf(", %zu skipped (passed through, named above)", t.skipped.size());
-    std::printf("; wrote %s\n", cli.out.c_str());
-    return t.skipped.empty() ? kDone : kScansSkipped;
+    char text[300];
+    std::snprintf(text, sizeof text, "%zu entries, %zu scans segmented, %zu points, %.1f %% ground, %.2f ms per scan",
+                  t.entries, t.scans, t.points, 100.0 * double(t.ground) / double(std::max<std::size_t>(1, t.points)),
+                  t.scans ? t.ms / double(t.scans) : 0.0);
+    result.message = text;
+    if (t.nonFinite) result.message += ", " + std::to_string(t.nonFinite) + " non-finite points labelled non-ground";
+    if (t.alreadySplit) result.message += ", " + std::to_string(t.alreadySplit) + " already split (passed through)";
+    if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";
+    result.message += "; wrote " + outPath;
+    result.code = t.skipped.empty() ? kDone : kScansSkipped;
+    return result;
 }
 
-}  // namespace
+/// The inputs (-i, then --list) and their outputs: `-o` itself for one input given with -i (and
+/// -o not a folder), else DIR/<input file name>. Throws std::invalid_argument on a run that cannot
+/// be written (two inputs with one name, an output that is an input), std::runtime_error on an
+/// unreadable list.
+std::vector<std::pair<std::string, std::string>> plan(const Cli& cli, bool& batch) {
+    std::vector<std::string> inputs = cli.inputs;
+    if (!cli.list.empty()) {
+        std::ifstream list(cli.list);
+        if (!list) throw std::runtime_error(cli.list + ": cannot read the list of rawlogs");
+        for (std::string line; std::getline(list, line);) {
+            line.erase(0, line.find_first_not_of(" \t"));
+            line.erase(line.find_last_not_of(" \t\r") + 1);
+            if (!line.empty() && line[0] != '#') inputs.push_back(line);
+        }
+    }
+    if (inputs.empty()) throw std::invalid_argument("no input: give -i IN (repeatable) or --list FILE");
+    batch = inputs.size() > 1 || !cli.list.empty() || fs::is_directory(cli.out);
+    std::vector<std::pair<std::string, std::string>> jobs;
+    std::vector<gseg::io::NamedPath> ins = {{"--config", cli.config}, {"--list", cli.list}}, outs;
+    std::set<std::string> names;
+    for (const std::string& in : inputs) {
+        const std::string name = fs::path(in).filename().string();
+        if (batch && !names.insert(name).second)
+            throw std::invalid_argument("two inputs named " + name + ": their outputs in " + cli.out + " would collide");
+        jobs.emplace_back(in, batch ? (fs::path(cli.out) / name).string() : cli.out);
+        ins.push_back({"input", in}), outs.push_back({"-o", jobs.back().second});
+    }
+    gseg::io::checkOutputsAreNotInputs(ins, outs);
+    return jobs;
+}
 
-int main(int argc, char** argv) {
+/// Rank 0 prints every input's result in input order (and the skipped scans of inputs other
+/// ranks did: its own were printed as they came). Returns the exit code: 1 if an input failed,
+/// else 3 if scans were skipped, else 0. `owner`: the rank of each input.
+int report(const std::vector<std::pair<std::string, std::string>>& jobs, const std::vector<FileResult>& results, bool batch,
+           const std::vector<int>& owner, int processes) {
+    std::vector<std::string> failed;
+    int code = kDone;
+    for (std::size_t i = 0; i < jobs.size(); ++i) {
+        const std::string& in = jobs[i].first;
+        const std::string what = batch ? in + ": " : "";
+        if (owner[i] != 0)
+            for (const std::string& line : results[i].skipped) std::fprintf(stderr, "rawlog-gseg: %s\n", line.c_str());
+        if (results[i].code == kBadInput) {
+            const bool named = results[i].message.rfind(in, 0) == 0;  // reader errors start with the file
+            std::fprintf(stderr, "%srawlog-gseg: %s%s\n", !batch && ::isatty(::fileno(stderr)) ? "\n" : "",
+                         named ? "" : what.c_str(), results[i].message.c_str());
+            failed.push_back(in);
+        } else {
+            std::printf("rawlog-gseg: %s%s\n", what.c_str(), results[i].message.c_str());
+            code = std::max(code, results[i].code);
+        }
+    }
+    if (batch) {
+        std::string names, split;
+        for (const std::string& f : failed) names += (names.empty() ? ": " : ", ") + f;
+        for (int r = 0; r < processes && processes > 1; ++r)
+            split += (r ? ", " : " (inputs per process: ") + std::to_string(std::count(owner.begin(), owner.end(), r));
+        std::printf("rawlog-gseg: %zu of %zu rawlogs written%s%s%s\n", jobs.size() - failed.size(), jobs.size(),
+                    split.empty() ? "" : (split + ")").c_str(), failed.empty() ? "" : ", failed", names.c_str());
+    }
+    std::fflush(stdout);
+    return failed.empty() ? code : kBadInput;
+}
+
+/// One rank's part: its inputs (split by size), then rank 0 gathers and reports. The exit code.
+int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
+    std::vector<std::pair<std::string, std::string>> jobs;
+    bool batch = false;
+    std::string error;
+    int code = kDone;
+    try {
+        if (cli.frame != "sensor" && cli.frame != "vehicle") throw std::invalid_argument("--frame must be sensor or vehicle");
+        jobs = plan(cli, batch);
+        if (!cli.config.empty()) gseg::mrpt::loadConfig(cli.config);  // a bad config fails once, not per input
+        if (batch && ranks.root()) fs::create_directories(cli.out);
+    } catch (const std::invalid_argument& e) {
+        error = e.what(), code = kBadUsage;
+    } catch (const std::exception& e) {
+        error = gseg::mrpt::errorReason(e), code = kBadInput;
+    }
+    if (const std::string first = ranks.firstError(error); !first.empty()) {
+        std::fprintf(stderr, "rawlog-gseg: %s\n", first.c_str());
+        return code ? code : kBadInput;
+    }
+    std::vector<std::string> inputs;
+    for (const auto& job : jobs) inputs.push_back(job.first);
+    auto segmentMine = [&](const std::vector<std::size_t>& mine) {
+        std::vector<std::string> done;
+        for (const std::size_t i : mine) {
+            FileResult r;
+            try {
+                r = segmentFile(cli, jobs[i].first, jobs[i].second, batch ? jobs[i].first : "");
+            } catch (const std::exception& e) {
+                r.code = kBadInput, r.message = gseg::mrpt::errorReason(e);
+            }
+            gseg::tools::ByteWriter out;
+            out.u64(std::uint64_t(r.code)).str(r.message).u64(r.skipped.size());
+            for (const std::string& line : r.skipped) out.str(line);
+            done.push_back(out.bytes());
+        }
+        return done;
+    };
+    std::vector<int> owner;
+    const std::vector<std::string> all = gseg::tools::shareItems(ranks, gseg::tools::fileSizes(inputs), segmentMine, &owner);
+    std::vector<FileResult> results;
+    for (const std::string& one : all) {
+        gseg::tools::ByteReader in(one);
+        FileResult& r = results.emplace_back();
+        r.code = int(in.u64()), r.message = in.str();
+        for (std::uint64_t n = in.u64(); n > 0; --n) r.skipped.push_back(in.str());
+    }
+    return ranks.root() ? report(jobs, results, batch, owner, ranks.size()) : kDone;
+}
+
+int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     Cli cli;
     try {
         TCLAP::CmdLine cmd("Split every LiDAR scan of a rawlog into <label>_ground and <label>_obstacles point clouds "
-                           "with GSeg3D. Exit code: 0 done, 1 bad input (nothing written), 2 bad usage, 3 done but "
-                           "some scans could not be segmented (passed through unchanged and named on stderr).",
+                           "with GSeg3D. Several inputs (-i repeated, or --list) go into the folder -o DIR under their "
+                           "file names, each as a run on it alone; a failing input is named and leaves no output, the "
+                           "others are written. Under mpirun or srun the inputs are split over the processes. Exit code: "
+                           "0 done, 1 bad input (nothing written for it), 2 bad usage, 3 done but some scans could not "
+                           "be segmented (passed through unchanged and named on stderr).",
                            ' ', "0.1");
-        TCLAP::ValueArg<std::string> in("i", "input", "input rawlog (plain or gzip, either layout)", true, "", "IN", cmd);
-        TCLAP::ValueArg<std::string> outArg("o", "output", "output rawlog (gzip)", true, "", "OUT", cmd);
+        TCLAP::MultiArg<std::string> in("i", "input", "input rawlog (plain or gzip, either layout); repeatable", false,
+                                        "IN", cmd);
+        TCLAP::ValueArg<std::string> list("", "list", "a file listing input rawlogs, one a line (# comments)", false, "",
+                                          "FILE", cmd);
+        TCLAP::ValueArg<std::string> outArg("o", "output", "output rawlog (gzip); with several inputs or --list, the "
+                                            "folder for them (made if missing)", true, "", "OUT|DIR", cmd);
         TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameters (distToGround: auto allowed)", false,
                                          "", "FILE", cmd);
         TCLAP::SwitchArg replace("", "replace", "drop the original scans (default: keep them)", cmd);
@@ -109,22 +265,24 @@ int main(int argc, char** argv) {
                     return kDone;
             return kBadUsage;
         }
-        cli = {in.getValue(), outArg.getValue(), cfg.getValue(), frame.getValue(), sensor.getValue(), replace.getValue()};
-        if (cli.frame != "sensor" && cli.frame != "vehicle") throw std::invalid_argument("--frame must be sensor or vehicle");
-        gseg::io::checkOutputsAreNotInputs({{"input", cli.in}, {"--config", cli.config}}, {{"-o", cli.out}});
+        cli = {in.getValue(), list.getValue(), outArg.getValue(), cfg.getValue(), frame.getValue(), sensor.getValue(),
+               replace.getValue()};
     } catch (const TCLAP::ArgException& e) {
         std::fprintf(stderr, "rawlog-gseg: %s (%s)\n", e.error().c_str(), e.argId().c_str());
-        return kBadUsage;
-    } catch (const std::invalid_argument& e) {
-        std::fprintf(stderr, "rawlog-gseg: %s\n", e.what());
         return kBadUsage;
     }
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
-        return run(cli);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "%srawlog-gseg: %s\n", ::isatty(::fileno(stderr)) ? "\n" : "",
-                     gseg::mrpt::errorReason(e).c_str());
+        return runBatch(cli, ranks);
+    } catch (const std::exception& e) {  // not an input's failure (those are reported per input)
+        std::fprintf(stderr, "rawlog-gseg: %s\n", gseg::mrpt::errorReason(e).c_str());
         return kBadInput;
     }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    gseg::tools::Ranks ranks(argc, argv);
+    return ranks.exitCode(run(argc, argv, ranks));
 }

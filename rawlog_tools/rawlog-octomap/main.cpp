@@ -5,8 +5,11 @@
 // by rawlog-gseg as it is), put it into the world frame and ray-cast it into a ScanUpdate, and one
 // thread applies the updates to the maps strictly in scan order (gseg::map::runOrdered), so the
 // maps do not depend on the number of threads. At most a few scans are in memory at a time.
+// Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline
+// (remote_workers.hpp): the maps are the same bytes as one process's.
 
 #include "rawlog_octomap.hpp"
+#include "remote_workers.hpp"
 
 #include <gseg/map/ordered_pipeline.hpp>
 #include <gseg/map/output_files.hpp>
@@ -37,6 +40,7 @@ const char* kUsage =
     "  --origin first  subtract the first sensor position (whole metres) from every position: for poses in\n"
     "                  UTM or other large coordinates (the maps span +-32768 voxels); or --origin X,Y,Z\n"
     "  --threads N     worker threads for segmentation and ray casting (default: one per core; 0: none)\n"
+    "                  in each process; under mpirun/srun rank 0 reads and maps, every rank's threads work\n"
     "  --bench N       time plain OctoMap (insertPointCloud, discretized) and rawlog-octomap alternately,\n"
     "                  N rounds each, on the same rawlog; maps go to PREFIX_bench*\n";
 
@@ -86,8 +90,8 @@ Cli parseCli(int argc, char** argv) {
         else if (a == "--threads") c.threads = parseCount(a, value(), 256);
         else if (a == "--bench") c.benchRounds = int(std::max(1u, parseCount(a, value(), 100)));
         else if (a == "-h" || a == "--help") {
-            std::cout << kUsage;
-            std::exit(0);
+            c.help = true;
+            return c;
         } else throw std::invalid_argument("unexpected argument '" + a + "'");
     }
     if (c.input.empty() || c.prefix.empty()) throw std::invalid_argument("needs -i IN.rawlog and -o PREFIX");
@@ -106,7 +110,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void printReport(const RunReport& r, double resolution, unsigned threads) {
+void printReport(const RunReport& r, double resolution) {
     const gseg::map::MapStats& s = r.stats;
     const double cellArea = resolution * resolution;
     std::printf("rawlog-octomap: %zu scans (%zu from _ground/_obstacles pairs, %zu raw scans not segmented again, %zu "
@@ -129,18 +133,27 @@ void printReport(const RunReport& r, double resolution, unsigned threads) {
                 s.cellsTraversable, double(s.cellsTraversable) * cellArea, s.cellsObstacle,
                 double(s.cellsObstacle) * cellArea, s.cellsUnknown);
     const PhaseTimes& t = r.times;
-    const std::string where = threads ? "summed over " + std::to_string(threads) + " worker thread(s)" : "one thread";
+    const std::size_t processes = r.scansByProcess.size();
+    std::string where = r.workers ? "summed over " + std::to_string(r.workers) + " worker thread(s)" : "one thread";
+    if (processes > 1) where += " in " + std::to_string(processes) + " processes";
     std::printf("time [s]: read %.2f, segmentation %.2f, transform %.2f, ray casting %.2f (%s), map update %.2f, "
                 "writing %.2f; wall %.2f, %.1f scans/s\n",
                 t.read, t.segmentation, t.transform, t.rayCasting, where.c_str(), t.mapUpdate, t.writing, r.wallSeconds,
                 r.wallSeconds > 0 ? double(s.scans) / r.wallSeconds : 0.0);
-    std::printf("peak memory: %.0f MB while integrating, %.0f MB with writing\n", r.peakMbBeforeWriting, r.peakMb);
+    std::printf("peak memory: %.0f MB while integrating, %.0f MB with writing%s\n", r.peakMbBeforeWriting, r.peakMb,
+                processes > 1 ? " (rank 0)" : "");
+    if (processes > 1) {
+        std::string split;
+        for (std::size_t p = 0; p < processes; ++p)
+            split += (p ? ", " : "") + std::to_string(r.scansByProcess[p]) + " on rank " + std::to_string(p);
+        std::printf("scans worked on: %s\n", split.c_str());
+    }
     for (const auto& p : r.written) std::printf("wrote %s\n", p.c_str());
 }
 
 }  // namespace
 
-RunReport buildMaps(const Cli& cli, bool quiet) {
+RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     const auto start = std::chrono::steady_clock::now();
     // Fail early: every output can be written and none is an input, before any work.
     gseg::map::checkOutputs(gseg::map::TraversabilityMap::outputPaths(cli.prefix),
@@ -151,10 +164,17 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
     gseg::map::TraversabilityMap map(cli.options);
     std::vector<ScanWorker> workers;  // one per thread: each has its own segmenter
     for (unsigned i = 0; i < std::max(1u, cli.threads); ++i) workers.emplace_back(cfg, cli.options);
+    const unsigned local = cli.threads, remoteWorkers = remote ? remote->count() : 0;
     gseg::map::Progress progress(stderr, "rawlog-octomap", "scans");
     RunReport report;
+    report.workers = local + remoteWorkers;
+    report.scansByProcess.assign(std::size_t(remote ? remote->processes() : 1), 0);
+    auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the other ranks' (if any)
+        return w < local || remoteWorkers == 0 ? workers[w](job) : (*remote)(w - local, job);
+    };
     auto consume = [&](std::size_t k, ScanResult& r) {
         report.times += r.times;
+        ++report.scansByProcess.at(std::size_t(r.rank));
         if (!r.skipped.empty()) {
             report.skipped.push_back(r.describe + ": " + r.skipped);
             if (!quiet) progress.message("rawlog-octomap: skipped " + report.skipped.back());
@@ -168,9 +188,8 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
         }
         if (!quiet) progress.update(k + 1, r.fraction);
     };
-    gseg::map::runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); },
-                                               [&](unsigned w, ScanJob& job) { return workers[w](job); }, consume,
-                                               {cli.threads, 2 * std::size_t(std::max(1u, cli.threads)) + 2});
+    gseg::map::runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
+                                               {report.workers, 2 * std::size_t(std::max(1u, report.workers)) + 2});
     const std::size_t total = map.path().size() + report.skipped.size();
     if (!quiet) progress.finish(total);
     if (total == 0)
@@ -193,22 +212,38 @@ RunReport buildMaps(const Cli& cli, bool quiet) {
 
 }  // namespace rawlog_octomap
 
-int main(int argc, char** argv) {
-    using namespace rawlog_octomap;
-#ifdef __GLIBC__
-    // Each scan allocates and frees a few MB (its points, its voxel lists): keep them in the heap
-    // instead of mapping fresh pages for every scan (measured: a third less time in ray casting).
-    mallopt(M_MMAP_THRESHOLD, 256 << 20);
-    mallopt(M_TRIM_THRESHOLD, 512 << 20);
-#endif
+namespace rawlog_octomap {
+namespace {
+
+/// One rank's part of the run; the exit code (rank 0's decides for all).
+int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
+    Cli cli;
     try {
-        const Cli cli = parseCli(argc, argv);
+        cli = parseCli(argc, argv);  // the same on every rank: the same arguments
+    } catch (const std::invalid_argument& e) {
+        std::cerr << "rawlog-octomap: " << e.what() << "\n";
+        return 2;
+    }
+    if (cli.help) {
+        std::cout << kUsage;
+        return 0;
+    }
+    if (cli.benchRounds > 0 && ranks.size() > 1) {
+        std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
+        return 2;
+    }
+    if (!ranks.root()) {
+        serveScans(ranks, cli);
+        return 0;
+    }
+    RemoteWorkers remote(ranks);  // told to stop when this returns, whatever happened
+    try {
         if (cli.benchRounds > 0) {
             runBench(cli);
             return 0;
         }
-        const RunReport r = buildMaps(cli);
-        printReport(r, cli.options.resolution, cli.threads);
+        const RunReport r = buildMaps(cli, false, &remote);
+        printReport(r, cli.options.resolution);
         if (!r.skipped.empty()) {
             std::cerr << "rawlog-octomap: " << r.skipped.size() << " scan(s) skipped, first: " << r.skipped[0] << "\n";
             return 1;
@@ -221,4 +256,18 @@ int main(int argc, char** argv) {
         std::cerr << "rawlog-octomap: " << gseg::map::reasonOf(e) << "\n";
         return 1;
     }
+}
+
+}  // namespace
+}  // namespace rawlog_octomap
+
+int main(int argc, char** argv) {
+#ifdef __GLIBC__
+    // Each scan allocates and frees a few MB (its points, its voxel lists): keep them in the heap
+    // instead of mapping fresh pages for every scan (measured: a third less time in ray casting).
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
+    gseg::tools::Ranks ranks(argc, argv);
+    return ranks.exitCode(rawlog_octomap::run(argc, argv, ranks));
 }

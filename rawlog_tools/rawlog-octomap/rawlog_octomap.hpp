@@ -17,7 +17,10 @@ struct Cli {
     gseg::map::TraversabilityOptions options;
     unsigned threads = 0;  ///< worker threads (0: everything on one thread)
     int benchRounds = 0;   ///< --bench N
+    bool help = false;     ///< -h: print the usage and stop
 };
+
+class RemoteWorkers;
 
 /// What a run did.
 struct RunReport {
@@ -33,11 +36,15 @@ struct RunReport {
     std::vector<std::string> written;
     std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)
     std::string poseSource;                 ///< "the rawlog" or the pose file
+    unsigned workers = 0;                   ///< worker threads, on every process
+    std::vector<std::size_t> scansByProcess;  ///< scans worked on by each MPI rank (one entry in one process)
 };
 
 /// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless
-/// `quiet`. Throws std::invalid_argument (bad usage) or std::runtime_error (bad input, naming it).
-RunReport buildMaps(const Cli& cli, bool quiet = false);
+/// `quiet`. `remote`: the worker threads of the other MPI ranks, used beside this process's
+/// `cli.threads` (null: this process alone). Throws std::invalid_argument (bad usage) or
+/// std::runtime_error (bad input, naming it).
+RunReport buildMaps(const Cli& cli, bool quiet = false, RemoteWorkers* remote = nullptr);
 
 /// --bench: alternates plain OctoMap and rawlog-octomap on the same rawlog, prints both timings.
 void runBench(const Cli& cli);

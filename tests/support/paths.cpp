@@ -5,6 +5,7 @@
 #include <sstream>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace gseg::test {
 
@@ -20,6 +21,19 @@ std::string missingDataMessage(const std::string& relative) {
 }
 
 std::string tool(const std::string& name) { return std::string(GSEG_BINARY_DIR) + "/bin/" + name; }
+
+std::string mpirun(int processes, std::string& whyNot) {
+    if (!GSEG_TEST_WITH_MPI) {
+        whyNot = "this build has no MPI support (GSEG_WITH_MPI is off): skipped";
+        return "";
+    }
+    const std::string launcher = GSEG_TEST_MPIRUN;
+    if (launcher.empty() || ::access(launcher.c_str(), X_OK) != 0) {
+        whyNot = "mpirun is not installed (Debian: openmpi-bin): skipped";
+        return "";
+    }
+    return "'" + launcher + "' --allow-run-as-root --oversubscribe -np " + std::to_string(processes) + " ";
+}
 
 std::string readText(const std::string& path) {
     std::ifstream in(path);

@@ -15,6 +15,17 @@ std::string missingDataMessage(const std::string& relative);
 /// Path of a built executable (`<build>/bin/<name>`).
 std::string tool(const std::string& name);
 
+/// The command that starts `processes` ranks of a tool on this machine
+/// (`mpirun --allow-run-as-root --oversubscribe -np N`, OpenMPI), or "" with the reason in
+/// `whyNot` when the build has no MPI support (GSEG_WITH_MPI off) or mpirun is absent.
+std::string mpirun(int processes, std::string& whyNot);
+
+/// In a test body: `const std::string var` = mpirun(processes), or the test is skipped with the reason.
+#define GSEG_TEST_MPIRUN_OR_SKIP(var, processes)                       \
+    std::string var##WhyNot;                                           \
+    const std::string var = gseg::test::mpirun(processes, var##WhyNot); \
+    if (var.empty()) GTEST_SKIP() << var##WhyNot
+
 /// The whole content of a text file ("" if it cannot be read).
 std::string readText(const std::string& path);
 

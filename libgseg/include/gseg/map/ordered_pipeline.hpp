@@ -4,9 +4,10 @@
 /// (segmentation, transform, ray casting: independent of the map), and their results consumed
 /// strictly in item order (the map updates), with a bounded number of items in flight.
 ///
-/// The three roles are plain functions, so the same split serves other transports: a process
-/// that sends each item's result (e.g. a serialised ScanUpdate) to the one that consumes them in
-/// order gives the same maps as one process.
+/// The three roles are plain functions, so the same split serves other transports: rawlog-octomap
+/// under MPI gives this pipeline one more worker per worker thread of every other process, whose
+/// `work` sends the item there and waits for its result (a serialised ScanUpdate); the maps are
+/// the same bytes as one process's.
 
 #include <condition_variable>
 #include <cstddef>
