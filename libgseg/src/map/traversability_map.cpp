@@ -125,6 +125,19 @@ std::string mapSceneBytes(const OccupiedVoxels& v, double resolution, const std:
     for (std::size_t i = 1; i < path.size(); ++i)
         line->appendLine(path[i - 1].x(), path[i - 1].y(), path[i - 1].z(), path[i].x(), path[i].y(), path[i].z());
     scene.insert(line);
+    // Lines are one pixel wide in most OpenGL core profiles: blue boxes at the sensor positions
+    // make the path visible from afar.
+    auto marks = gl::COctoMapVoxels::Create();
+    marks->setName("sensor positions, blue");
+    marks->resizeVoxelSets(1);
+    marks->showGridLines(false);
+    marks->enableLights(true);
+    marks->enableCubeTransparency(false);
+    marks->cullFaces(::mrpt::opengl::TCullFace::BACK);
+    for (const auto& p : path)
+        marks->push_back_Voxel(0, gl::COctoMapVoxels::TVoxel({float(p.x()), float(p.y()), float(p.z())}, 2 * resolution,
+                                                             ::mrpt::img::TColor(40, 120, 255)));
+    scene.insert(marks);
     auto axes = gl::stock_objects::CornerXYZ(2.0f);
     axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
     if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());

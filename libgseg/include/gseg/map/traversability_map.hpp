@@ -199,7 +199,8 @@ public:
     /// - `<prefix>_traversability.ply`: the centres of the occupied voxels, coloured, with a
     ///   `label` property (1 ground, 0 obstacle) for CloudCompare and other point-cloud viewers;
     /// - `<prefix>_traversability.3Dscene`: an MRPT scene for SceneViewer3D: the same voxels as
-    ///   coloured boxes (COctoMapVoxels), the driven path as a blue line, axes at its start.
+    ///   coloured boxes (COctoMapVoxels), the driven path as a blue line with a blue box at each
+    ///   sensor position, axes at its start.
     /// The same map always gives the same bytes. Throws std::runtime_error naming the file on
     /// failure and std::logic_error if no scan was inserted. Returns the paths written.
     std::vector<std::string> write(const std::string& prefix) const;
