@@ -1,6 +1,7 @@
 # The main job, run by `cmake --build build --target demo` (README Quick start, first command):
 # segment the real VLP-16 scan that Debian's mrpt-common ships and, where ../shared/data is present,
-# the SemanticKITTI scans; write a coloured PLY and a top-down PNG of each into OUT.
+# the SemanticKITTI scans; write a coloured PLY (with labels), a top-down PNG and an MRPT 3D scene
+# of each into OUT.
 # Then build traversability OctoMaps: of the VLP-16 scan (a stationary sensor: one identity pose),
 # and of the SemanticKITTI sequence-00 drive (six scans with their poses) where present.
 # Inputs (-D): GSEG (the gseg executable), BIN (folder of the tools), SRC (source dir), OUT (output dir).
@@ -17,7 +18,7 @@ function(run_segment scan config name)
   message(STATUS "gseg segment ${scan}")
   execute_process(COMMAND "${GSEG}" segment "${scan}" --config "${config}"
                           --ply-out "${OUT}/${name}.ply" --png-out "${OUT}/${name}.png"
-                          --labels-out "${OUT}/${name}.labels"
+                          --scene-out "${OUT}/${name}.3Dscene" --labels-out "${OUT}/${name}.labels"
                   RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "gseg segment failed on ${scan} (exit ${rc})")
@@ -51,7 +52,8 @@ run_tool("${BIN}/rawlog-octomap" -i "${vlp16}" -o "${OUT}/vlp16" --poses "${OUT}
          --pose-tolerance 1e12 -c "${SRC}/config/vlp16.yaml")
 if(EXISTS "${kitti}/00/poses.txt")
   message(STATUS "kitti2rawlog + rawlog-octomap: SemanticKITTI sequence 00")
-  run_tool("${BIN}/kitti2rawlog" "${kitti}/00" -o "${OUT}/seq00.rawlog")
+  run_tool("${BIN}/kitti2rawlog" -i "${kitti}/00" -o "${OUT}/seq00.rawlog")
   run_tool("${BIN}/rawlog-octomap" -i "${OUT}/seq00.rawlog" -o "${OUT}/seq00" -c "${SRC}/config/kitti_hdl64.yaml")
 endif()
-message(STATUS "Outputs in ${OUT}: *.ply (any point-cloud viewer), *.png (pictures), *.bt / *.ot (octovis)")
+message(STATUS "Outputs in ${OUT}: *.png (pictures), *.3Dscene (SceneViewer3D of mrpt-apps), *.ply (CloudCompare or "
+               "any point-cloud viewer), *.bt / *.ot (liboctomap tools)")

@@ -1,9 +1,12 @@
 // `gseg segment` end to end: the built executable on real and broken inputs.
 #include <gseg/io/kitti.hpp>
+#include <gseg/io/ply.hpp>
 #include <support/child.hpp>
 #include <support/paths.hpp>
 
 #include <mrpt/img/CImage.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CPointCloudColoured.h>
 
 #include <gtest/gtest.h>
 
@@ -49,12 +52,12 @@ const std::string kVlp16 = "/usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog"
 
 }  // namespace
 
-TEST(SegmentTool, KittiScanWritesLabelsPlyAndPng) {
+TEST(SegmentTool, KittiScanWritesLabelsPlyPngAndScene) {
     const std::string scan = gseg::test::sharedData("semantickitti/sequences/08/velodyne/000000.bin");
     if (scan.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/08/velodyne/000000.bin");
-    const std::string labels = out("k.labels"), ply = out("k.ply"), png = out("k.png");
+    const std::string labels = out("k.labels"), ply = out("k.ply"), png = out("k.png"), scene = out("k.3Dscene");
     const ToolRun r = segmentTool("'" + scan + "' --config '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' --labels-out '" +
-                       labels + "' --ply-out '" + ply + "' --png-out '" + png + "'");
+                       labels + "' --ply-out '" + ply + "' --png-out '" + png + "' --scene-out '" + scene + "'");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("points 123389"), std::string::npos) << r.output;
     const auto bytes = gseg::io::readFileBytes(labels);
@@ -66,10 +69,27 @@ TEST(SegmentTool, KittiScanWritesLabelsPlyAndPng) {
     }
     EXPECT_GT(ground, 50000u);  // a suburban street: about 60 % ground
     EXPECT_LT(ground, 90000u);
-    EXPECT_EQ(gseg::io::readFileBytes(ply).size() > 123389u * 15, true);
+    // The PLY: the input points with their intensity, and the labels as a `label` property.
+    const std::vector<float> input = gseg::io::readKittiBin(scan), back = gseg::io::readPly(ply);
+    ASSERT_EQ(back, input);  // x, y, z, intensity, exactly
+    const std::vector<double> label = gseg::io::readPlyProperty(ply, "label"), green = gseg::io::readPlyProperty(ply, "green");
+    ASSERT_EQ(label.size(), bytes.size());
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+        ASSERT_EQ(label[i], double(bytes[i])) << i;
+        ASSERT_EQ(green[i], bytes[i] ? 200.0 : 60.0) << i;
+    }
     mrpt::img::CImage img;
     ASSERT_TRUE(img.loadFromFile(png));
     EXPECT_EQ(img.getWidth(), 800u);
+    // The scene: MRPT's loader reads it; one coloured point per input point.
+    mrpt::opengl::COpenGLScene view;
+    ASSERT_TRUE(view.loadFromFile(scene));
+    const auto points = view.getByClass<mrpt::opengl::CPointCloudColoured>();
+    ASSERT_TRUE(points);
+    ASSERT_EQ(points->size(), bytes.size());
+    std::size_t greenPoints = 0;
+    for (std::size_t i = 0; i < points->size(); ++i) greenPoints += points->getPointColor(i).G == 200;
+    EXPECT_EQ(greenPoints, ground);
 }
 
 TEST(SegmentTool, RealVlp16RawlogGroundLiesBelowTheSensor) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationRobotPose.h>
 #include <mrpt/serialization/CArchive.h>
@@ -45,22 +46,48 @@ std::string tempDir(const std::string& name) {
     return d.string();
 }
 
+/// The drive's t = 0 by default: 2011-09-26 00:00:00 UTC [s since the UNIX epoch].
+constexpr double kBase = 1316995200.0;
+
+/// One frame: odometry, pose, scan, in this order (odometry and pose only with poses).
 struct Entry {
+    mrpt::obs::CObservationOdometry::Ptr odometry;
     mrpt::obs::CObservationRobotPose::Ptr pose;
     mrpt::obs::CObservationPointCloud::Ptr scan;
 };
 
 std::vector<Entry> readBack(const std::string& rawlog) {
     std::vector<Entry> out;
+    auto open = [&]() -> Entry& {
+        if (out.empty() || out.back().scan) out.emplace_back();
+        return out.back();
+    };
     gseg::mrpt::forEachRawlogEntry(rawlog, [&](std::size_t, const auto& obj) {
-        if (auto p = std::dynamic_pointer_cast<mrpt::obs::CObservationRobotPose>(obj)) out.push_back({p, nullptr});
-        else if (auto s = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(obj)) {
-            if (out.empty() || out.back().scan) out.push_back({nullptr, s});
-            else out.back().scan = s;
-        } else ADD_FAILURE() << "unexpected object " << obj->GetRuntimeClass()->className;
+        if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obj)) {
+            Entry& e = open();
+            EXPECT_FALSE(e.odometry || e.pose) << "odometry comes first in a frame";
+            e.odometry = o;
+        } else if (auto p = std::dynamic_pointer_cast<mrpt::obs::CObservationRobotPose>(obj)) {
+            Entry& e = open();
+            EXPECT_TRUE(e.odometry && !e.pose) << "the pose follows the odometry";
+            e.pose = p;
+        } else if (auto s = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(obj)) {
+            open().scan = s;
+        } else {
+            ADD_FAILURE() << "unexpected object " << obj->GetRuntimeClass()->className;
+        }
         return true;
     });
     return out;
+}
+
+/// The odometry is the pose in 2D, at the same time.
+void expectOdometryIsThePose(const Entry& e) {
+    ASSERT_TRUE(e.odometry && e.pose);
+    EXPECT_NEAR(e.odometry->odometry.x(), e.pose->pose.mean.x(), 1e-9);
+    EXPECT_NEAR(e.odometry->odometry.y(), e.pose->pose.mean.y(), 1e-9);
+    EXPECT_NEAR(e.odometry->odometry.phi(), e.pose->pose.mean.yaw(), 1e-9);
+    EXPECT_EQ(e.odometry->timestamp, e.pose->timestamp);
 }
 
 Eigen::Matrix4d matrixOf(const mrpt::poses::CPose3D& p) {
@@ -114,8 +141,9 @@ TEST(Kitti2Rawlog, Sequence00WithPosesTimesAndSimplemap) {
         EXPECT_EQ(entries[k].scan->pointcloud->size(), gseg::io::readKittiBin(seqDir + bin).size() / 4);
         EXPECT_TRUE(matrixOf(entries[k].pose->pose.mean).isApprox(velo[k].matrix(), 1e-6)) << "frame " << k;
         EXPECT_EQ(entries[k].pose->timestamp, entries[k].scan->timestamp);
+        expectOdometryIsThePose(entries[k]);
         if (k < 3) {
-            EXPECT_NEAR(mrpt::Clock::toDouble(entries[k].scan->timestamp), times[k], 1e-6);
+            EXPECT_NEAR(mrpt::Clock::toDouble(entries[k].scan->timestamp), kBase + times[k], 1e-6);
         }
         EXPECT_TRUE(entries[k].scan->sensorPose == mrpt::poses::CPose3D());
     }
@@ -148,8 +176,8 @@ TEST(Kitti2Rawlog, WithoutTimesAndPosesWritesScansAt10Hz) {
     const auto entries = readBack(dir + "/b.rawlog");
     ASSERT_EQ(entries.size(), 3u);
     for (std::size_t k = 0; k < 3; ++k) {
-        EXPECT_FALSE(entries[k].pose);
-        EXPECT_NEAR(mrpt::Clock::toDouble(entries[k].scan->timestamp), 0.1 * double(k), 1e-6);
+        EXPECT_FALSE(entries[k].pose || entries[k].odometry);
+        EXPECT_NEAR(mrpt::Clock::toDouble(entries[k].scan->timestamp), kBase + 0.1 * double(k), 1e-6);
         EXPECT_EQ(entries[k].scan->pointcloud->size(), 3u);
     }
     fs::remove_all(seq), fs::remove_all(dir);
@@ -244,9 +272,48 @@ TEST(Kitti2Rawlog, RepeatContinuesTheTrajectory) {
         ASSERT_TRUE(entries[n].pose && entries[n].scan);
         EXPECT_NEAR(entries[n].pose->pose.mean.x(), double(n), 1e-6) << n;
         EXPECT_NEAR(entries[n].pose->pose.mean.y(), 0.0, 1e-6) << n;
-        EXPECT_NEAR(mrpt::Clock::toDouble(entries[n].scan->timestamp), 0.5 * double(n), 1e-6) << n;
+        EXPECT_NEAR(mrpt::Clock::toDouble(entries[n].scan->timestamp), kBase + 0.5 * double(n), 1e-6) << n;
+        expectOdometryIsThePose(entries[n]);
         EXPECT_EQ(entries[n].scan->pointcloud->size(), 3u);
     }
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, StartTimeSetsTheBaseDate) {
+    const std::string seq = syntheticSequence("start", 2, 2, true), dir = tempDir("start_out");
+    ASSERT_EQ(runTool("-i " + seq + " -o " + dir + "/s.rawlog --start-time 2020-02-29T12:30:15.25Z", dir).status, 0);
+    const auto entries = readBack(dir + "/s.rawlog");
+    ASSERT_EQ(entries.size(), 2u);
+    const double base = 1582979415.25;  // 2020-02-29 12:30:15.25 UTC
+    EXPECT_NEAR(mrpt::Clock::toDouble(entries[0].scan->timestamp), base, 1e-6);
+    EXPECT_NEAR(mrpt::Clock::toDouble(entries[1].scan->timestamp), base + 0.5, 1e-6);
+    ASSERT_EQ(runTool("-i " + seq + " -o " + dir + "/d.rawlog --start-time 2012-01-01", dir).status, 0);
+    EXPECT_NEAR(mrpt::Clock::toDouble(readBack(dir + "/d.rawlog")[0].scan->timestamp), 1325376000.0, 1e-6);
+    for (const char* bad : {"yesterday", "2020-13-01", "2020-02-29T25:00:00", "1970-01-01", "2020-02-29Tnoon"}) {
+        const ToolRun r = runTool("-i " + seq + " -o " + dir + "/x.rawlog --start-time " + bad, dir);
+        EXPECT_EQ(r.status, 2) << bad;
+        EXPECT_NE(r.err.find("--start-time needs a UTC date"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir + "/x.rawlog")) << bad;
+    }
+    fs::remove_all(seq), fs::remove_all(dir);
+}
+
+TEST(Kitti2Rawlog, InputOptionAndTheOldPositionalFormGiveTheSameRawlog) {
+    const std::string seq = syntheticSequence("forms", 3, 3, true), dir = tempDir("forms_out");
+    ASSERT_EQ(runTool("-i " + seq + " -o " + dir + "/a.rawlog", dir).status, 0);
+    ASSERT_EQ(runTool(seq + " -o " + dir + "/b.rawlog", dir).status, 0);
+    EXPECT_TRUE(gseg::test::readText(dir + "/a.rawlog") == gseg::test::readText(dir + "/b.rawlog"));
+    ToolRun r = runTool("-i " + seq + " " + seq + " -o " + dir + "/c.rawlog", dir);  // both: ambiguous
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("give the sequence folder once"), std::string::npos) << r.err;
+    r = runTool("-o " + dir + "/c.rawlog", dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("needs the sequence folder"), std::string::npos) << r.err;
+    r = runTool("-i " + seq + " -o " + dir + "/c.rawlog --first x", dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(runTool("--version", dir).status, 0);
+    EXPECT_EQ(runTool("--help", dir).status, 0);
+    EXPECT_FALSE(fs::exists(dir + "/c.rawlog"));
     fs::remove_all(seq), fs::remove_all(dir);
 }
 

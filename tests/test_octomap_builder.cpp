@@ -1,5 +1,6 @@
 // TraversabilityMap on a simulated drive with exact poses and exact labels: a flat road that
 // turns into a 10 % ramp, a box, a wall, and a car that leaves after the first scans.
+#include <gseg/io/ply.hpp>
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/traversability_map.hpp>
@@ -13,6 +14,9 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/math/CMatrixF.h>
 #include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/opengl/COctoMapVoxels.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfLines.h>
 #include <mrpt/poses/CPose3D.h>
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
@@ -165,7 +169,8 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     const std::string dir = std::filesystem::temp_directory_path() / ("gseg_builder_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const auto written = m.write(dir + "/drive");
-    ASSERT_EQ(written.size(), 4u);
+    ASSERT_EQ(written, TraversabilityMap::outputPaths(dir + "/drive"));
+    ASSERT_EQ(written.size(), 6u);
     mrpt::img::CImage png;
     ASSERT_TRUE(png.loadFromFile(dir + "/drive_traversability.png"));
     const auto layout = gseg::map::pictureLayout(grid, m.path());
@@ -192,6 +197,89 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     const auto* node = colour->search(10.5, -3.1, 0.9);
     ASSERT_NE(node, nullptr);
     EXPECT_EQ(node->getColor().r, gseg::map::colourOf(CellClass::Obstacle).r);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
+    // The convention of the scan pictures: world x up (smaller rows), y to the left (smaller columns).
+    const auto& m = theDrive();
+    const auto grid = m.topDown();
+    const auto l = gseg::map::pictureLayout(grid, m.path());
+    int c5 = 0, r5 = 0, c25 = 0, r25 = 0, cLeft = 0, rLeft = 0, cRight = 0, rRight = 0;
+    ASSERT_TRUE(l.toPixel(5, 0, c5, r5) && l.toPixel(25, 0, c25, r25));
+    ASSERT_TRUE(l.toPixel(10, 3, cLeft, rLeft) && l.toPixel(10, -3, cRight, rRight));
+    EXPECT_LT(r25, r5);          // further forward: higher up
+    EXPECT_EQ(c25, c5);
+    EXPECT_LT(cLeft, cRight);    // left (+y): further left
+    EXPECT_EQ(rLeft, rRight);
+    EXPECT_NEAR(double(r5 - r25), 20.0 * l.pixelsPerMetre(), l.pixelsPerCell);
+    // The map sits inside the page, between a title band and a legend band.
+    EXPECT_GT(l.mapTop, 40);
+    EXPECT_GT(l.height - (l.mapTop + l.mapHeight), 100);
+    const auto unknown = gseg::map::colourOf(CellClass::Unknown), page = gseg::map::backgroundColour();
+    EXPECT_GT(std::abs(int(unknown.r) - int(page.r)) + std::abs(int(unknown.g) - int(page.g)) + std::abs(int(unknown.b) - int(page.b)), 100);
+    const std::string dir = std::filesystem::temp_directory_path() / ("gseg_orient_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    m.write(dir + "/o");
+    mrpt::img::CImage png;
+    ASSERT_TRUE(png.loadFromFile(dir + "/o_traversability.png"));
+    mrpt::math::CMatrixFloat R, G, B;
+    png.getAsRGBMatrices(R, G, B);
+    if (png.getChannelsOrder() == "BGR") std::swap(R, B);
+    auto is = [&](int row, int col, gseg::map::Rgb c) {
+        return std::lround(255 * R(row, col)) == c.r && std::lround(255 * G(row, col)) == c.g && std::lround(255 * B(row, col)) == c.b;
+    };
+    EXPECT_TRUE(is(l.mapTop - 2, l.mapLeft + l.mapWidth / 2, page));  // just above the map: the page
+    int c = 0, r = 0;
+    ASSERT_TRUE(l.toPixel(20.0, -20.0, c, r));  // behind the wall: never seen
+    EXPECT_TRUE(is(r, c, unknown));
+    // The legend band names every colour of the map: each appears there as a swatch.
+    for (const CellClass k : {CellClass::Traversable, CellClass::Obstacle, CellClass::Unknown}) {
+        bool found = false;
+        for (int row = l.mapTop + l.mapHeight + 1; row < l.height && !found; ++row)
+            for (int col = 0; col < 40 && !found; ++col) found = is(row, col, gseg::map::colourOf(k));
+        EXPECT_TRUE(found) << "no legend swatch for class " << int(k);
+    }
+    std::filesystem::remove_all(dir);
+}
+
+TEST(OctomapBuilder, PlyAndSceneHoldTheOccupiedVoxelsAndThePath) {
+    const auto& m = theDrive();
+    const std::string dir = std::filesystem::temp_directory_path() / ("gseg_views_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    m.write(dir + "/v");
+    const auto s = m.stats();
+    const std::size_t shown = s.groundVoxels - s.groundUnderObstacle + s.obstacleVoxels;
+    // PLY: one vertex per occupied voxel, label 1 ground / 0 obstacle, at the voxel centres.
+    const std::vector<float> xyz = gseg::io::readPly(dir + "/v_traversability.ply");
+    const std::vector<double> label = gseg::io::readPlyProperty(dir + "/v_traversability.ply", "label");
+    const std::vector<double> red = gseg::io::readPlyProperty(dir + "/v_traversability.ply", "red");
+    ASSERT_EQ(label.size(), shown);
+    ASSERT_EQ(xyz.size(), 4 * shown);
+    std::size_t ground = 0;
+    for (std::size_t i = 0; i < label.size(); ++i) {
+        const double x = xyz[4 * i], y = xyz[4 * i + 1], z = xyz[4 * i + 2];
+        ground += label[i] == 1;
+        ASSERT_TRUE(label[i] == 0 || label[i] == 1);
+        EXPECT_EQ(red[i], label[i] == 1 ? gseg::map::colourOf(CellClass::Traversable).r : gseg::map::colourOf(CellClass::Obstacle).r);
+        EXPECT_TRUE(occupied(label[i] == 1 ? m.groundTree() : m.obstacleTree(), x, y, z)) << x << " " << y << " " << z;
+    }
+    EXPECT_EQ(ground, s.groundVoxels - s.groundUnderObstacle);
+    // .3Dscene: MRPT's loader reads it; the same voxels as boxes, and the path as a line.
+    mrpt::opengl::COpenGLScene scene;
+    ASSERT_TRUE(scene.loadFromFile(dir + "/v_traversability.3Dscene"));
+    const auto voxels = scene.getByClass<mrpt::opengl::COctoMapVoxels>();
+    ASSERT_TRUE(voxels);
+    ASSERT_EQ(voxels->getVoxelSetCount(), 2u);
+    EXPECT_EQ(voxels->getVoxelCount(0), ground);
+    EXPECT_EQ(voxels->getVoxelCount(1), shown - ground);
+    const auto path = scene.getByClass<mrpt::opengl::CSetOfLines>();
+    ASSERT_TRUE(path);
+    ASSERT_EQ(path->getLineCount(), m.path().size() - 1);
+    double x0, y0, z0, x1, y1, z1;
+    path->getLineByIndex(0, x0, y0, z0, x1, y1, z1);
+    EXPECT_NEAR(x0, m.path()[0].x(), 1e-6);
+    EXPECT_NEAR(x1, m.path()[1].x(), 1e-6);
     std::filesystem::remove_all(dir);
 }
 
@@ -343,7 +431,8 @@ TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
     const std::string dir = tempDir("bytes");
     fromBytes.write(dir + "/a");
     theDrive().write(dir + "/b");
-    for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png"})
+    for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
+                          "_traversability.3Dscene"})
         EXPECT_TRUE(fileBytes(dir + "/a" + f) == fileBytes(dir + "/b" + f)) << f;
     std::filesystem::remove_all(dir);
     // Damaged bytes are an error, not a garbage update.
@@ -365,7 +454,10 @@ TEST(OctomapBuilder, NoOccupiedVoxelStillWritesReadableMaps) {
     EXPECT_EQ(s.groundVoxels + s.obstacleVoxels, 0u);
     EXPECT_GT(s.freeVoxels, 20u);
     const std::string dir = tempDir("empty");
-    ASSERT_EQ(m.write(dir + "/e").size(), 4u);
+    ASSERT_EQ(m.write(dir + "/e").size(), 6u);
+    EXPECT_TRUE(gseg::io::readPly(dir + "/e_traversability.ply").empty());
+    mrpt::opengl::COpenGLScene scene;
+    EXPECT_TRUE(scene.loadFromFile(dir + "/e_traversability.3Dscene"));
     std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(dir + "/e_traversability.ot"));
     ASSERT_NE(dynamic_cast<octomap::ColorOcTree*>(any.get()), nullptr);
     EXPECT_EQ(any->size(), 0u);
@@ -408,6 +500,18 @@ TEST(OctomapBuilder, TopDownPictureOfAPathKilometresLongStaysSmall) {
     ASSERT_TRUE(png.loadFromFile(dir + "/f_traversability.png"));
     EXPECT_EQ(int(png.getWidth()), layout.width);
     std::filesystem::remove_all(dir);
+}
+
+TEST(OctomapBuilder, TopDownPictureOfASmallMapIsEnlarged) {
+    TraversabilityMap m;
+    const float a[3] = {2, 1, 0};
+    m.insertScan(gseg::PointCloudView(a, 1), {}, Eigen::Vector3d(0, 0, 1.8));
+    const auto layout = gseg::map::pictureLayout(m.topDown(), m.path());
+    EXPECT_EQ(layout.pixelsPerCell, 8);  // 21 cells a side: at most 8 pixels a cell
+    EXPECT_EQ(layout.mapHeight, 8 * int(layout.cellsHigh));
+    int c0 = 0, r0 = 0, c1 = 0, r1 = 0;
+    ASSERT_TRUE(layout.toPixel(0.1, 0.1, c0, r0) && layout.toPixel(0.3, 0.1, c1, r1));
+    EXPECT_EQ(r0 - r1, 8);  // one cell further along x: 8 pixels up
 }
 
 TEST(OctomapBuilder, TopDownGridIndexesNegativeCellsAndTileBorders) {

@@ -7,6 +7,7 @@
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/render.hpp>
+#include <gseg/mrpt/scene.hpp>
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 
@@ -19,7 +20,7 @@ namespace gseg::app {
 namespace {
 
 struct Cli {
-    std::string scan, config, labelsOut, plyOut, pngOut;
+    std::string scan, config, labelsOut, plyOut, pngOut, sceneOut;
     int index = -1;
 };
 
@@ -56,12 +57,20 @@ int run(const Cli& cli) {
         outputs.back()->write(bytes.data(), bytes.size());
     };
     add(cli.labelsOut, std::string(r.labels.begin(), r.labels.end()));
-    if (!cli.plyOut.empty()) add(cli.plyOut, io::labelledPlyBytes(cloud, r.labels));
+    if (!cli.plyOut.empty()) {
+        io::PlyOptions ply;
+        ply.intensity = true;  // the cloud views x, y, z, intensity
+        ply.comment = "gseg ground segmentation of " + mrpt::displayName(cli.scan);
+        add(cli.plyOut, io::labelledPlyBytes(cloud, r.labels, {}, ply));
+    }
     if (!cli.pngOut.empty()) {
         mrpt::RenderOptions ro;
-        ro.title = scan.description;
+        ro.title = mrpt::displayName(cli.scan) + ": ground / non-ground";
+        if (scan.description.rfind("rawlog entry", 0) == 0)  // which scan of the rawlog
+            ro.title = mrpt::displayName(cli.scan) + ", " + scan.description + ": ground / non-ground";
         add(cli.pngOut, mrpt::topDownPng(cloud, r.labels, ro));
     }
+    if (!cli.sceneOut.empty()) add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels));
     for (auto& out : outputs) out->commit();
     for (const auto& out : outputs) std::printf("wrote %s\n", out->path().c_str());
     return 0;
@@ -79,16 +88,21 @@ int runSegment(int argc, char** argv) {
                                             "identical to config/kitti_hdl64.yaml)", false, "", "FILE", cmd);
         TCLAP::ValueArg<std::string> labels("", "labels-out", "write one byte per input point, in input order: "
                                             "1 ground, 0 non-ground", false, "", "FILE", cmd);
-        TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud coloured by label (green ground, red "
-                                         "non-ground) as binary PLY", false, "", "FILE", cmd);
+        TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud as binary PLY: x, y, z, intensity, colour "
+                                         "(green ground, red non-ground) and label (1 ground, 0 non-ground; "
+                                         "CloudCompare filters by it)", false, "", "FILE", cmd);
         TCLAP::ValueArg<std::string> png("", "png-out", "write a top-down picture of ground and obstacles", false, "",
                                          "FILE", cmd);
+        TCLAP::ValueArg<std::string> scene("", "scene-out", "write an MRPT 3D scene (.3Dscene, for SceneViewer3D of "
+                                           "mrpt-apps): ground points green, non-ground red", false, "", "FILE", cmd);
         TCLAP::ValueArg<int> index("", "index", "rawlogs: segment the N-th LiDAR observation (0-based; default the "
                                    "first)", false, -1, "N", cmd);
         if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
-        cli = {scan.getValue(), config.getValue(), labels.getValue(), ply.getValue(), png.getValue(), index.getValue()};
+        cli = {scan.getValue(), config.getValue(), labels.getValue(), ply.getValue(), png.getValue(), scene.getValue(),
+               index.getValue()};
         io::checkOutputsAreNotInputs({{"scan", cli.scan}, {"--config", cli.config}},
-                                     {{"--labels-out", cli.labelsOut}, {"--ply-out", cli.plyOut}, {"--png-out", cli.pngOut}});
+                                     {{"--labels-out", cli.labelsOut}, {"--ply-out", cli.plyOut}, {"--png-out", cli.pngOut},
+                                      {"--scene-out", cli.sceneOut}});
     } catch (const TCLAP::ArgException& e) {
         std::fprintf(stderr, "gseg segment: %s (%s); see gseg segment --help\n", e.error().c_str(), e.argId().c_str());
         return 2;

@@ -1,14 +1,21 @@
 // kitti2rawlog: a KITTI odometry sequence (velodyne/*.bin, times.txt, poses.txt + calib.txt) as an
 // MRPT rawlog (observation-only layout) that rawlog-octomap and RawLogViewer read.
 //
-// Per frame, in this order, both with the frame's time stamp:
-//   1. CObservationRobotPose "KITTI_POSE" (only when poses are known): the velodyne pose in the
+// Per frame, in this order, all with the frame's time stamp:
+//   1. CObservationOdometry "KITTI_ODOMETRY" (only when poses are known): the same pose in 2D (x,
+//      y, yaw), so that MRPT tools that follow odometry (RawLogViewer's travelled distance and
+//      path) show the drive.
+//   2. CObservationRobotPose "KITTI_POSE" (only when poses are known): the velodyne pose in the
 //      world frame = the velodyne frame of the first converted scan (z up, road near z = -1.73 m),
-//      i.e. V_first^-1 * V_k with V_k = Tr^-1 * P_k * Tr.
-//   2. CObservationPointCloud "VELODYNE": x, y, z, intensity (CPointsMapXYZI) in the velodyne frame;
+//      i.e. V_first^-1 * V_k with V_k = Tr^-1 * P_k * Tr. It comes after the odometry, so that a
+//      reader taking the last pose before a scan (rawlog-octomap) gets the full 3D pose.
+//   3. CObservationPointCloud "VELODYNE": x, y, z, intensity (CPointsMapXYZI) in the velodyne frame;
 //      sensorPose = identity (the velodyne is the vehicle frame here).
-// Time stamps: times.txt (seconds since the drive started) taken as seconds since the UNIX epoch;
-// without times.txt, frame k is at k * 0.1 s (KITTI's 10 Hz).
+// Time stamps: a base date plus times.txt (seconds since the drive started); without times.txt,
+// frame k is k * 0.1 s after the base (KITTI's 10 Hz). KITTI odometry does not say when each
+// sequence was recorded (the raw recordings are from 2011-09-26 to 2011-10-03, matched to
+// sequences only loosely), so the base is fixed and documented: 2011-09-26 00:00:00 UTC, the first
+// recording day; --start-time sets another (time 0 is MRPT's "invalid time", shown as 1970).
 // --simplemap also writes the same scans with their poses as a CSimpleMap, the input of MRPT's
 // observations2map (MRPT builds a simplemap in memory: not for long drives).
 // --repeat N writes the frames N times along a continuing synthetic trajectory (each round starts
@@ -20,17 +27,24 @@
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/map/progress.hpp>
+#include <gseg/version.hpp>
 
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationRobotPose.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt/system/datetime.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -42,60 +56,100 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kUsage =
-    "usage: kitti2rawlog SEQUENCE_DIR -o OUT.rawlog [--poses FILE] [--calib FILE] [--no-poses]\n"
-    "                    [--first N] [--last M] [--simplemap OUT.simplemap] [--repeat N]\n"
-    "  SEQUENCE_DIR  a KITTI odometry sequence: velodyne/NNNNNN.bin, optional times.txt, poses.txt, calib.txt\n"
-    "  --poses FILE  KITTI poses (3x4 per frame, camera-0); default SEQUENCE_DIR/poses.txt if present\n"
-    "  --calib FILE  calib.txt with Tr (velodyne to camera-0); default SEQUENCE_DIR/calib.txt\n"
-    "  --no-poses    write scans only, even if poses.txt is present\n"
-    "  --first N, --last M  convert frames N..M (frame numbers, inclusive)\n"
-    "  --simplemap F also write scans + poses as a CSimpleMap (input of observations2map; held in memory)\n"
-    "  --repeat N    the frames N times along a continuing trajectory (a long drive for benchmarks; needs poses)\n";
+/// The documented base of the time stamps: 2011-09-26 00:00:00 UTC (see the top of this file).
+constexpr const char* kDefaultStart = "2011-09-26T00:00:00Z";
 
 struct Cli {
     std::string sequence, output, poses, calib, simplemap;
     bool noPoses = false;
     long first = 0, last = -1, repeat = 1;
+    double start = 0;  ///< [s since the UNIX epoch] time of the drive's t = 0
 };
 
-long parseIndex(const std::string& flag, const std::string& v) {
-    std::size_t used = 0;
-    long n = -1;
-    try {
-        n = std::stol(v, &used);
-    } catch (const std::exception&) {
+/// "YYYY-MM-DD", "YYYY-MM-DDTHH:MM:SS[.fff][Z]" or "YYYY-MM-DD HH:MM:SS[.fff]" (UTC) as seconds
+/// since the UNIX epoch. Throws std::invalid_argument on anything else.
+double parseStartTime(const std::string& text) {
+    int y = 0, mo = 0, d = 0, h = 0, mi = 0, n = 0;
+    double sec = 0;
+    const char* s = text.c_str();
+    bool ok = std::sscanf(s, "%4d-%2d-%2d%n", &y, &mo, &d, &n) == 3 && n == 10;
+    if (ok && s[n] != '\0') {
+        int m = 0;
+        ok = (s[n] == 'T' || s[n] == ' ') && std::sscanf(s + n + 1, "%2d:%2d:%lf%n", &h, &mi, &sec, &m) == 3;
+        const char* rest = s + n + 1 + m;
+        ok = ok && (*rest == '\0' || (rest[0] == 'Z' && rest[1] == '\0'));
     }
-    if (used != v.size() || n < 0) throw std::invalid_argument(flag + " needs a frame number >= 0, got '" + v + "'");
-    return n;
+    ok = ok && y >= 1971 && y <= 9999 && mo >= 1 && mo <= 12 && d >= 1 && d <= 31 && h >= 0 && h < 24 && mi >= 0 &&
+         mi < 60 && sec >= 0 && sec < 61;
+    if (!ok)
+        throw std::invalid_argument("--start-time needs a UTC date YYYY-MM-DD or YYYY-MM-DDTHH:MM:SS (1971 to 9999), got '" +
+                                    text + "'");
+    std::tm tm{};
+    tm.tm_year = y - 1900, tm.tm_mon = mo - 1, tm.tm_mday = d, tm.tm_hour = h, tm.tm_min = mi;
+    return double(::timegm(&tm)) + sec;
 }
 
-Cli parseCli(int argc, char** argv) {
-    Cli c;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-            return argv[++i];
-        };
-        if (a == "-o" || a == "--output") c.output = value();
-        else if (a == "--poses") c.poses = value();
-        else if (a == "--calib") c.calib = value();
-        else if (a == "--simplemap") c.simplemap = value();
-        else if (a == "--no-poses") c.noPoses = true;
-        else if (a == "--first") c.first = parseIndex(a, value());
-        else if (a == "--last") c.last = parseIndex(a, value());
-        else if (a == "--repeat") c.repeat = std::max(1L, parseIndex(a, value()));
-        else if (a == "-h" || a == "--help") {
-            std::cout << kUsage;
-            std::exit(0);
-        } else if (!a.empty() && a[0] == '-') throw std::invalid_argument("unknown option " + a);
-        else if (c.sequence.empty()) c.sequence = a;
-        else throw std::invalid_argument("unexpected argument '" + a + "'");
+/// Exit codes.
+enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2 };
+
+/// Parses the command line into `c`; returns -1 to go on, or the exit code (0 after --help /
+/// --version, 2 on bad usage, with the message printed).
+int parseCli(int argc, char** argv, Cli& c) {
+    try {
+        TCLAP::CmdLine cmd(
+            "Convert a KITTI odometry sequence (velodyne/NNNNNN.bin, optional times.txt, poses.txt, calib.txt) into an "
+            "MRPT rawlog: per frame a CObservationOdometry and a CObservationRobotPose (when poses are known) and the "
+            "scan as a CObservationPointCloud (x, y, z, intensity). Time stamps: --start-time plus times.txt (10 Hz "
+            "without it). The old form `kitti2rawlog SEQUENCE_DIR -o OUT` still works. Exit code: 0 done, 1 bad input "
+            "(nothing written), 2 bad usage.",
+            ' ', GSEG_VERSION);
+        TCLAP::ValueArg<std::string> input("i", "input", "the KITTI sequence folder (e.g. sequences/00)", false, "",
+                                           "SEQUENCE_DIR", cmd);
+        TCLAP::UnlabeledValueArg<std::string> positional("sequence", "the sequence folder, old form (same as -i)", false,
+                                                         "", "SEQUENCE_DIR", cmd);
+        TCLAP::ValueArg<std::string> output("o", "output", "output rawlog (gzip)", true, "", "OUT.rawlog", cmd);
+        TCLAP::ValueArg<std::string> poses("", "poses", "KITTI poses (3x4 per frame, camera 0; default "
+                                           "SEQUENCE_DIR/poses.txt if present)", false, "", "FILE", cmd);
+        TCLAP::ValueArg<std::string> calib("", "calib", "calib.txt with Tr, velodyne to camera 0 (default "
+                                           "SEQUENCE_DIR/calib.txt)", false, "", "FILE", cmd);
+        TCLAP::SwitchArg noPoses("", "no-poses", "write the scans only, even if poses.txt is present", cmd);
+        TCLAP::ValueArg<long> first("", "first", "first frame to convert (frame number, default 0)", false, 0, "N", cmd);
+        TCLAP::ValueArg<long> last("", "last", "last frame to convert (inclusive; default the last one)", false, -1, "M", cmd);
+        TCLAP::ValueArg<std::string> simplemap("", "simplemap", "also write scans + poses as a CSimpleMap (the input of "
+                                               "MRPT's observations2map; held in memory: short drives only)", false, "",
+                                               "OUT.simplemap", cmd);
+        TCLAP::ValueArg<long> repeat("", "repeat", "the frames N times along a continuing trajectory (a long drive for "
+                                     "benchmarks; needs poses)", false, 1, "N", cmd);
+        TCLAP::ValueArg<std::string> start("", "start-time", std::string("UTC date and time of the drive's t = 0 of "
+                                           "times.txt (default ") + kDefaultStart + ", the first KITTI recording day; "
+                                           "KITTI odometry does not say when each sequence was recorded)",
+                                           false, kDefaultStart, "YYYY-MM-DD[THH:MM:SS]", cmd);
+        if (!cmd.parse(argc, argv)) {
+            for (int i = 1; i < argc; ++i)
+                if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "--version"))
+                    return kDone;
+            return kBadUsage;
+        }
+        if (!input.getValue().empty() && !positional.getValue().empty())
+            throw std::invalid_argument("give the sequence folder once: -i SEQUENCE_DIR (or the old positional form)");
+        c.sequence = input.getValue().empty() ? positional.getValue() : input.getValue();
+        if (c.sequence.empty()) throw std::invalid_argument("needs the sequence folder: -i SEQUENCE_DIR");
+        c.output = output.getValue(), c.poses = poses.getValue(), c.calib = calib.getValue();
+        c.simplemap = simplemap.getValue(), c.noPoses = noPoses.getValue();
+        c.first = first.getValue(), c.last = last.getValue(), c.repeat = repeat.getValue();
+        if (c.first < 0) throw std::invalid_argument("--first needs a frame number >= 0");
+        if (c.last < -1) throw std::invalid_argument("--last needs a frame number >= 0");
+        if (c.last >= 0 && c.last < c.first) throw std::invalid_argument("--last is before --first");
+        if (c.repeat < 1) throw std::invalid_argument("--repeat needs a count >= 1");
+        c.start = parseStartTime(start.getValue());
+    } catch (const TCLAP::ArgException& e) {
+        std::fprintf(stderr, "kitti2rawlog: %s (%s); see kitti2rawlog --help\n", e.error().c_str(), e.argId().c_str());
+        return kBadUsage;
+    } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "kitti2rawlog: %s; see kitti2rawlog --help\n", e.what());
+        return kBadUsage;
     }
-    if (c.sequence.empty() || c.output.empty()) throw std::invalid_argument("needs SEQUENCE_DIR and -o OUT.rawlog");
-    if (c.last >= 0 && c.last < c.first) throw std::invalid_argument("--last is before --first");
-    return c;
+    return -1;
 }
 
 /// Frame number and path of every velodyne/NNNNNN.bin in [first, last], sorted.
@@ -166,6 +220,15 @@ mrpt::obs::CObservationPointCloud::Ptr makeScan(const std::string& binPath, mrpt
     return obs;
 }
 
+mrpt::obs::CObservationOdometry::Ptr makeOdometry(const Eigen::Isometry3d& p, mrpt::Clock::time_point t) {
+    auto obs = mrpt::obs::CObservationOdometry::Create();
+    const mrpt::poses::CPose3D pose = toPose(p);
+    obs->odometry = mrpt::poses::CPose2D(pose.x(), pose.y(), pose.yaw());
+    obs->sensorLabel = "KITTI_ODOMETRY";
+    obs->timestamp = t;
+    return obs;
+}
+
 mrpt::obs::CObservationRobotPose::Ptr makePose(const Eigen::Isometry3d& p, mrpt::Clock::time_point t) {
     auto obs = mrpt::obs::CObservationRobotPose::Create();
     obs->pose.mean = toPose(p);
@@ -212,7 +275,8 @@ void run(const Cli& c) {
     gseg::map::checkOutputs(outputs, inputsOf(c, scans));  // before anything is written
     std::cerr << "kitti2rawlog: " << scans.size() << " scans (frames " << scans.front().first << ".." << scans.back().first
               << "), " << (poses ? "with poses" : "no poses") << ", "
-              << (times.empty() ? "no times.txt: 10 Hz time stamps" : "times from times.txt")
+              << (times.empty() ? "no times.txt: 10 Hz time stamps" : "times from times.txt") << " after "
+              << mrpt::system::dateTimeToString(mrpt::Clock::fromDouble(c.start)) << " UTC"
               << (c.repeat > 1 ? ", " + std::to_string(c.repeat) + " rounds" : std::string()) << "\n";
 
     std::vector<double> frameTimes;
@@ -228,9 +292,9 @@ void run(const Cli& c) {
     for (std::size_t n = 0; n < total; ++n) {
         const std::size_t i = n % scans.size(), r = n / scans.size();
         if (i == 0 && r > 0) roundStart = roundStart * repeater.round;
-        const auto t = mrpt::Clock::fromDouble(frameTimes[i] + double(r) * repeater.period);
+        const auto t = mrpt::Clock::fromDouble(c.start + frameTimes[i] + double(r) * repeater.period);
         const auto scan = makeScan(scans[i].second, t);
-        if (poses) out << *makePose(roundStart * (*poses)[i], t);
+        if (poses) out << *makeOdometry(roundStart * (*poses)[i], t) << *makePose(roundStart * (*poses)[i], t);
         out << *scan;
         if (!c.simplemap.empty()) {
             auto sf = mrpt::obs::CSensoryFrame::Create();
@@ -253,14 +317,16 @@ void run(const Cli& c) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    Cli cli;
+    if (const int code = parseCli(argc, argv, cli); code >= 0) return code;
     try {
-        run(parseCli(argc, argv));
-        return 0;
+        run(cli);
+        return kDone;
     } catch (const std::invalid_argument& e) {
-        std::cerr << "kitti2rawlog: " << e.what() << "\n" << kUsage;
-        return 2;
+        std::cerr << "kitti2rawlog: " << e.what() << "\n";
+        return kBadUsage;
     } catch (const std::exception& e) {
         std::cerr << "kitti2rawlog: " << gseg::map::reasonOf(e) << "\n";
-        return 1;
+        return kBadInput;
     }
 }

@@ -140,11 +140,13 @@ bool nextNumber(const std::uint8_t*& p, const std::uint8_t* end, double& value) 
 
 }  // namespace
 
-std::vector<float> parsePly(const std::uint8_t* data, std::size_t size, const std::string& name) {
-    if (size == 0) throw std::runtime_error(name + ": empty file");
-    const Header h = parseHeader(data, size, name);
-    const int ix = indexOf(h, "x"), iy = indexOf(h, "y"), iz = indexOf(h, "z"), ii = indexOf(h, "intensity");
-    if (ix < 0 || iy < 0 || iz < 0) throw std::runtime_error(name + ": PLY vertices lack x, y or z");
+namespace {
+
+/// Calls take(v, values) for every vertex of the file whose header is `h` (with at least one
+/// property), `values` holding the vertex's properties in header order. Checks the size announced
+/// in the header against the data first.
+template <class Take>
+void forEachVertex(const std::uint8_t* data, std::size_t size, const std::string& name, const Header& h, Take&& take) {
     const std::size_t remaining = size - h.dataOffset;
     std::size_t stride = 0;
     for (const Property& p : h.props) stride += std::size_t(p.size);
@@ -155,9 +157,7 @@ std::vector<float> parsePly(const std::uint8_t* data, std::size_t size, const st
         throw std::runtime_error(name + ": truncated PLY: " + std::to_string(h.vertices) + " vertices announced, the " +
                                  std::to_string(remaining) + " bytes after the header hold at most " +
                                  std::to_string(capacity));
-    std::vector<float> out(4 * h.vertices, 0.f);
     std::vector<double> values(h.props.size());
-    const int wanted[4] = {ix, iy, iz, ii};
     const std::uint8_t* p = data + h.dataOffset;
     const std::uint8_t* const end = data + size;
     for (std::size_t v = 0; v < h.vertices; ++v) {
@@ -169,10 +169,43 @@ std::vector<float> parsePly(const std::uint8_t* data, std::size_t size, const st
                 throw std::runtime_error(name + ": truncated or malformed PLY at vertex " + std::to_string(v));
             }
         }
+        take(v, values);
+    }
+}
+
+}  // namespace
+
+std::vector<float> parsePly(const std::uint8_t* data, std::size_t size, const std::string& name) {
+    if (size == 0) throw std::runtime_error(name + ": empty file");
+    const Header h = parseHeader(data, size, name);
+    const int wanted[4] = {indexOf(h, "x"), indexOf(h, "y"), indexOf(h, "z"), indexOf(h, "intensity")};
+    if (wanted[0] < 0 || wanted[1] < 0 || wanted[2] < 0) throw std::runtime_error(name + ": PLY vertices lack x, y or z");
+    std::vector<float> out;
+    forEachVertex(data, size, name, h, [&](std::size_t v, const std::vector<double>& values) {
+        if (out.empty()) out.assign(4 * h.vertices, 0.f);  // once the size is known to fit the file
         for (int a = 0; a < 4; ++a)
             if (wanted[a] >= 0) out[4 * v + std::size_t(a)] = toFloat(values[std::size_t(wanted[a])]);
-    }
+    });
     return out;
+}
+
+std::vector<double> parsePlyProperty(const std::uint8_t* data, std::size_t size, const std::string& name,
+                                     const std::string& property) {
+    if (size == 0) throw std::runtime_error(name + ": empty file");
+    const Header h = parseHeader(data, size, name);
+    const int k = indexOf(h, property.c_str());
+    if (k < 0) throw std::runtime_error(name + ": PLY vertices have no property '" + property + "'");
+    std::vector<double> out;
+    forEachVertex(data, size, name, h, [&](std::size_t v, const std::vector<double>& values) {
+        if (out.empty()) out.resize(h.vertices);  // once the size is known to fit the file
+        out[v] = values[std::size_t(k)];
+    });
+    return out;
+}
+
+std::vector<double> readPlyProperty(const std::string& path, const std::string& property) {
+    const std::vector<std::uint8_t> bytes = readFileBytes(path);
+    return parsePlyProperty(bytes.data(), bytes.size(), path, property);
 }
 
 std::vector<float> readPly(const std::string& path) {
@@ -181,27 +214,34 @@ std::vector<float> readPly(const std::string& path) {
 }
 
 std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                             const PlyColours& colours) {
+                             const PlyColours& colours, const PlyOptions& options) {
     if (labels.size() != cloud.size())
         throw std::invalid_argument("writeLabelledPly: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(cloud.size()) + " points");
-    std::string out = "ply\nformat binary_little_endian 1.0\ncomment gseg ground segmentation: green ground, red "
-                      "non-ground\nelement vertex " + std::to_string(cloud.size()) +
-                      "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar "
-                      "green\nproperty uchar blue\nend_header\n";
-    const std::size_t header = out.size();
-    out.resize(header + cloud.size() * 15);
+    if (options.intensity && cloud.strideBytes() < 4 * sizeof(float))
+        throw std::invalid_argument("writeLabelledPly: intensity asked for, but the points are " +
+                                    std::to_string(cloud.strideBytes()) + " bytes apart (x, y, z, intensity need 16)");
+    std::string out = "ply\nformat binary_little_endian 1.0\ncomment " + options.comment + "\ncomment label: 1 " +
+                      options.groundName + " (" + colours.groundName + "), 0 " + options.nonGroundName + " (" +
+                      colours.nonGroundName + ")\nelement vertex " + std::to_string(cloud.size()) +
+                      "\nproperty float x\nproperty float y\nproperty float z\n" +
+                      (options.intensity ? "property float intensity\n" : "") +
+                      "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar label\nend_header\n";
+    const std::size_t header = out.size(), record = options.intensity ? 20 : 16;
+    out.resize(header + cloud.size() * record);
     char* p = out.data() + header;
-    for (std::size_t i = 0; i < cloud.size(); ++i, p += 15) {
-        std::memcpy(p, cloud.point(i), 12);
-        std::memcpy(p + 12, labels[i] ? colours.ground : colours.nonGround, 3);
+    for (std::size_t i = 0; i < cloud.size(); ++i, p += record) {
+        std::memcpy(p, cloud.point(i), options.intensity ? 16 : 12);
+        char* rest = p + record - 4;
+        std::memcpy(rest, labels[i] ? colours.ground : colours.nonGround, 3);
+        rest[3] = char(labels[i] ? 1 : 0);
     }
     return out;
 }
 
 void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                      const PlyColours& colours) {
-    const std::string bytes = labelledPlyBytes(cloud, labels, colours);
+                      const PlyColours& colours, const PlyOptions& options) {
+    const std::string bytes = labelledPlyBytes(cloud, labels, colours, options);
     writeFileAtomic(path, bytes.data(), bytes.size());
 }
 

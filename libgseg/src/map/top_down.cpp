@@ -1,11 +1,13 @@
-// The top-down grid (sparse tiles), its picture layout and the PNG.
-#include <gseg/map/output_files.hpp>
+// The top-down grid (sparse tiles), its picture layout and the PNG (drawn with the shared picture
+// conventions of gseg/mrpt/picture.hpp: x up, y to the left, as the scan pictures).
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/mrpt/picture.hpp>
 
-#include "png.hpp"
 #include "voxel_keys.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -14,47 +16,57 @@ namespace {
 
 std::int64_t floorDiv(std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-constexpr std::uint8_t kPathPixel = 3, kStartPixel = 4;  // drawn over the cell classes
+constexpr int kTitleBand = 56, kMargin = 12, kMinWidth = 760;  // [px] around the map
+constexpr int kEnlargeTo = 640;                                   // [px] longer side of a small map
 
-Rgb pixelColour(std::uint8_t v) {
-    if (v == kPathPixel) return {40, 120, 255};
-    if (v == kStartPixel) return {255, 255, 255};
-    return colourOf(CellClass(v));
+gseg::mrpt::Colour colour(Rgb c) { return {c.r, c.g, c.b}; }
+const gseg::mrpt::Colour kPath{40, 120, 255}, kStart{255, 255, 255};
+
+/// The legend under the map.
+std::vector<gseg::mrpt::LegendEntry> legendEntries() {
+    return {{colour(colourOf(CellClass::Traversable)), "traversable (ground, nothing within clearance)"},
+            {colour(colourOf(CellClass::Obstacle)), "obstacle"},
+            {colour(colourOf(CellClass::Unknown)), "unknown: not seen (page around the map darker)"},
+            {kPath, "driven path; arrowhead: direction of travel"},
+            {kStart, "start of the path"},
+            {{}, "top view: x up, y (left) to the left", false},
+            {{}, "(kitti2rawlog drives: x = forward at the start)", false}};
 }
 
-/// Pixel classes of the picture (the most blocking class of the cells a pixel covers), path on top.
-std::vector<std::uint8_t> renderPixels(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& path, const PictureLayout& l) {
-    std::vector<std::uint8_t> px(std::size_t(l.width) * std::size_t(l.height), std::uint8_t(CellClass::Unknown));
+/// Class of every map pixel (the most blocking class of the cells it covers), row-major.
+std::vector<std::uint8_t> mapPixels(const TopDownGrid& grid, const PictureLayout& l) {
+    const int w = l.mapWidth / l.pixelsPerCell, h = l.mapHeight / l.pixelsPerCell;
+    std::vector<std::uint8_t> px(std::size_t(w) * std::size_t(h), std::uint8_t(CellClass::Unknown));
     grid.forEachCell([&](std::int64_t ix, std::int64_t iy, CellClass c) {
-        const std::size_t col = std::size_t((ix - l.leftCell) / l.cellsPerPixel), row = std::size_t((l.topCell - iy) / l.cellsPerPixel);
-        std::uint8_t& p = px[row * std::size_t(l.width) + col];
+        const std::size_t col = std::size_t((l.leftCell - iy) / l.cellsPerPixel), row = std::size_t((l.topCell - ix) / l.cellsPerPixel);
+        std::uint8_t& p = px[row * std::size_t(w) + col];
         p = std::max(p, std::uint8_t(c));  // Obstacle > Traversable > Unknown
     });
-    auto put = [&](int c, int r, std::uint8_t v) {
-        if (c >= 0 && r >= 0 && c < l.width && r < l.height) px[std::size_t(r) * std::size_t(l.width) + std::size_t(c)] = v;
-    };
-    int pc = 0, pr = 0;
-    bool havePrevious = false;
+    return px;
+}
+
+/// The path: a line through the centres of the sensor positions' blocks, the start as a square,
+/// an arrowhead at the end pointing the way the last metres went.
+void drawPath(gseg::mrpt::Picture& pic, const std::vector<Eigen::Vector3d>& path, const PictureLayout& l) {
+    const int half = l.pixelsPerCell / 2;
+    std::vector<std::pair<int, int>> pts;
     for (const auto& p : path) {
         int c = 0, r = 0;
-        if (!l.toPixel(p.x(), p.y(), c, r)) continue;
-        if (havePrevious) {  // Bresenham line from the previous position
-            const int dc = std::abs(c - pc), dr = -std::abs(r - pr), sc = pc < c ? 1 : -1, sr = pr < r ? 1 : -1;
-            for (int err = dc + dr, x = pc, y = pr;;) {
-                put(x, y, kPathPixel);
-                if (x == c && y == r) break;
-                const int e2 = 2 * err;
-                if (e2 >= dr) err += dr, x += sc;
-                if (e2 <= dc) err += dc, y += sr;
-            }
-        }
-        pc = c, pr = r, havePrevious = true;
+        if (l.toPixel(p.x(), p.y(), c, r)) pts.emplace_back(c + half, r + half);
     }
-    int c = 0, r = 0;
-    if (!path.empty() && l.toPixel(path[0].x(), path[0].y(), c, r))
-        for (int dr = -1; dr <= 1; ++dr)
-            for (int dc = -1; dc <= 1; ++dc) put(c + dc, r + dr, kStartPixel);
-    return px;
+    for (std::size_t i = 1; i < pts.size(); ++i) pic.line(pts[i - 1].first, pts[i - 1].second, pts[i].first, pts[i].second, kPath, 2);
+    if (pts.empty()) return;
+    for (std::size_t k = pts.size() - 1; k-- > 0;) {  // the arrowhead: from the last position at least 12 px back
+        const int dx = pts.back().first - pts[k].first, dy = pts.back().second - pts[k].second;
+        if (dx * dx + dy * dy < 144 && k > 0) continue;
+        if (dx || dy) {
+            const double n = std::hypot(double(dx), double(dy));
+            pic.arrow(pts.back().first - int(std::lround(14 * dx / n)), pts.back().second - int(std::lround(14 * dy / n)),
+                      int(std::lround(14 * dx / n)), int(std::lround(14 * dy / n)), "", 2, kPath);
+        }
+        break;
+    }
+    pic.fill(pts[0].first - 3, pts[0].second - 3, pts[0].first + 3, pts[0].second + 3, kStart);
 }
 
 }  // namespace
@@ -87,9 +99,11 @@ void TopDownGrid::set(std::int64_t ix, std::int64_t iy, CellClass c) {
 std::size_t TopDownGrid::count(CellClass c) const { return counts_[std::size_t(c)]; }
 
 bool PictureLayout::toPixel(double x, double y, int& col, int& row) const {
-    const std::int64_t dx = std::int64_t(std::floor(x / cell)) - leftCell, dy = topCell - std::int64_t(std::floor(y / cell));
-    if (dx < 0 || dy < 0 || dx / cellsPerPixel >= width || dy / cellsPerPixel >= height) return false;
-    col = int(dx / cellsPerPixel), row = int(dy / cellsPerPixel);
+    const std::int64_t across = leftCell - std::int64_t(std::floor(y / cell)), down = topCell - std::int64_t(std::floor(x / cell));
+    if (across < 0 || down < 0) return false;
+    const std::int64_t c = across / cellsPerPixel * pixelsPerCell, r = down / cellsPerPixel * pixelsPerCell;
+    if (c >= mapWidth || r >= mapHeight) return false;
+    col = mapLeft + int(c), row = mapTop + int(r);
     return true;
 }
 
@@ -106,41 +120,58 @@ PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Ve
     }
     if (!any) return l;
     const int margin = 5;  // cells around the content
-    l.leftCell = lo[0] - margin;
-    l.topCell = hi[1] + margin;
-    l.cellsWide = std::uint64_t(hi[0] - lo[0] + 1 + 2 * margin);
-    l.cellsHigh = std::uint64_t(hi[1] - lo[1] + 1 + 2 * margin);
+    l.topCell = hi[0] + margin;   // x up
+    l.leftCell = hi[1] + margin;  // y to the left
+    l.cellsHigh = std::uint64_t(hi[0] - lo[0] + 1 + 2 * margin);
+    l.cellsWide = std::uint64_t(hi[1] - lo[1] + 1 + 2 * margin);
     const std::uint64_t side = std::max(l.cellsWide, l.cellsHigh);
     l.cellsPerPixel = int((side + std::uint64_t(maxSide) - 1) / std::uint64_t(maxSide));
+    if (l.cellsPerPixel == 1) l.pixelsPerCell = std::clamp(int(std::uint64_t(kEnlargeTo) / side), 1, 8);
     const auto s = std::uint64_t(l.cellsPerPixel);
-    l.width = int((l.cellsWide + s - 1) / s);
-    l.height = int((l.cellsHigh + s - 1) / s);
+    l.mapWidth = int((l.cellsWide + s - 1) / s) * l.pixelsPerCell;
+    l.mapHeight = int((l.cellsHigh + s - 1) / s) * l.pixelsPerCell;
+    l.width = std::max(l.mapWidth + 2 * kMargin, kMinWidth);
+    l.mapLeft = (l.width - l.mapWidth) / 2;
+    l.mapTop = kTitleBand;
+    l.height = kTitleBand + l.mapHeight + kMargin + gseg::mrpt::Picture::legendHeight(legendEntries().size()) + kMargin;
     return l;
 }
 
-std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath) {
+std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, const std::string& title) {
     const PictureLayout l = pictureLayout(grid, drivenPath);
     if (l.width <= 0) throw std::runtime_error("empty map: no picture to draw");
-    const std::vector<std::uint8_t> px = renderPixels(grid, drivenPath, l);
-    return detail::encodePngRgb(l.width, l.height, [&](int row, std::uint8_t* rgb) {
-        const std::uint8_t* in = &px[std::size_t(row) * std::size_t(l.width)];
-        for (int c = 0; c < l.width; ++c, rgb += 3) {
-            const Rgb v = pixelColour(in[c]);
-            rgb[0] = v.r, rgb[1] = v.g, rgb[2] = v.b;
-        }
-    });
+    gseg::mrpt::Picture pic(l.width, l.height, colour(backgroundColour()));
+    const std::vector<std::uint8_t> px = mapPixels(grid, l);
+    const int w = l.mapWidth / l.pixelsPerCell, p = l.pixelsPerCell;
+    for (int row = 0; row < l.mapHeight; ++row)
+        for (int col = 0; col < l.mapWidth; ++col)
+            pic.pixel(l.mapLeft + col, l.mapTop + row, colour(colourOf(CellClass(px[std::size_t(row / p) * std::size_t(w) + std::size_t(col / p)]))));
+    drawPath(pic, drivenPath, l);
+    char scale[96];
+    std::snprintf(scale, sizeof scale, "%.2f m cells%s", l.cell,
+                  l.cellsPerPixel > 1 ? (", " + std::to_string(l.cellsPerPixel) + " x " + std::to_string(l.cellsPerPixel) +
+                                         " cells a pixel (the most blocking class shown)").c_str()
+                                      : "");
+    pic.title("gseg traversability map" + (title.empty() ? std::string() : ": " + title), scale);
+    const int legendTop = l.mapTop + l.mapHeight + kMargin;
+    pic.legend(kMargin, legendTop, legendEntries());
+    // Axes and scale at the right of the legend band.
+    const int ax = l.width - 70, ay = legendTop + 70;
+    pic.arrow(ax, ay, 0, -48, "x");
+    pic.arrow(ax, ay, -48, 0, "y");
+    pic.scaleBar(l.width - kMargin - 4, legendTop + 124, l.pixelsPerMetre(), 200);
+    return pic.png();
 }
 
-void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath) {
+void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
+                     const std::string& title) {
     std::string png;
     try {
-        png = encodeTopDownPng(grid, drivenPath);
+        png = encodeTopDownPng(grid, drivenPath, title);
     } catch (const std::exception& e) {
         throw std::runtime_error(path + ": " + e.what());
     }
-    AtomicFiles file({path});
-    writeFileChecked(file.temporary(0), png);
-    file.commit();
+    gseg::io::writeFileAtomic(path, png.data(), png.size());
 }
 
 }  // namespace gseg::map

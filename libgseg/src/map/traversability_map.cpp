@@ -1,7 +1,9 @@
 #include <gseg/map/traversability_map.hpp>
 
+#include <gseg/io/ply.hpp>
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/scan_update.hpp>
+#include <gseg/mrpt/scene.hpp>
 
 #include "brick_map.hpp"
 #include "map_tree.hpp"
@@ -9,6 +11,11 @@
 
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
+
+#include <mrpt/opengl/COctoMapVoxels.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfLines.h>
+#include <mrpt/opengl/stock_objects.h>
 
 #include <algorithm>
 #include <cmath>
@@ -51,6 +58,93 @@ struct Column {
 using detail::kGround;
 using detail::kObstacles;
 
+/// The occupied voxels of the map as they are shown (.ply, .3Dscene): centres [m] and labels (1
+/// ground, 0 obstacle; a voxel occupied in both maps is an obstacle), in Morton-code order.
+struct OccupiedVoxels {
+    std::vector<float> xyz;
+    std::vector<std::uint8_t> labels;
+};
+
+OccupiedVoxels occupiedVoxels(const detail::BrickMap& voxels, const detail::MapTree& configured) {
+    std::vector<std::pair<std::uint64_t, std::uint8_t>> codes;
+    const float occupied = configured.getOccupancyThresLog();
+    voxels.forEachVoxel(kObstacles, [&](std::uint64_t code, float value) {
+        if (value >= occupied) codes.emplace_back(code, 0);
+    });
+    voxels.forEachVoxel(kGround, [&](std::uint64_t code, float value) {
+        if (value >= occupied && !voxels.occupied(kObstacles, code)) codes.emplace_back(code, 1);
+    });
+    std::sort(codes.begin(), codes.end());  // the files must not depend on the order the bricks were made in
+    OccupiedVoxels v;
+    v.xyz.reserve(3 * codes.size());
+    v.labels.reserve(codes.size());
+    for (const auto& [code, label] : codes) {
+        const octomap::point3d c = configured.keyToCoord(detail::keyOfCode(code));
+        v.xyz.insert(v.xyz.end(), {c.x(), c.y(), c.z()});
+        v.labels.push_back(label);
+    }
+    return v;
+}
+
+std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
+    gseg::io::PlyColours colours;
+    auto set = [](std::uint8_t* rgb, Rgb c) { rgb[0] = c.r, rgb[1] = c.g, rgb[2] = c.b; };
+    set(colours.ground, colourOf(CellClass::Traversable));
+    set(colours.nonGround, colourOf(CellClass::Obstacle));
+    gseg::io::PlyOptions options;
+    char comment[128];
+    std::snprintf(comment, sizeof comment, "gseg traversability map: centres of the occupied %.2f m voxels", resolution);
+    options.comment = comment;
+    options.nonGroundName = "obstacle";
+    return gseg::io::labelledPlyBytes(PointCloudView(v.xyz.data(), v.labels.size()), v.labels, colours, options);
+}
+
+std::string mapSceneBytes(const OccupiedVoxels& v, double resolution, const std::vector<Eigen::Vector3d>& path) {
+    namespace gl = ::mrpt::opengl;
+    auto voxels = gl::COctoMapVoxels::Create();
+    voxels->setName("gseg traversability map: ground voxels green, obstacle voxels red");
+    voxels->resizeVoxelSets(2);  // 0: ground, 1: obstacles
+    voxels->showGridLines(false);
+    voxels->enableLights(true);
+    // Without culling, a voxel's dark bottom face wins the depth test against its top face
+    // beyond some 40 m from the camera (24-bit depth buffer): the far map turned black.
+    voxels->cullFaces(::mrpt::opengl::TCullFace::BACK);
+    voxels->enableCubeTransparency(false);
+    const Rgb colours[2] = {colourOf(CellClass::Obstacle), colourOf(CellClass::Traversable)};
+    for (std::size_t i = 0; i < v.labels.size(); ++i) {
+        const Rgb c = colours[v.labels[i]];
+        voxels->push_back_Voxel(v.labels[i] ? 0 : 1, gl::COctoMapVoxels::TVoxel({v.xyz[3 * i], v.xyz[3 * i + 1], v.xyz[3 * i + 2]},
+                                                                                  resolution, ::mrpt::img::TColor(c.r, c.g, c.b)));
+    }
+    gl::COpenGLScene scene;
+    scene.insert(voxels);
+    auto line = gl::CSetOfLines::Create();
+    line->setName("driven path (sensor positions), blue");
+    line->setColor_u8(40, 120, 255);
+    line->setLineWidth(3);
+    for (std::size_t i = 1; i < path.size(); ++i)
+        line->appendLine(path[i - 1].x(), path[i - 1].y(), path[i - 1].z(), path[i].x(), path[i].y(), path[i].z());
+    scene.insert(line);
+    // Lines are one pixel wide in most OpenGL core profiles: blue boxes at the sensor positions
+    // make the path visible from afar.
+    auto marks = gl::COctoMapVoxels::Create();
+    marks->setName("sensor positions, blue");
+    marks->resizeVoxelSets(1);
+    marks->showGridLines(false);
+    marks->enableLights(true);
+    marks->enableCubeTransparency(false);
+    marks->cullFaces(::mrpt::opengl::TCullFace::BACK);
+    for (const auto& p : path)
+        marks->push_back_Voxel(0, gl::COctoMapVoxels::TVoxel({float(p.x()), float(p.y()), float(p.z())}, 2 * resolution,
+                                                             ::mrpt::img::TColor(40, 120, 255)));
+    scene.insert(marks);
+    auto axes = gl::stock_objects::CornerXYZ(2.0f);
+    axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
+    if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
+    scene.insert(axes);
+    return gseg::mrpt::sceneFileBytes(scene);
+}
+
 }  // namespace
 
 void TraversabilityOptions::validate() const {
@@ -72,9 +166,11 @@ Rgb colourOf(CellClass c) {
     switch (c) {
         case CellClass::Traversable: return {60, 180, 75};
         case CellClass::Obstacle: return {220, 40, 40};
-        default: return {45, 45, 50};
+        default: return {105, 105, 115};
     }
 }
+
+Rgb backgroundColour() { return {24, 24, 30}; }
 
 TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
     : options_(options) {
@@ -190,7 +286,14 @@ MapStats TraversabilityMap::stats() const {
 }
 
 std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefix) {
-    return {prefix + "_ground.bt", prefix + "_obstacles.bt", prefix + "_traversability.ot", prefix + "_traversability.png"};
+    return {prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
+            prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene"};
+}
+
+std::string TraversabilityMap::pictureTitle() const {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%zu scan%s, %.2f m driven", stats_.scans, stats_.scans == 1 ? "" : "s", stats_.pathLength);
+    return buf;
 }
 
 std::vector<std::string> TraversabilityMap::write(const std::string& prefix) const {
@@ -206,7 +309,10 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
         const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
         voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
     });
-    writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_));
+    writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_, pictureTitle()));
+    const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
+    writeFileChecked(files.temporary(4), mapPlyBytes(v, res));
+    writeFileChecked(files.temporary(5), mapSceneBytes(v, res, path_));
     files.commit();
     return files.paths();
 }

@@ -101,19 +101,27 @@ private:
     static std::int64_t tileY(std::uint64_t key);
 };
 
-/// Where the top-down picture puts the grid: the cells with data and the driven path, with a
-/// margin of 5 cells; one pixel per cell, or one per cellsPerPixel x cellsPerPixel cells (the most
-/// blocking class wins) where the picture would exceed maxSide pixels.
+/// Where the top-down picture puts the grid. The picture follows the convention of gseg's scan
+/// pictures: world x up, y to the left (for a kitti2rawlog drive, x is the vehicle's forward
+/// direction at the first scan). It frames the cells with data and the driven path, with a margin
+/// of 5 cells: a small map is enlarged (pixelsPerCell, about 640 pixels on its longer side), a
+/// large one reduced to at most maxSide pixels a side (cellsPerPixel, the most blocking class of
+/// the cells a pixel covers wins). Around the map: a title band above, a legend band below.
 struct PictureLayout {
-    std::int64_t leftCell = 0;  ///< cell index (x) of column 0
-    std::int64_t topCell = 0;   ///< cell index (y) of row 0 (north up: rows go to smaller y)
-    int width = 0, height = 0;  ///< [pixels]
-    int cellsPerPixel = 1;
-    double cell = 0.2;          ///< [m]
-    std::uint64_t cellsWide = 0, cellsHigh = 0;  ///< [cells] the framed area
+    std::int64_t topCell = 0;   ///< cell index along x of the map's first row (x up: rows go to smaller x)
+    std::int64_t leftCell = 0;  ///< cell index along y of the map's first column (y left: columns go to smaller y)
+    int cellsPerPixel = 1;      ///< > 1: a large map, reduced
+    int pixelsPerCell = 1;      ///< > 1: a small map, enlarged
+    int mapLeft = 0, mapTop = 0;      ///< [pixels] top-left corner of the map in the picture
+    int mapWidth = 0, mapHeight = 0;  ///< [pixels] the map area
+    int width = 0, height = 0;        ///< [pixels] the whole picture (0: nothing to draw)
+    double cell = 0.2;                ///< [m]
+    std::uint64_t cellsWide = 0, cellsHigh = 0;  ///< [cells] the framed area: along y (across), along x (down)
 
-    /// Pixel of world (x, y); false outside the picture.
+    /// Top-left pixel (in the picture) of the block that shows world (x, y); false outside the map.
     bool toPixel(double x, double y, int& col, int& row) const;
+    /// [pixels per metre] of the map area.
+    double pixelsPerMetre() const { return double(pixelsPerCell) / (double(cellsPerPixel) * cell); }
 };
 PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, int maxSide = 4096);
 
@@ -181,13 +189,23 @@ public:
     /// Counters and voxel counts (walks both trees).
     MapStats stats() const;
 
-    /// The four files write() writes for `prefix`, in this order.
+    /// The six files write() writes for `prefix`, in this order.
     static std::vector<std::string> outputPaths(const std::string& prefix);
-    /// Writes `<prefix>_ground.bt`, `<prefix>_obstacles.bt`, `<prefix>_traversability.ot` and
-    /// `<prefix>_traversability.png`: all of them or none (temporary files, then renamed; if a
-    /// rename fails the previous versions are put back). Throws std::runtime_error naming the
-    /// file on failure and std::logic_error if no scan was inserted. Returns the paths written.
+    /// Writes, all of them or none (temporary files, then renamed; if a rename fails the previous
+    /// versions are put back):
+    /// - `<prefix>_ground.bt`, `<prefix>_obstacles.bt`: the occupancy OcTrees (liboctomap, octovis);
+    /// - `<prefix>_traversability.ot`: ground and obstacle voxels in one ColorOcTree;
+    /// - `<prefix>_traversability.png`: the top-down picture (writeTopDownPng());
+    /// - `<prefix>_traversability.ply`: the centres of the occupied voxels, coloured, with a
+    ///   `label` property (1 ground, 0 obstacle) for CloudCompare and other point-cloud viewers;
+    /// - `<prefix>_traversability.3Dscene`: an MRPT scene for SceneViewer3D: the same voxels as
+    ///   coloured boxes (COctoMapVoxels), the driven path as a blue line with a blue box at each
+    ///   sensor position, axes at its start.
+    /// The same map always gives the same bytes. Throws std::runtime_error naming the file on
+    /// failure and std::logic_error if no scan was inserted. Returns the paths written.
     std::vector<std::string> write(const std::string& prefix) const;
+    /// The first line of the picture's title: "6 scans, 3.55 m driven".
+    std::string pictureTitle() const;
 
 private:
     TraversabilityOptions options_;
@@ -199,17 +217,23 @@ private:
     MapStats stats_;
 };
 
-/// Writes the picture (traversable green, obstacle red, unknown dark grey, the path as a blue
-/// polyline with its start marked white) as a PNG, atomically. Throws std::runtime_error naming
-/// the file on failure.
-void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath);
+/// Writes the picture (pictureLayout(): traversable green, obstacle red, unknown grey, the page
+/// around the mapped area darker; the path as a blue line from a white start square to an
+/// arrowhead in the direction of travel; title, legend naming every colour, scale bar and the
+/// x / y axes) as a PNG, atomically. `title` is the first line (e.g. "6 scans, 3.55 m driven").
+/// Throws std::runtime_error naming the file on failure.
+void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
+                     const std::string& title = "");
 /// The same PNG as bytes.
-std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath);
+std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
+                             const std::string& title = "");
 
-/// RGB of each class in the PNG.
+/// RGB of each class in the PNG (also the voxel colours of the `.ot`, `.ply` and `.3Dscene`).
 struct Rgb {
     std::uint8_t r, g, b;
 };
 Rgb colourOf(CellClass c);
+/// RGB of the page around the mapped area (darker than Unknown).
+Rgb backgroundColour();
 
 }  // namespace gseg::map

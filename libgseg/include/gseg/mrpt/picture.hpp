@@ -1,0 +1,130 @@
+#pragma once
+/// \file picture.hpp
+/// What every gseg picture shares (scan top views, failure breakdowns, traversability maps, the
+/// eval plot): a title that names files, not paths; a legend that names every colour; a scale bar
+/// of a round length; one orientation convention for top views (x forward up, y left to the left,
+/// stated in the picture and drawn as an arrow); and PNG output written completely or not at all.
+
+#include <gseg/point_cloud.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mrpt::img {
+class CImage;
+}
+
+namespace gseg::mrpt {
+
+/// 8-bit RGB.
+struct Colour {
+    std::uint8_t r = 0, g = 0, b = 0;
+};
+
+/// One legend line: a colour swatch and its text (`swatch` false: text only, e.g. the orientation).
+struct LegendEntry {
+    Colour colour;
+    std::string text;
+    bool swatch = true;
+};
+
+/// The orientation line of every top view: "top view: x (forward) up, y (left) to the left".
+extern const char* const kTopViewOrientation;
+
+/// A name for a picture's title: the file name, with the folders of the KITTI layout kept
+/// ("08/velodyne/000000.bin"), never the folders above it. Empty for an empty path.
+std::string displayName(const std::string& path);
+
+/// An RGB canvas (MRPT's CImage) with gseg's decorations. Text colour follows the background
+/// (light on dark, black on light). Text drawing is serialised inside (MRPT 2.5.8's is not
+/// thread-safe), so pictures can be drawn from several threads.
+class Picture {
+public:
+    static constexpr int kLineHeight = 20;  ///< [px] legend and title line spacing
+    static constexpr int kCharWidth = 9;    ///< [px] width of a character of the default font
+
+    /// Throws std::invalid_argument on a size below 1 or above 16384 pixels a side.
+    Picture(int width, int height, Colour background);
+    ~Picture();
+    Picture(Picture&&) noexcept;
+    Picture& operator=(Picture&&) noexcept;
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    Colour background() const { return background_; }
+    Colour textColour() const;
+
+    /// Sets one pixel (ignored outside the picture).
+    void pixel(int x, int y, Colour c);
+    /// Filled rectangle, corners inclusive, clipped to the picture.
+    void fill(int x0, int y0, int x1, int y1, Colour c);
+    void line(int x0, int y0, int x1, int y1, Colour c, int width = 1);
+    void circle(int x, int y, int radius, Colour c);
+    /// Text with its top-left corner at (x, y); in textColour() unless given.
+    void text(int x, int y, const std::string& s);
+    void text(int x, int y, const std::string& s, Colour c);
+
+    /// Title (bold) and a second line below it, at the top-left corner.
+    void title(const std::string& title, const std::string& subtitle = "");
+    /// Legend with its top-left corner at (x, y), one entry per line; returns the height used.
+    int legend(int x, int y, const std::vector<LegendEntry>& entries);
+    /// Height of legend() for n entries.
+    static int legendHeight(std::size_t n) { return int(n) * kLineHeight; }
+    /// Scale bar whose right end is at (xRight, y): the longest of 1, 2, 5 x 10^k m that fits in
+    /// maxPixels, labelled above ("10 m").
+    void scaleBar(int xRight, int y, double pixelsPerMetre, int maxPixels = 150);
+    /// An arrow from (x, y) to (x + dx, y + dy) with its head at the end, labelled beside the head;
+    /// in textColour() unless given.
+    void arrow(int x, int y, int dx, int dy, const std::string& label, int width = 2);
+    void arrow(int x, int y, int dx, int dy, const std::string& label, int width, Colour c);
+
+    /// The picture as a PNG file (encodePng()).
+    std::string png() const;
+    /// Writes png() to `path` through gseg::io::AtomicFile (complete or absent).
+    void save(const std::string& path) const;
+
+    ::mrpt::img::CImage& image() { return *image_; }
+    const ::mrpt::img::CImage& image() const { return *image_; }
+
+private:
+    std::unique_ptr<::mrpt::img::CImage> image_;
+    int width_ = 0, height_ = 0;
+    Colour background_;
+    bool bgr_ = false;  ///< channel order of the image
+};
+
+/// One class of points in a top view of a scan.
+struct PointClass {
+    Colour colour;
+    std::string name;  ///< legend text; the count is appended ("ground: 81122")
+    int layer = 0;     ///< drawn in increasing layer (errors last, over the rest)
+    int sizePx = 2;    ///< [px] edge of a point's square
+};
+
+/// How a top view of a scan is drawn: the sensor at the centre, x forward up, y left to the left.
+struct TopViewOptions {
+    int sizePx = 800;          ///< [px] width and height
+    double rangeM = 0;         ///< [m] half-width shown; 0: fit the 98th percentile of the points' range (5 to 80 m)
+    double ringStepM = 10;     ///< [m] distance between range circles (0: none)
+    std::string title;         ///< first line (name files with displayName())
+};
+
+/// Draws a top view: every point i in the colour of classes[classOf[i]] (points with a NaN or
+/// infinite coordinate, or a class index out of range, are not drawn), range circles, the sensor
+/// at the centre with an arrow along x (forward), a scale bar, the title, the orientation and a
+/// legend with every class and its count. Throws std::invalid_argument if classOf and the cloud
+/// differ in size.
+Picture drawTopView(const PointCloudView& cloud, const std::vector<std::uint8_t>& classOf,
+                    const std::vector<PointClass>& classes, const TopViewOptions& options);
+
+/// PNG bytes of an 8-bit grey or colour image, encoded by gseg (zlib).
+std::string encodePng(const ::mrpt::img::CImage& image);
+
+/// Writes `image` as a PNG through gseg::io::AtomicFile: every write and the close checked, so a
+/// full disk is an error and leaves nothing (MRPT's CImage::saveToFile reports success on a
+/// truncated file). Throws std::runtime_error naming `path`.
+void writePng(const std::string& path, const ::mrpt::img::CImage& image);
+
+}  // namespace gseg::mrpt

@@ -1,0 +1,266 @@
+// The shared drawing of every gseg picture, and PNG output.
+#include <gseg/io/atomic_file.hpp>
+#include <gseg/mrpt/picture.hpp>
+
+#include <mrpt/img/CImage.h>
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+
+namespace gseg::mrpt {
+namespace {
+
+::mrpt::img::TColor tcolor(Colour c) { return ::mrpt::img::TColor(c.r, c.g, c.b); }
+
+/// MRPT 2.5.8's CImage text drawing is not thread-safe (eval's workers crashed the heap without it).
+std::mutex& textMutex() {
+    static std::mutex m;
+    return m;
+}
+
+void putBigEndian(std::string& out, std::uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) out += char((v >> shift) & 0xff);
+}
+
+void putChunk(std::string& out, const char* type, const std::string& data) {
+    putBigEndian(out, std::uint32_t(data.size()));
+    const std::size_t start = out.size();
+    out += type;
+    out += data;
+    putBigEndian(out, std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(out.data() + start), uInt(out.size() - start))));
+}
+
+double fitRange(const PointCloudView& cloud) {
+    std::vector<float> r;
+    r.reserve(cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+        if (const float d = std::hypot(cloud.x(i), cloud.y(i)); std::isfinite(d)) r.push_back(d);
+    if (r.empty()) return 10.0;
+    const std::size_t k = std::min(r.size() - 1, std::size_t(0.98 * double(r.size())));
+    std::nth_element(r.begin(), r.begin() + long(k), r.end());
+    return std::clamp(double(r[k]) * 1.05, 5.0, 80.0);
+}
+
+std::string metres(double m) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, m >= 1 ? "%.0f m" : "%.1f m", m);
+    return buf;
+}
+
+}  // namespace
+
+const char* const kTopViewOrientation = "top view: x (forward) up, y (left) to the left";
+
+std::string displayName(const std::string& path) {
+    const std::filesystem::path p = std::filesystem::path(path).lexically_normal();
+    const std::string name = p.filename().string();
+    const std::filesystem::path folder = p.parent_path();
+    if (folder.filename() == "velodyne" && !folder.parent_path().filename().empty())
+        return (folder.parent_path().filename() / "velodyne" / name).string();
+    return name;
+}
+
+Picture::Picture(int width, int height, Colour background)
+    : width_(width), height_(height), background_(background) {
+    if (width < 1 || height < 1 || width > 16384 || height > 16384)
+        throw std::invalid_argument("Picture: " + std::to_string(width) + " x " + std::to_string(height) +
+                                    " pixels: each side must be 1 to 16384");
+    image_ = std::make_unique<::mrpt::img::CImage>(width, height, ::mrpt::img::CH_RGB);
+    bgr_ = image_->getChannelsOrder() == "BGR";
+    fill(0, 0, width - 1, height - 1, background);
+}
+
+Picture::~Picture() = default;
+Picture::Picture(Picture&&) noexcept = default;
+Picture& Picture::operator=(Picture&&) noexcept = default;
+
+Colour Picture::textColour() const {
+    const int luminance = (299 * background_.r + 587 * background_.g + 114 * background_.b) / 1000;
+    return luminance < 128 ? Colour{235, 235, 235} : Colour{0, 0, 0};
+}
+
+void Picture::pixel(int x, int y, Colour c) {
+    if (x < 0 || y < 0 || x >= width_ || y >= height_) return;
+    std::uint8_t* p = image_->ptrLine<std::uint8_t>(unsigned(y)) + 3 * std::size_t(x);
+    p[0] = bgr_ ? c.b : c.r, p[1] = c.g, p[2] = bgr_ ? c.r : c.b;
+}
+
+void Picture::fill(int x0, int y0, int x1, int y1, Colour c) {
+    x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, width_ - 1), y1 = std::min(y1, height_ - 1);
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) pixel(x, y, c);
+}
+
+void Picture::line(int x0, int y0, int x1, int y1, Colour c, int width) {
+    image_->line(x0, y0, x1, y1, tcolor(c), unsigned(std::max(1, width)));
+}
+
+void Picture::circle(int x, int y, int radius, Colour c) { image_->drawCircle(x, y, radius, tcolor(c)); }
+
+void Picture::text(int x, int y, const std::string& s) { text(x, y, s, textColour()); }
+
+void Picture::text(int x, int y, const std::string& s, Colour c) {
+    const std::lock_guard<std::mutex> lock(textMutex());
+    image_->textOut(x, y, s, tcolor(c));
+}
+
+void Picture::title(const std::string& title, const std::string& subtitle) {
+    const int lines = subtitle.empty() ? 1 : 2;
+    const std::size_t chars = std::max(title.size(), subtitle.size());
+    fill(0, 0, std::min(width_ - 1, 16 + int(chars) * kCharWidth), 8 + lines * kLineHeight, background_);
+    {
+        const std::lock_guard<std::mutex> lock(textMutex());
+        image_->selectTextFont("9x15B");
+        image_->textOut(10, 8, title, tcolor(textColour()));
+        image_->selectTextFont("9x15");
+    }
+    if (!subtitle.empty()) text(10, 8 + kLineHeight, subtitle);
+}
+
+int Picture::legend(int x, int y, const std::vector<LegendEntry>& entries) {
+    std::size_t chars = 0;
+    for (const auto& e : entries) chars = std::max(chars, e.text.size());
+    const int h = legendHeight(entries.size());
+    fill(x - 6, y - 4, x + 30 + int(chars) * kCharWidth, y + h, background_);  // readable over points
+    for (const auto& e : entries) {
+        if (e.swatch) fill(x, y + 3, x + 16, y + 13, e.colour);
+        text(x + (e.swatch ? 24 : 0), y, e.text);
+        y += kLineHeight;
+    }
+    return h;
+}
+
+void Picture::scaleBar(int xRight, int y, double pixelsPerMetre, int maxPixels) {
+    if (!(pixelsPerMetre > 0)) return;
+    double length = 0;
+    for (double decade = 0.01; decade <= 1e6; decade *= 10)
+        for (double m : {1.0, 2.0, 5.0})
+            if (m * decade * pixelsPerMetre <= maxPixels) length = m * decade;
+    if (length <= 0) return;
+    const int px = std::max(1, int(std::lround(length * pixelsPerMetre)));
+    const std::string label = metres(length);
+    fill(xRight - std::max(px, int(label.size()) * kCharWidth) - 6, y - 26, xRight + 4, y + 8, background_);
+    fill(xRight - px, y, xRight, y + 4, textColour());
+    fill(xRight - px, y - 4, xRight - px + 1, y + 4, textColour());
+    fill(xRight - 1, y - 4, xRight, y + 4, textColour());
+    text(xRight - px / 2 - int(label.size()) * kCharWidth / 2, y - 22, label);
+}
+
+void Picture::arrow(int x, int y, int dx, int dy, const std::string& label, int width) {
+    arrow(x, y, dx, dy, label, width, textColour());
+}
+
+void Picture::arrow(int x, int y, int dx, int dy, const std::string& label, int width, Colour c) {
+    const double length = std::hypot(double(dx), double(dy));
+    if (length < 1) return;
+    const int x1 = x + dx, y1 = y + dy;
+    line(x, y, x1, y1, c, width);
+    const double ux = dx / length, uy = dy / length, head = std::min(12.0, 0.4 * length);
+    for (double side : {-1.0, 1.0}) {  // two strokes at +-30 deg from the shaft
+        const double hx = -ux * 0.866 - side * uy * 0.5, hy = -uy * 0.866 + side * ux * 0.5;
+        line(x1, y1, x1 + int(std::lround(hx * head)), y1 + int(std::lround(hy * head)), c, width);
+    }
+    if (!label.empty()) text(x1 + (dx < 0 ? -int(label.size()) * kCharWidth - 6 : 8), y1 - 8, label);
+}
+
+std::string Picture::png() const { return encodePng(*image_); }
+
+void Picture::save(const std::string& path) const {
+    const std::string bytes = png();
+    gseg::io::writeFileAtomic(path, bytes.data(), bytes.size());
+}
+
+Picture drawTopView(const PointCloudView& cloud, const std::vector<std::uint8_t>& classOf,
+                    const std::vector<PointClass>& classes, const TopViewOptions& opt) {
+    if (classOf.size() != cloud.size())
+        throw std::invalid_argument("drawTopView: " + std::to_string(classOf.size()) + " classes for " +
+                                    std::to_string(cloud.size()) + " points");
+    const int size = std::max(300, opt.sizePx), c = size / 2;
+    const double range = opt.rangeM > 0 ? opt.rangeM : fitRange(cloud);
+    const double scale = 0.5 * size / range;  // px per metre
+    Picture pic(size, size, {24, 24, 30});
+    const Colour ringColour{70, 70, 82}, white{255, 255, 255};
+    const bool rings = opt.ringStepM > 0 && opt.ringStepM >= range / 100;
+    for (double ring = opt.ringStepM; rings && ring <= range * 1.5; ring += opt.ringStepM)
+        pic.circle(c, c, int(ring * scale), ringColour);
+
+    std::vector<std::size_t> counts(classes.size(), 0);
+    for (std::uint8_t k : classOf)
+        if (k < classes.size()) ++counts[k];
+    std::vector<std::size_t> order(classes.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return classes[a].layer < classes[b].layer; });
+    for (const std::size_t k : order) {
+        const int lo = (std::max(1, classes[k].sizePx) - 1) / 2, hi = std::max(1, classes[k].sizePx) - 1 - lo;
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            if (classOf[i] != k) continue;
+            const double u = c - std::round(cloud.y(i) * scale);  // y (left) to the left
+            const double v = c - std::round(cloud.x(i) * scale);  // x (forward) up
+            if (!(u >= lo && v >= lo && u < size - hi && v < size - hi)) continue;  // also NaN
+            pic.fill(int(u) - lo, int(v) - lo, int(u) + hi, int(v) + hi, classes[k].colour);
+        }
+    }
+    // The sensor and its forward direction.
+    pic.line(c - 6, c, c + 6, c, white, 2);
+    pic.arrow(c, c + 6, 0, -46, "x (forward)");
+
+    char subtitle[160];
+    std::snprintf(subtitle, sizeof subtitle, "%s; sensor at the centre, %.0f m each side", kTopViewOrientation, range);
+    pic.title(opt.title, subtitle);
+    std::vector<LegendEntry> legend;
+    for (std::size_t k = 0; k < classes.size(); ++k) legend.push_back({classes[k].colour, classes[k].name + ": " + std::to_string(counts[k])});
+    if (rings) legend.push_back({ringColour, "range circles every " + metres(opt.ringStepM)});
+    legend.push_back({white, "sensor (+) and its forward direction (arrow)"});
+    pic.legend(12, size - 12 - Picture::legendHeight(legend.size()), legend);
+    pic.scaleBar(size - 24, size - 24, scale);
+    return pic;
+}
+
+std::string encodePng(const ::mrpt::img::CImage& image) {
+    const std::size_t w = image.getWidth(), h = image.getHeight();
+    const bool colour = image.isColor();
+    if (w == 0 || h == 0 || image.getPixelDepth() != ::mrpt::img::PixelDepth::D8U)
+        throw std::invalid_argument("encodePng: needs a non-empty 8-bit image");
+    const bool bgr = colour && image.getChannelsOrder() == "BGR";
+    const std::size_t channels = colour ? 3 : 1;
+    // Rows, each led by filter type 0 (none), RGB or grey.
+    std::string raw;
+    raw.reserve(h * (1 + w * channels));
+    for (std::size_t y = 0; y < h; ++y) {
+        raw += '\0';
+        const std::uint8_t* line = image.ptrLine<std::uint8_t>(unsigned(y));
+        for (std::size_t x = 0; x < w; ++x, line += channels) {
+            if (!colour) raw += char(line[0]);
+            else if (bgr) raw += {char(line[2]), char(line[1]), char(line[0])};
+            else raw += {char(line[0]), char(line[1]), char(line[2])};
+        }
+    }
+    uLongf packedSize = compressBound(uLong(raw.size()));
+    std::string packed(packedSize, '\0');
+    if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packedSize, reinterpret_cast<const Bytef*>(raw.data()),
+                  uLong(raw.size()), 6) != Z_OK)
+        throw std::runtime_error("encodePng: compression failed");
+    packed.resize(packedSize);
+    std::string header;
+    putBigEndian(header, std::uint32_t(w));
+    putBigEndian(header, std::uint32_t(h));
+    header += {char(8), char(colour ? 2 : 0), char(0), char(0), char(0)};  // 8 bit, RGB/grey, deflate, no interlace
+    std::string png("\x89PNG\r\n\x1a\n", 8);
+    putChunk(png, "IHDR", header);
+    putChunk(png, "IDAT", packed);
+    putChunk(png, "IEND", "");
+    return png;
+}
+
+void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
+    const std::string png = encodePng(image);
+    gseg::io::writeFileAtomic(path, png.data(), png.size());
+}
+
+}  // namespace gseg::mrpt

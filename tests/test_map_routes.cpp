@@ -1,0 +1,147 @@
+// The README's two routes to the traversability maps give the same files, byte for byte:
+//   kitti2rawlog SEQ -o X.rawlog --simplemap X.simplemap
+//   rawlog-octomap -i X.rawlog -o PREFIX -c config/kitti_hdl64.yaml
+//   LD_PRELOAD=build/lib/libgseg_map.so observations2map config/octomap_maps.ini X.simplemap OUT
+// (and gseg-observations2map, which cannot end having written nothing). On a simulated KITTI-like
+// sequence always, and on SemanticKITTI 00 where ../shared/data has it. The observations2map part
+// is skipped where mrpt-apps is not installed.
+#include <gseg/map/traversability_map.hpp>
+#include <support/lidar_sim.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using gseg::test::runCommand;
+
+const std::string kSource = GSEG_SOURCE_DIR, kBuild = GSEG_BINARY_DIR;
+
+bool haveObservations2map() { return runCommand("command -v observations2map").status == 0; }
+
+std::string tempDir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("gseg_routes_" + std::to_string(::getpid()) + "_" + name);
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d.string();
+}
+
+/// A KITTI odometry sequence of four HDL-64 scans 2 m apart on a street with a wall and a box:
+/// velodyne/*.bin, poses.txt (camera 0), calib.txt (Tr) and times.txt.
+std::string simulatedSequence(const std::string& dir) {
+    fs::create_directories(dir + "/velodyne");
+    std::ofstream poses(dir + "/poses.txt"), times(dir + "/times.txt");
+    for (int k = 0; k < 4; ++k) {
+        const double x = 2.0 * k;  // the sensor moves along velodyne x = camera z
+        gseg::test::Scene scene;
+        scene.addFlatGround(1.723);
+        scene.addBox(12 - x, 4, -1.723, 13 - x, 5, -0.2);      // a box ahead on the left
+        scene.addBox(-10 - x, -6.2, -1.723, 30 - x, -6, 1.5);  // a wall on the right
+        gseg::test::Lidar lidar;
+        lidar.seed = 11u + unsigned(k);
+        const gseg::test::SimScan s = gseg::test::simulate(scene, lidar);
+        std::vector<float> xyzi;
+        for (std::size_t i = 0; i < s.size(); ++i) xyzi.insert(xyzi.end(), {s.xyz[3 * i], s.xyz[3 * i + 1], s.xyz[3 * i + 2], 0.5f});
+        char name[64];
+        std::snprintf(name, sizeof name, "/velodyne/%06d.bin", k);
+        std::ofstream(dir + name, std::ios::binary).write(reinterpret_cast<const char*>(xyzi.data()), std::streamsize(xyzi.size() * 4));
+        poses << "1 0 0 0 0 1 0 0 0 0 1 " << x << "\n";
+        times << 0.1 * k << "\n";
+    }
+    std::ofstream(dir + "/calib.txt") << "Tr: 0 -1 0 0 0 0 -1 0 1 0 0 0\n";
+    return dir;
+}
+
+const char* const kSuffixes[] = {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png",
+                                 "_traversability.ply", "_traversability.3Dscene"};
+
+/// Runs both routes on `sequence` and compares every file.
+void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string& dir) {
+    ASSERT_EQ(gseg::map::TraversabilityMap::outputPaths("x").size(), std::size(kSuffixes));
+    auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + sequence + "' -o " + dir + "/seq.rawlog --simplemap " +
+                        dir + "/seq.simplemap");
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = runCommand("cd '" + kSource + "' && '" + gseg::test::tool("rawlog-octomap") + "' -i " + dir + "/seq.rawlog -o " +
+                   dir + "/r -c config/kitti_hdl64.yaml");
+    ASSERT_EQ(r.status, 0) << r.output;
+    if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps): route 2 not run";
+    r = runCommand("cd '" + kSource + "' && LD_PRELOAD='" + kBuild + "/lib/libgseg_map.so' observations2map config/octomap_maps.ini " +
+                   dir + "/seq.simplemap " + dir + "/o2m < /dev/null");
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = runCommand("cd '" + kSource + "' && '" + gseg::test::tool("gseg-observations2map") + "' config/octomap_maps.ini " + dir +
+                   "/seq.simplemap " + dir + "/w");
+    ASSERT_EQ(r.status, 0) << r.output;
+    for (const char* s : kSuffixes) {
+        const std::string a = gseg::test::readText(dir + "/r" + s);
+        EXPECT_GT(a.size(), 100u) << s;
+        EXPECT_TRUE(a == gseg::test::readText(dir + "/o2m_gseg_maps__CTraversabilityOctoMap_00" + s)) << s << " differs";
+        EXPECT_TRUE(a == gseg::test::readText(dir + "/w_gseg_maps__CTraversabilityOctoMap_00" + s)) << s << " differs";
+    }
+}
+
+}  // namespace
+
+TEST(MapRoutes, RawlogOctomapAndObservations2mapGiveByteIdenticalFilesOnASimulatedDrive) {
+    const std::string dir = tempDir("sim");
+    expectSameMapsFromBothRoutes(simulatedSequence(dir + "/seq"), dir);
+    fs::remove_all(dir);
+}
+
+TEST(MapRoutes, RawlogOctomapAndObservations2mapGiveByteIdenticalFilesOnKitti00) {
+    const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    const std::string dir = tempDir("kitti");
+    expectSameMapsFromBothRoutes(fs::path(poses).parent_path().string(), dir);
+    fs::remove_all(dir);
+}
+
+TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo) {
+    if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps)";
+    const std::string dir = tempDir("noplugin");
+    auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + simulatedSequence(dir + "/seq") + "' -o " + dir +
+                        "/seq.rawlog --simplemap " + dir + "/seq.simplemap --last 1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    // MRPT's behaviour, the reason for the wrapper: exit 0, "done", no file.
+    r = runCommand("cd '" + kSource + "' && observations2map config/octomap_maps.ini " + dir + "/seq.simplemap " + dir +
+                   "/bare < /dev/null");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/bare_gseg_maps__CTraversabilityOctoMap_00_ground.bt"));
+    // The wrapper: a configuration without gseg's map is bad usage, an empty simplemap bad input.
+    std::ofstream(dir + "/none.ini") << "[MappingApplication]\nCOccupancyGridMap2D_count = 0\n";
+    const std::string wrapper = gseg::test::tool("gseg-observations2map");
+    r = runCommand(wrapper + " " + dir + "/none.ini " + dir + "/seq.simplemap " + dir + "/w");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("no gsegTraversabilityMap"), std::string::npos) << r.output;
+    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/missing.simplemap " + dir + "/w");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("missing.simplemap: cannot read"), std::string::npos) << r.output;
+    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/seq.simplemap");
+    EXPECT_EQ(r.status, 2) << r.output;
+    // A previous run's files do not count as written now: a simplemap without scans leaves the
+    // map empty, observations2map exits 0 and writes nothing.
+    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/seq.simplemap " + dir + "/w");
+    ASSERT_EQ(r.status, 0) << r.output;
+    {
+        mrpt::io::CFileGZOutputStream f(dir + "/empty.simplemap");
+        mrpt::serialization::archiveFrom(f) << mrpt::maps::CSimpleMap();
+    }
+    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/empty.simplemap " + dir + "/w");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("observations2map wrote no"), std::string::npos) << r.output;
+    std::ofstream(dir + "/garbage.simplemap") << "not a simplemap";
+    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/garbage.simplemap " + dir + "/w");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_EQ(runCommand(wrapper + " --version").status, 0);
+    EXPECT_EQ(runCommand(wrapper + " --help").status, 0);
+    fs::remove_all(dir);
+}
