@@ -457,15 +457,16 @@ TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
     const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
     const ToolRun one = runTool("rawlog-octomap", args + "/one --threads 1", dir);
     ASSERT_EQ(one.status, 0) << one.err;
-    // --threads 0: rank 0 reads and maps, rank 1 does every scan's work.
-    const ToolRun remote = runTool("rawlog-octomap", args + "/remote --threads 0", dir, "", mpirun);
+    // --rank0-maps-only: rank 0 reads and maps, rank 1 does every scan's work.
+    const ToolRun remote = runTool("rawlog-octomap", args + "/remote --threads 0 --rank0-maps-only", dir, "", mpirun);
     ASSERT_EQ(remote.status, 0) << remote.err;
     EXPECT_NE(remote.out.find("scans worked on: 0 on rank 0, 8 on rank 1"), std::string::npos) << remote.out;
     EXPECT_NE(remote.out.find("(summed over 1 worker thread(s) in 2 processes)"), std::string::npos) << remote.out;
     expectSameMaps(dir + "/one", dir + "/remote");
-    // --threads 1: both ranks work; whoever is free takes the next scan.
-    const ToolRun both = runTool("rawlog-octomap", args + "/both --threads 1", dir, "", mpirun);
+    // --threads 0: one rank per core, both ranks work; whoever is free takes the next scan.
+    const ToolRun both = runTool("rawlog-octomap", args + "/both --threads 0", dir, "", mpirun);
     ASSERT_EQ(both.status, 0) << both.err;
+    EXPECT_NE(both.out.find("(summed over 2 worker thread(s) in 2 processes)"), std::string::npos) << both.out;
     EXPECT_NE(both.out.find("scans worked on: "), std::string::npos) << both.out;
     expectSameMaps(dir + "/one", dir + "/both");
     const auto voxels = [](const std::string& out) { return out.substr(out.find("voxels ("), out.find("map memory") - out.find("voxels (")); };
@@ -499,7 +500,7 @@ TEST(RawlogOctomap, UnderMpiASkippedOrFailingScanOnAnotherRankIsNamedAndNothingH
     Drive empty;
     empty.emptyScan = 3;
     writeDrive(dir + "/empty.rawlog", empty);
-    const std::string args = "-c " + dir + "/gseg.yaml --threads 0 -i " + dir;
+    const std::string args = "-c " + dir + "/gseg.yaml --threads 0 --rank0-maps-only -i " + dir;
     const ToolRun one = runTool("rawlog-octomap", args + "/empty.rawlog -o " + dir + "/one", dir);
     const ToolRun two = runTool("rawlog-octomap", args + "/empty.rawlog -o " + dir + "/two", dir, "", mpirun);
     EXPECT_EQ(one.status, 1);

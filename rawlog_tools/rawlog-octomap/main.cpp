@@ -29,7 +29,7 @@ namespace {
 const char* kUsage =
     "usage: rawlog-octomap -i IN.rawlog -o PREFIX [--poses FILE] [--calib FILE] [--pose-tolerance 0.02]\n"
     "                      [--resolution 0.2] [--max-range 50] [--clearance 2] [-c FILE.yaml]\n"
-    "                      [--origin first|X,Y,Z] [--threads N] [--bench N]\n"
+    "                      [--origin first|X,Y,Z] [--threads N] [--rank0-maps-only] [--bench N]\n"
     "  writes PREFIX_ground.bt, PREFIX_obstacles.bt, PREFIX_traversability.ot, PREFIX_traversability.png\n"
     "  --poses FILE    TUM trajectory (t x y z qx qy qz qw, vehicle pose, matched by time stamp) or KITTI\n"
     "                  poses (3x4 per scan, with calib.txt beside it or --calib); default: poses in the rawlog\n"
@@ -40,7 +40,10 @@ const char* kUsage =
     "  --origin first  subtract the first sensor position (whole metres) from every position: for poses in\n"
     "                  UTM or other large coordinates (the maps span +-32768 voxels); or --origin X,Y,Z\n"
     "  --threads N     worker threads for segmentation and ray casting (default: one per core; 0: none)\n"
-    "                  in each process; under mpirun/srun rank 0 reads and maps, every rank's threads work\n"
+    "                  in each process; under mpirun/srun rank 0 reads and maps, and every rank works with\n"
+    "                  N threads, at least one (--threads 0: one rank per core)\n"
+    "  --rank0-maps-only  under mpirun/srun rank 0 reads, maps and writes but works on no scan (a rank 0\n"
+    "                  on a node of its own, or a slow disk)\n"
     "  --bench N       time plain OctoMap (insertPointCloud, discretized) and rawlog-octomap alternately,\n"
     "                  N rounds each, on the same rawlog; maps go to PREFIX_bench*\n";
 
@@ -88,6 +91,7 @@ Cli parseCli(int argc, char** argv) {
         else if (a == "--clearance") c.options.clearance = parseNumber(a, value());
         else if (a == "--origin") c.poses.origin = value();
         else if (a == "--threads") c.threads = parseCount(a, value(), 256);
+        else if (a == "--rank0-maps-only") c.rank0MapsOnly = true;
         else if (a == "--bench") c.benchRounds = int(std::max(1u, parseCount(a, value(), 100)));
         else if (a == "-h" || a == "--help") {
             c.help = true;
@@ -164,7 +168,10 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     gseg::map::TraversabilityMap map(cli.options);
     std::vector<ScanWorker> workers;  // one per thread: each has its own segmenter
     for (unsigned i = 0; i < std::max(1u, cli.threads); ++i) workers.emplace_back(cfg, cli.options);
-    const unsigned local = cli.threads, remoteWorkers = remote ? remote->count() : 0;
+    // Under mpirun/srun rank 0 works too, with at least one thread like every other rank (with
+    // --threads 0 one rank per core is the usual MPI layout): otherwise it would only read and map.
+    const unsigned remoteWorkers = remote ? remote->count() : 0;
+    const unsigned local = remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
     gseg::map::Progress progress(stderr, "rawlog-octomap", "scans");
     RunReport report;
     report.workers = local + remoteWorkers;

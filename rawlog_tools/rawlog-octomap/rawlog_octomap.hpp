@@ -16,6 +16,7 @@ struct Cli {
     PoseConfig poses;
     gseg::map::TraversabilityOptions options;
     unsigned threads = 0;  ///< worker threads (0: everything on one thread)
+    bool rank0MapsOnly = false;  ///< under MPI, rank 0 works on no scan (it reads, maps and writes)
     int benchRounds = 0;   ///< --bench N
     bool help = false;     ///< -h: print the usage and stop
 };
