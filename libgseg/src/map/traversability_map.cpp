@@ -6,16 +6,13 @@
 #include <gseg/mrpt/scene.hpp>
 
 #include "brick_map.hpp"
+#include "map_scene.hpp"
 #include "map_tree.hpp"
 #include "voxel_keys.hpp"
 
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
-#include <mrpt/opengl/COctoMapVoxels.h>
-#include <mrpt/opengl/COpenGLScene.h>
-#include <mrpt/opengl/CSetOfLines.h>
-#include <mrpt/opengl/stock_objects.h>
 
 #include <algorithm>
 #include <cmath>
@@ -97,52 +94,6 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
     options.comment = comment;
     options.nonGroundName = "obstacle";
     return gseg::io::labelledPlyBytes(PointCloudView(v.xyz.data(), v.labels.size()), v.labels, colours, options);
-}
-
-std::string mapSceneBytes(const OccupiedVoxels& v, double resolution, const std::vector<Eigen::Vector3d>& path) {
-    namespace gl = ::mrpt::opengl;
-    auto voxels = gl::COctoMapVoxels::Create();
-    voxels->setName("gseg traversability map: ground voxels green, obstacle voxels red");
-    voxels->resizeVoxelSets(2);  // 0: ground, 1: obstacles
-    voxels->showGridLines(false);
-    voxels->enableLights(true);
-    // Without culling, a voxel's dark bottom face wins the depth test against its top face
-    // beyond some 40 m from the camera (24-bit depth buffer): the far map turned black.
-    voxels->cullFaces(::mrpt::opengl::TCullFace::BACK);
-    voxels->enableCubeTransparency(false);
-    const Rgb colours[2] = {colourOf(CellClass::Obstacle), colourOf(CellClass::Traversable)};
-    for (std::size_t i = 0; i < v.labels.size(); ++i) {
-        const Rgb c = colours[v.labels[i]];
-        voxels->push_back_Voxel(v.labels[i] ? 0 : 1, gl::COctoMapVoxels::TVoxel({v.xyz[3 * i], v.xyz[3 * i + 1], v.xyz[3 * i + 2]},
-                                                                                  resolution, ::mrpt::img::TColor(c.r, c.g, c.b)));
-    }
-    gl::COpenGLScene scene;
-    scene.insert(voxels);
-    auto line = gl::CSetOfLines::Create();
-    line->setName("driven path (sensor positions), blue");
-    line->setColor_u8(40, 120, 255);
-    line->setLineWidth(3);
-    for (std::size_t i = 1; i < path.size(); ++i)
-        line->appendLine(path[i - 1].x(), path[i - 1].y(), path[i - 1].z(), path[i].x(), path[i].y(), path[i].z());
-    scene.insert(line);
-    // Lines are one pixel wide in most OpenGL core profiles: blue boxes at the sensor positions
-    // make the path visible from afar.
-    auto marks = gl::COctoMapVoxels::Create();
-    marks->setName("sensor positions, blue");
-    marks->resizeVoxelSets(1);
-    marks->showGridLines(false);
-    marks->enableLights(true);
-    marks->enableCubeTransparency(false);
-    marks->cullFaces(::mrpt::opengl::TCullFace::BACK);
-    for (const auto& p : path)
-        marks->push_back_Voxel(0, gl::COctoMapVoxels::TVoxel({float(p.x()), float(p.y()), float(p.z())}, 2 * resolution,
-                                                             ::mrpt::img::TColor(40, 120, 255)));
-    scene.insert(marks);
-    auto axes = gl::stock_objects::CornerXYZ(2.0f);
-    axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
-    if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
-    scene.insert(axes);
-    return gseg::mrpt::sceneFileBytes(scene);
 }
 
 }  // namespace
@@ -312,7 +263,7 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_, pictureTitle()));
     const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
     writeFileChecked(files.temporary(4), mapPlyBytes(v, res));
-    writeFileChecked(files.temporary(5), mapSceneBytes(v, res, path_));
+    writeFileChecked(files.temporary(5), detail::mapSceneBytes(v.xyz, v.labels, res, path_));
     files.commit();
     return files.paths();
 }

@@ -1,0 +1,60 @@
+#include "map_scene.hpp"
+
+#include <gseg/map/traversability_map.hpp>
+#include <gseg/mrpt/scene.hpp>
+
+#include <mrpt/opengl/COctoMapVoxels.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfLines.h>
+#include <mrpt/opengl/stock_objects.h>
+
+namespace gseg::map::detail {
+
+std::string mapSceneBytes(const std::vector<float>& xyz, const std::vector<std::uint8_t>& labels, double resolution,
+                          const std::vector<Eigen::Vector3d>& path) {
+    namespace gl = ::mrpt::opengl;
+    auto voxels = gl::COctoMapVoxels::Create();
+    voxels->setName("gseg traversability map: ground voxels green, obstacle voxels red");
+    voxels->resizeVoxelSets(2);  // 0: ground, 1: obstacles
+    voxels->showGridLines(false);
+    voxels->enableLights(true);
+    // Without culling, a voxel's dark bottom face wins the depth test against its top face
+    // beyond some 40 m from the camera (24-bit depth buffer): the far map turned black.
+    voxels->cullFaces(::mrpt::opengl::TCullFace::BACK);
+    voxels->enableCubeTransparency(false);
+    const Rgb colours[2] = {colourOf(CellClass::Obstacle), colourOf(CellClass::Traversable)};
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+        const Rgb c = colours[labels[i]];
+        voxels->push_back_Voxel(labels[i] ? 0 : 1, gl::COctoMapVoxels::TVoxel({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]},
+                                                                                  resolution, ::mrpt::img::TColor(c.r, c.g, c.b)));
+    }
+    gl::COpenGLScene scene;
+    scene.insert(voxels);
+    auto line = gl::CSetOfLines::Create();
+    line->setName("driven path (sensor positions), blue");
+    line->setColor_u8(40, 120, 255);
+    line->setLineWidth(3);
+    for (std::size_t i = 1; i < path.size(); ++i)
+        line->appendLine(path[i - 1].x(), path[i - 1].y(), path[i - 1].z(), path[i].x(), path[i].y(), path[i].z());
+    scene.insert(line);
+    // Lines are one pixel wide in most OpenGL core profiles: blue boxes at the sensor positions
+    // make the path visible from afar.
+    auto marks = gl::COctoMapVoxels::Create();
+    marks->setName("sensor positions, blue");
+    marks->resizeVoxelSets(1);
+    marks->showGridLines(false);
+    marks->enableLights(true);
+    marks->enableCubeTransparency(false);
+    marks->cullFaces(::mrpt::opengl::TCullFace::BACK);
+    for (const auto& p : path)
+        marks->push_back_Voxel(0, gl::COctoMapVoxels::TVoxel({float(p.x()), float(p.y()), float(p.z())}, 2 * resolution,
+                                                             ::mrpt::img::TColor(40, 120, 255)));
+    scene.insert(marks);
+    auto axes = gl::stock_objects::CornerXYZ(2.0f);
+    axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
+    if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
+    scene.insert(axes);
+    return gseg::mrpt::sceneFileBytes(scene);
+}
+
+}  // namespace gseg::map::detail
