@@ -135,11 +135,11 @@ TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo
         mrpt::io::CFileGZOutputStream f(dir + "/empty.simplemap");
         mrpt::serialization::archiveFrom(f) << mrpt::maps::CSimpleMap();
     }
-    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/empty.simplemap " + dir + "/w");
+    r = runCommand(wrapper + " -w '" + kSource + "/config/octomap_maps.ini' " + dir + "/empty.simplemap " + dir + "/w");
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_NE(r.output.find("observations2map wrote no"), std::string::npos) << r.output;
     std::ofstream(dir + "/garbage.simplemap") << "not a simplemap";
-    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/garbage.simplemap " + dir + "/w");
+    r = runCommand(wrapper + " -w '" + kSource + "/config/octomap_maps.ini' " + dir + "/garbage.simplemap " + dir + "/w");
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_EQ(runCommand(wrapper + " --version").status, 0);
     EXPECT_EQ(runCommand(wrapper + " --help").status, 0);
