@@ -17,7 +17,7 @@ struct Cli {
     gseg::map::TraversabilityOptions options;
     unsigned threads = 0;  ///< worker threads (0: everything on one thread)
     int benchRounds = 0;   ///< --bench N
-    bool help = false;     ///< -h: print the usage and stop
+    bool overwrite = false;  ///< -w: replace map files that exist
 };
 
 class RemoteWorkers;
@@ -41,7 +41,7 @@ struct RunReport {
 };
 
 /// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless
-/// `quiet`. `remote`: the worker threads of the other MPI ranks, used beside this process's
+/// `quiet` (or --quiet). `remote`: the worker threads of the other MPI ranks, used beside this process's
 /// `cli.threads` (null: this process alone). Throws std::invalid_argument (bad usage) or
 /// std::runtime_error (bad input, naming it).
 RunReport buildMaps(const Cli& cli, bool quiet = false, RemoteWorkers* remote = nullptr);

@@ -232,4 +232,44 @@ void checkOutputsAreNotInputs(const std::vector<NamedPath>& inputs, const std::v
     }
 }
 
+namespace {
+
+/// Whether `folder` accepts a new file: one is made and removed. "" if so, else why not.
+std::string cannotWriteIn(const std::string& folder) {
+    const std::string probe = (std::filesystem::path(folder) / (".gseg-probe-" + std::to_string(::getpid()))).string();
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+    if (fd < 0) return std::strerror(errno);
+    ::close(fd);
+    ::unlink(probe.c_str());
+    return "";
+}
+
+}  // namespace
+
+void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules) {
+    namespace fs = std::filesystem;
+    checkOutputsAreNotInputs(inputs, outputs);
+    std::vector<fs::path> writable;  // folders tried already (a run may write thousands of files into one)
+    for (const NamedPath& out : outputs) {
+        if (out.path.empty()) continue;
+        const std::string what = out.argument + " " + out.path;
+        std::error_code ec;
+        if (fs::is_directory(out.path, ec)) throw std::invalid_argument(what + " is a folder, not a file");
+        if (fs::exists(fs::symlink_status(out.path, ec)) && !rules.overwrite)
+            throw std::invalid_argument(what + " exists: give -w (--overwrite) to replace it");
+        fs::path folder = fs::path(out.path).parent_path();
+        if (folder.empty()) folder = ".";
+        while (rules.makeFolders && !fs::exists(folder, ec) && folder.parent_path() != folder)  // the one to make it in
+            folder = folder.parent_path().empty() ? fs::path(".") : folder.parent_path();
+        if (!fs::exists(folder, ec))
+            throw std::invalid_argument(what + ": the folder " + folder.string() + " does not exist");
+        if (!fs::is_directory(folder, ec))
+            throw std::invalid_argument(what + ": " + folder.string() + " is not a folder");
+        if (std::find(writable.begin(), writable.end(), folder) != writable.end()) continue;
+        if (const std::string why = cannotWriteIn(folder.string()); !why.empty())
+            throw std::invalid_argument(what + ": cannot write in the folder " + folder.string() + " (" + why + ")");
+        writable.push_back(folder);
+    }
+}
+
 }  // namespace gseg::io
