@@ -181,7 +181,7 @@ TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
         Drive d;
         d.layout = layout;
         writeDrive(dir + "/drive.rawlog", d);
-        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
+        const ToolRun r = runTool("rawlog-octomap", "-w -i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
         ASSERT_EQ(r.status, 0) << r.err;
         const std::string raw = layout == Drive::Pair ? "0" : "8";
         EXPECT_NE(r.out.find("8 scans (8 from _ground/_obstacles pairs, " + raw + " raw scans not segmented again"),
@@ -401,7 +401,7 @@ TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
     writeDrive(dir + "/drive.rawlog");
     for (const std::string& prefix : {dir + "/missing/m", std::string("/proc/gseg_maps_test/m"), std::string("/proc/m")}) {
         const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + prefix, dir);
-        EXPECT_EQ(r.status, 1) << prefix;
+        EXPECT_EQ(r.status, 2) << prefix;  // bad usage
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line and no scan read: " << r.err;
         EXPECT_NE(r.err.find(prefix + "_ground.bt: "), std::string::npos) << r.err;
     }

@@ -79,7 +79,7 @@ void runBench(const Cli& cli) {
     const std::string plainBt = cli.prefix + "_bench_plain.bt";
     std::vector<gseg::io::NamedPath> outputs = {{"-o", plainBt}};
     for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(ours.prefix)) outputs.push_back({"-o", path});
-    gseg::io::checkOutputs({{"-i", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
+    gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
 #ifdef NDEBUG
     const char* build = "Release";

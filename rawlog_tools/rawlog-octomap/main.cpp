@@ -169,7 +169,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     // Fail early: every output can be written, none is an input or exists (unless -w), before any work.
     std::vector<gseg::io::NamedPath> outputs;
     for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(cli.prefix)) outputs.push_back({"-o", path});
-    gseg::io::checkOutputs({{"-i", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
+    gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
     const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
     ScanStream stream(cli.poses);
