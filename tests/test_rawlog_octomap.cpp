@@ -396,6 +396,18 @@ TEST(RawlogOctomap, PosesInUtmNeedAnOriginAndThenWork) {
     fs::remove_all(dir);
 }
 
+TEST(RawlogOctomap, AFileThatIsNoRawlogIsSaidToBeNone) {
+    // Was "entry 0 is corrupt or truncated (Message: Exception while parsing typed object ...)".
+    const std::string dir = tempDir("not_rawlog");
+    std::ofstream(dir + "/x.rawlog") << "hello\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/x.rawlog -o " + dir + "/m", dir);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_EQ(r.err, "rawlog-octomap: " + dir + "/x.rawlog: not an MRPT rawlog (a rawlog is a stream of serialized MRPT "
+                     "objects, optionally gzip-compressed; this file does not start with one)\n");
+    EXPECT_FALSE(fs::exists(dir + "/m_ground.bt"));
+    fs::remove_all(dir);
+}
+
 TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
     const std::string dir = tempDir("early");
     writeDrive(dir + "/drive.rawlog");
