@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -187,6 +188,22 @@ TEST(CheckOutputs, ExistingFilesNeedOverwriteAndFoldersMustTakeAFile) {
     EXPECT_FALSE(fs::exists(dir / "missing")) << "the check makes no folder";
     EXPECT_EQ(gseg::test::readText(old), "previous run");
     EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "probe"), "") << "no probe file left";
+}
+
+TEST(CheckOutputs, ThousandsOfFilesAreCheckedInLinearTime) {
+    // gseg eval on all of SemanticKITTI writes a picture and a prediction per frame (2 x 23201).
+    const fs::path dir = gseg::test::freshDir("tool_common", "many_outputs");
+    std::vector<gseg::io::NamedPath> inputs, outputs;
+    for (int i = 0; i < 20000; ++i) {
+        inputs.push_back({"scan", (dir / ("in" + std::to_string(i % 10) + ".bin")).string()});
+        outputs.push_back({"--labels-out-dir", (dir / ("f" + std::to_string(i) + ".pred")).string()});
+    }
+    for (int i = 0; i < 10; ++i) std::ofstream(dir / ("in" + std::to_string(i) + ".bin")) << "scan";
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_EQ(refusal(inputs, outputs, {false, true}), "");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+    outputs.push_back(outputs[123]);
+    EXPECT_NE(refusal(inputs, outputs, {}).find("name the same file " + outputs[123].path), std::string::npos);
 }
 
 // ---- Every tool ----
