@@ -5,6 +5,7 @@
 # Then build traversability OctoMaps: of the VLP-16 scan (a stationary sensor: one identity pose),
 # and of the SemanticKITTI sequence-00 drive (six scans with their poses) where present.
 # Inputs (-D): GSEG (the gseg executable), BIN (folder of the tools), SRC (source dir), OUT (output dir).
+# Every tool is given -w (replace the outputs of a previous run), so the demo can be run again.
 file(MAKE_DIRECTORY "${OUT}")
 
 function(run_tool)
@@ -16,7 +17,7 @@ endfunction()
 
 function(run_segment scan config name)
   message(STATUS "gseg segment ${scan}")
-  execute_process(COMMAND "${GSEG}" segment "${scan}" --config "${config}"
+  execute_process(COMMAND "${GSEG}" segment -w -i "${scan}" --config "${config}"
                           --ply-out "${OUT}/${name}.ply" --png-out "${OUT}/${name}.png"
                           --scene-out "${OUT}/${name}.3Dscene" --labels-out "${OUT}/${name}.labels"
                   RESULT_VARIABLE rc)
@@ -48,12 +49,12 @@ endif()
 # whatever the scan's time stamp, stands for a sensor that did not move.
 file(WRITE "${OUT}/stationary.tum" "0 0 0 0 0 0 0 1\n")
 message(STATUS "rawlog-octomap ${vlp16}")
-run_tool("${BIN}/rawlog-octomap" -i "${vlp16}" -o "${OUT}/vlp16" --poses "${OUT}/stationary.tum"
+run_tool("${BIN}/rawlog-octomap" -w -i "${vlp16}" -o "${OUT}/vlp16" --poses "${OUT}/stationary.tum"
          --pose-tolerance 1e12 -c "${SRC}/config/vlp16.yaml")
 if(EXISTS "${kitti}/00/poses.txt")
   message(STATUS "kitti2rawlog + rawlog-octomap: SemanticKITTI sequence 00")
-  run_tool("${BIN}/kitti2rawlog" -i "${kitti}/00" -o "${OUT}/seq00.rawlog")
-  run_tool("${BIN}/rawlog-octomap" -i "${OUT}/seq00.rawlog" -o "${OUT}/seq00" -c "${SRC}/config/kitti_hdl64.yaml")
+  run_tool("${BIN}/kitti2rawlog" -w -i "${kitti}/00" -o "${OUT}/seq00.rawlog")
+  run_tool("${BIN}/rawlog-octomap" -w -i "${OUT}/seq00.rawlog" -o "${OUT}/seq00" -c "${SRC}/config/kitti_hdl64.yaml")
 endif()
 message(STATUS "Outputs in ${OUT}: *.png (pictures), *.3Dscene (SceneViewer3D of mrpt-apps), *.ply (CloudCompare or "
                "any point-cloud viewer), *.bt / *.ot (liboctomap tools)")

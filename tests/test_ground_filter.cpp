@@ -176,7 +176,7 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "vlp16.rawlog").string();
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out +
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" + out +
                                           "' -c '" GSEG_SOURCE_DIR "/config/vlp16.yaml'");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("1 scans segmented, 11305 points"), std::string::npos) << r.output;
@@ -193,8 +193,11 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
     EXPECT_EQ(ground + obstacles, 11305u);
     EXPECT_EQ(ground, 2060u);  // the same as `gseg segment` with this config (distToGround: auto)
 
-    const auto rep = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out +
-                                            "' --replace");
+    auto rep = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out +
+                                      "' --replace");
+    EXPECT_EQ(rep.status, 2) << "the previous output is not replaced without -w: " << rep.output;
+    EXPECT_EQ(entryClasses(out).size(), 3u);
+    rep = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out + "' --replace -w");
     ASSERT_EQ(rep.status, 0) << rep.output;
     EXPECT_EQ(entryClasses(out).size(), 2u);
 }
@@ -203,7 +206,7 @@ TEST(RawlogGseg, SensoryFrameLayoutPassesThroughEntryForEntry) {
     if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "kf.rawlog").string();
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kKfSlam + "' -o '" + out + "'");
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kKfSlam + "' -o '" + out + "'");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_EQ(entryClasses(out), entryClasses(kKfSlam));  // 600 sensory frames + 600 actions, none dropped
 }
@@ -228,7 +231,7 @@ TEST(RawlogGseg, CorruptInputNamesTheEntryAndLeavesNoOutput) {
     r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + (kDir / "garbage.rawlog").string() +
                                "' -o '" + out + "'");
     EXPECT_EQ(r.status, 1) << r.output;
-    EXPECT_NE(r.output.find("entry 0"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("garbage.rawlog: not an MRPT rawlog"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out));
     for (const auto& e : fs::directory_iterator(kDir))
         EXPECT_EQ(e.path().string().find("never.rawlog.tmp"), std::string::npos) << "temporary left behind";
@@ -280,7 +283,7 @@ TEST(RawlogGseg, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
     if (!fs::exists("/usr/bin/rawlog-edit")) GTEST_SKIP() << "rawlog-edit absent (package mrpt-apps)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "plugin.rawlog").string();
-    ASSERT_EQ(gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out + "'").status, 0);
+    ASSERT_EQ(gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" + out + "'").status, 0);
     const auto r = gseg::test::runCommand(GSEG_PLUGIN_HOST_ENV "rawlog-edit -p '" GSEG_BINARY_DIR
                                           "/lib/libgseg_mrpt.so' --info -i '" + out + "'");
     EXPECT_EQ(r.status, 0) << r.output;
@@ -665,7 +668,11 @@ TEST(RawlogGsegHostile, ErrorsSayWhatIsWrongInOneLineWithTheEntry) {
     std::ofstream(dir / "text.rawlog") << "not a rawlog, just text";
     auto r = rawlogGseg("-i " + q(dir / "text.rawlog") + " -o " + q(dir / "o.rawlog"));
     EXPECT_EQ(r.status, 1) << r.output;
-    EXPECT_NE(r.output.find("entry 0 is unreadable, not an MRPT rawlog?"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find((dir / "text.rawlog").string() + ": not an MRPT rawlog (a rawlog is a stream of serialized MRPT objects, "
+                            "optionally gzip-compressed; this file does not start with one)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("corrupt"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("===="), std::string::npos) << r.output;  // before: "(==== MRPT exception ====)"
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
     // Cut inside the second entry: that entry, the class MRPT was reading, and MRPT's own reason.

@@ -236,9 +236,9 @@ TEST(Kitti2Rawlog, AnInputAsOutputIsRefusedBeforeAnythingIsWritten) {
     }
     ToolRun r = runTool(seq + " -o " + dir + "/a.rawlog --simplemap " + dir + "/a.rawlog", dir);
     EXPECT_EQ(r.status, 2);
-    EXPECT_NE(r.err.find("given as two outputs"), std::string::npos) << r.err;
-    r = runTool(seq + " -o " + dir + "/missing/a.rawlog", dir);  // fail early
-    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("name the same file"), std::string::npos) << r.err;
+    r = runTool(seq + " -o " + dir + "/missing/a.rawlog", dir);  // fail early, bad usage
+    EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("kitti2rawlog: 1 scans"), std::string::npos) << "no scan converted: " << r.err;
     expectNothingLeftBehind(dir);

@@ -1,7 +1,6 @@
 // The map pipeline's structure (runOrdered: parallel per-scan work, results consumed in order,
-// bounded memory, deterministic errors) and the progress lines of the map tools.
+// bounded memory, deterministic errors). The progress lines of every tool: test_tool_common.cpp.
 #include <gseg/map/ordered_pipeline.hpp>
-#include <gseg/map/progress.hpp>
 
 #include <gtest/gtest.h>
 
@@ -100,65 +99,6 @@ TEST(OrderedPipeline, TheErrorOfTheEarliestItemWinsAndEverythingBeforeItIsConsum
             EXPECT_EQ(r.error, c.error) << workers << " workers";
             EXPECT_EQ(r.indices.size(), c.consumed) << c.error << ", " << workers << " workers";
         }
-}
-
-/// Progress lines written to memory with a clock the test moves.
-struct Captured {
-    char* buf = nullptr;
-    std::size_t size = 0;
-    std::FILE* f = open_memstream(&buf, &size);
-    double now = 0;
-    ~Captured() {
-        if (f) std::fclose(f);
-        std::free(buf);
-    }
-    std::string text() {
-        std::fflush(f);
-        return std::string(buf, size);
-    }
-};
-
-TEST(Progress, PlainLinesAtASteadyRateWhenNotATerminal) {
-    Captured out;
-    gseg::map::Progress p(out.f, "tool", "scans", 0, 10.0, [&] { return out.now; });
-    for (int k = 1; k <= 40; ++k) {
-        out.now = k;  // one scan per second, a quarter of the input every 10 scans
-        p.update(std::size_t(k), k / 40.0);
-    }
-    p.finish(40);
-    const std::string t = out.text();
-    EXPECT_EQ(t,
-              "tool: 1 scans, 1.0 scans/s, 2 %, 39 s left\n"
-              "tool: 11 scans, 1.0 scans/s, 28 %, 29 s left\n"
-              "tool: 21 scans, 1.0 scans/s, 52 %, 19 s left\n"
-              "tool: 31 scans, 1.0 scans/s, 78 %, 9 s left\n"
-              "tool: 40 scans, 1.0 scans/s, 40 s in all\n");
-}
-
-TEST(Progress, OneLiveLineOnATerminal) {
-    Captured out;
-    gseg::map::Progress p(out.f, "tool", "scans", 1, 10.0, [&] { return out.now; });
-    for (int k = 1; k <= 10; ++k) {
-        out.now = 0.1 * k;
-        p.update(std::size_t(k), -1);  // unknown fraction: no time left
-    }
-    p.message("tool: skipped scan 3");
-    p.finish(10);
-    const std::string t = out.text();
-    EXPECT_EQ(std::count(t.begin(), t.end(), '\n'), 2) << t;
-    EXPECT_EQ(t.find("left"), std::string::npos) << t;
-    EXPECT_NE(t.find("\rtool: 1 scans, 10.0 scans/s\033[K"), std::string::npos) << t;
-    EXPECT_EQ(t.find("\rtool: 2 scans"), std::string::npos) << "redrawn at most every 0.2 s: " << t;
-    EXPECT_NE(t.find("\rtool: skipped scan 3\033[K\n"), std::string::npos) << t;
-    EXPECT_NE(t.find("\rtool: 10 scans, 10.0 scans/s, 1 s in all\033[K\n"), std::string::npos) << t;
-}
-
-TEST(Progress, DurationsReadLikeClocks) {
-    EXPECT_EQ(gseg::map::formatDuration(0), "0 s");
-    EXPECT_EQ(gseg::map::formatDuration(59.4), "59 s");
-    EXPECT_EQ(gseg::map::formatDuration(61), "1 min 01 s");
-    EXPECT_EQ(gseg::map::formatDuration(3725), "1 h 02 min");
-    EXPECT_EQ(gseg::map::formatDuration(-5), "0 s");
 }
 
 }  // namespace

@@ -27,6 +27,12 @@ using gseg::test::runCommand;
 
 const std::string kSource = GSEG_SOURCE_DIR, kBuild = GSEG_BINARY_DIR;
 
+/// Sanitized builds: stock observations2map loading the sanitized plugin needs the ASan runtime
+/// first in LD_PRELOAD (and leaks of the stock app are not ours). Empty in other builds.
+const std::string kAsan = GSEG_ASAN_RUNTIME;
+const std::string kHostEnv = kAsan.empty() ? "" : "LD_PRELOAD='" + kAsan + "' ASAN_OPTIONS=detect_leaks=0 ";
+const std::string kPreload = kAsan.empty() ? "" : kAsan + ":";
+
 bool haveObservations2map() { return runCommand("command -v observations2map").status == 0; }
 
 std::string tempDir(const std::string& name) {
@@ -75,10 +81,10 @@ void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string
                    dir + "/r -c config/kitti_hdl64.yaml");
     ASSERT_EQ(r.status, 0) << r.output;
     if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps): route 2 not run";
-    r = runCommand("cd '" + kSource + "' && LD_PRELOAD='" + kBuild + "/lib/libgseg_map.so' observations2map config/octomap_maps.ini " +
+    r = runCommand("cd '" + kSource + "' && " + (kAsan.empty() ? "" : "ASAN_OPTIONS=detect_leaks=0 ") + "LD_PRELOAD='" + kPreload + kBuild + "/lib/libgseg_map.so' observations2map config/octomap_maps.ini " +
                    dir + "/seq.simplemap " + dir + "/o2m < /dev/null");
     ASSERT_EQ(r.status, 0) << r.output;
-    r = runCommand("cd '" + kSource + "' && '" + gseg::test::tool("gseg-observations2map") + "' config/octomap_maps.ini " + dir +
+    r = runCommand("cd '" + kSource + "' && " + kHostEnv + "'" + gseg::test::tool("gseg-observations2map") + "' config/octomap_maps.ini " + dir +
                    "/seq.simplemap " + dir + "/w");
     ASSERT_EQ(r.status, 0) << r.output;
     for (const char* s : kSuffixes) {
@@ -118,7 +124,7 @@ TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo
     EXPECT_FALSE(fs::exists(dir + "/bare_gseg_maps__CTraversabilityOctoMap_00_ground.bt"));
     // The wrapper: a configuration without gseg's map is bad usage, an empty simplemap bad input.
     std::ofstream(dir + "/none.ini") << "[MappingApplication]\nCOccupancyGridMap2D_count = 0\n";
-    const std::string wrapper = gseg::test::tool("gseg-observations2map");
+    const std::string wrapper = kHostEnv + gseg::test::tool("gseg-observations2map");
     r = runCommand(wrapper + " " + dir + "/none.ini " + dir + "/seq.simplemap " + dir + "/w");
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find("no gsegTraversabilityMap"), std::string::npos) << r.output;
@@ -135,11 +141,11 @@ TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo
         mrpt::io::CFileGZOutputStream f(dir + "/empty.simplemap");
         mrpt::serialization::archiveFrom(f) << mrpt::maps::CSimpleMap();
     }
-    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/empty.simplemap " + dir + "/w");
+    r = runCommand(wrapper + " -w '" + kSource + "/config/octomap_maps.ini' " + dir + "/empty.simplemap " + dir + "/w");
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_NE(r.output.find("observations2map wrote no"), std::string::npos) << r.output;
     std::ofstream(dir + "/garbage.simplemap") << "not a simplemap";
-    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/garbage.simplemap " + dir + "/w");
+    r = runCommand(wrapper + " -w '" + kSource + "/config/octomap_maps.ini' " + dir + "/garbage.simplemap " + dir + "/w");
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_EQ(runCommand(wrapper + " --version").status, 0);
     EXPECT_EQ(runCommand(wrapper + " --help").status, 0);

@@ -181,7 +181,7 @@ TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
         Drive d;
         d.layout = layout;
         writeDrive(dir + "/drive.rawlog", d);
-        const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
+        const ToolRun r = runTool("rawlog-octomap", "-w -i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
         ASSERT_EQ(r.status, 0) << r.err;
         const std::string raw = layout == Drive::Pair ? "0" : "8";
         EXPECT_NE(r.out.find("8 scans (8 from _ground/_obstacles pairs, " + raw + " raw scans not segmented again"),
@@ -396,12 +396,24 @@ TEST(RawlogOctomap, PosesInUtmNeedAnOriginAndThenWork) {
     fs::remove_all(dir);
 }
 
+TEST(RawlogOctomap, AFileThatIsNoRawlogIsSaidToBeNone) {
+    // Was "entry 0 is corrupt or truncated (Message: Exception while parsing typed object ...)".
+    const std::string dir = tempDir("not_rawlog");
+    std::ofstream(dir + "/x.rawlog") << "hello\n";
+    const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/x.rawlog -o " + dir + "/m", dir);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_EQ(r.err, "rawlog-octomap: " + dir + "/x.rawlog: not an MRPT rawlog (a rawlog is a stream of serialized MRPT "
+                     "objects, optionally gzip-compressed; this file does not start with one)\n");
+    EXPECT_FALSE(fs::exists(dir + "/m_ground.bt"));
+    fs::remove_all(dir);
+}
+
 TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
     const std::string dir = tempDir("early");
     writeDrive(dir + "/drive.rawlog");
     for (const std::string& prefix : {dir + "/missing/m", std::string("/proc/gseg_maps_test/m"), std::string("/proc/m")}) {
         const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + prefix, dir);
-        EXPECT_EQ(r.status, 1) << prefix;
+        EXPECT_EQ(r.status, 2) << prefix;  // bad usage
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line and no scan read: " << r.err;
         EXPECT_NE(r.err.find(prefix + "_ground.bt: "), std::string::npos) << r.err;
     }

@@ -1,6 +1,6 @@
 // gseg bench: time the segmentation of scans, per scan, phase and step.
-#include "cli.hpp"
 #include "commands.hpp"
+#include "common/cli.hpp"
 
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/mrpt/config.hpp>
@@ -62,6 +62,8 @@ std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::
                               std::vector<std::string>& skipped) {
     ::gseg::mrpt::LoadedConfig cfg;
     if (!config.empty()) cfg = ::gseg::mrpt::loadConfig(config);
+    tools::detail("parameters (%s):\n%s", config.empty() ? "library defaults" : config.c_str(),
+                  ::gseg::mrpt::toYaml(cfg).c_str());
     std::vector<Input> inputs;
     for (const auto& path : paths) {
         Input in{std::filesystem::path(path).filename().string(), ::gseg::mrpt::loadScan(path), cfg.params};
@@ -71,17 +73,17 @@ std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::
                          !std::isfinite(in.scan.xyzi[4 * i + 2]);
         if (nonFinite == in.scan.size()) {
             skipped.push_back(in.name + ": no finite point to segment");
-            std::printf("%s: skipped: no finite point to segment\n", in.name.c_str());
+            tools::say("%s: skipped: no finite point to segment\n", in.name.c_str());
             continue;
         }
         if (nonFinite)
-            std::printf("%s: %zu non-finite point(s) left out (labelled non-ground, not segmented)\n", in.name.c_str(),
+            tools::say("%s: %zu non-finite point(s) left out (labelled non-ground, not segmented)\n", in.name.c_str(),
                         nonFinite);
         if (cfg.distToGroundAuto) {
             AutoHeightSegmenter height(cfg.params);
             height.segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16), false);
             in.params.distToGround = height.lastDecision().height;
-            std::printf("%s: distToGround auto %s\n", in.name.c_str(), height.lastDecision().describe().c_str());
+            tools::say("%s: distToGround auto %s\n", in.name.c_str(), height.lastDecision().describe().c_str());
         }
         inputs.push_back(std::move(in));
     }
@@ -146,10 +148,10 @@ Stats column(const std::vector<Sample>& samples, Get get) {
 }
 
 void printPerScan(const std::vector<Input>& inputs, const std::vector<std::vector<Sample>>& perScan) {
-    std::printf("\n%-22s %8s %10s %10s %10s %10s\n", "scan", "points", "median ms", "p90 ms", "min ms", "Mpoints/s");
+    tools::say("\n%-22s %8s %10s %10s %10s %10s\n", "scan", "points", "median ms", "p90 ms", "min ms", "Mpoints/s");
     for (std::size_t i = 0; i < inputs.size(); ++i) {
         const Stats t = column(perScan[i], [](const Sample& s) { return s.total; });
-        std::printf("%-22s %8zu %10.2f %10.2f %10.2f %10.2f\n", inputs[i].name.c_str(), inputs[i].scan.size(), t.median,
+        tools::say("%-22s %8zu %10.2f %10.2f %10.2f %10.2f\n", inputs[i].name.c_str(), inputs[i].scan.size(), t.median,
                     t.p90, t.min, double(inputs[i].scan.size()) / t.median / 1000.0);
     }
 }
@@ -163,11 +165,11 @@ void printSteps(const std::vector<Sample>& all) {
                  {"plane fit", &StepTimes::planeFit},
                  {"expansion", &StepTimes::expansion},
                  {"refinement", &StepTimes::refinement}};
-    std::printf("\n%-16s %10s %10s   (median ms over all scans and repeats)\n", "step", "phase I", "phase II");
+    tools::say("\n%-16s %10s %10s   (median ms over all scans and repeats)\n", "step", "phase I", "phase II");
     for (const auto& st : steps)
-        std::printf("%-16s %10.3f %10.3f\n", st.name, column(all, [&](const Sample& s) { return s.p1.*st.step; }).median,
+        tools::say("%-16s %10.3f %10.3f\n", st.name, column(all, [&](const Sample& s) { return s.p1.*st.step; }).median,
                     column(all, [&](const Sample& s) { return s.p2.*st.step; }).median);
-    std::printf("%-16s %10.3f %10.3f\n", "phase total", column(all, [](const Sample& s) { return s.p1.total(); }).median,
+    tools::say("%-16s %10.3f %10.3f\n", "phase total", column(all, [](const Sample& s) { return s.p1.total(); }).median,
                 column(all, [](const Sample& s) { return s.p2.total(); }).median);
 }
 
@@ -180,7 +182,7 @@ int run(const std::vector<std::string>& paths, const std::string& config, int re
     const bool perScanParams = std::any_of(inputs.begin(), inputs.end(), [&](const Input& in) {
         return in.params.distToGround != inputs.front().params.distToGround;
     });
-    std::printf("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s); build: %s; "
+    tools::say("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s); build: %s; "
                 "%u hardware threads\n",
                 inputs.size(), points, repeat, threads, kBuild, std::thread::hardware_concurrency());
 
@@ -190,51 +192,49 @@ int run(const std::vector<std::string>& paths, const std::string& config, int re
     for (const auto& v : perScan) all.insert(all.end(), v.begin(), v.end());
     printPerScan(inputs, perScan);
     const Stats t = column(all, [](const Sample& s) { return s.total; });
-    std::printf("%-22s %8zu %10.2f %10.2f %10.2f %10.2f\n", "all scans", points / inputs.size(), t.median, t.p90,
+    tools::say("%-22s %8zu %10.2f %10.2f %10.2f %10.2f\n", "all scans", points / inputs.size(), t.median, t.p90,
                 t.min, double(points) / double(inputs.size()) / t.median / 1000.0);
     printSteps(all);
     const double passes = double(repeat + 1) * threads;  // timed + warm-up passes in the wall time
-    std::printf("\nthroughput: %.1f scans/s, %.2f Mpoints/s aggregate with %d thread(s) (wall %.2f s incl. warm-up)\n",
+    tools::say("\nthroughput: %.1f scans/s, %.2f Mpoints/s aggregate with %d thread(s) (wall %.2f s incl. warm-up)\n",
                 passes * double(inputs.size()) / wallS, passes * double(points) / wallS / 1e6, threads, wallS);
     rusage ru{};
     ::getrusage(RUSAGE_SELF, &ru);
-    std::printf("peak memory (ru_maxrss, scans loaded included): %.1f MB\n", double(ru.ru_maxrss) / 1024.0);
-    if (!skipped.empty()) std::printf("%zu scan(s) skipped (named above)\n", skipped.size());
+    tools::say("peak memory (ru_maxrss, scans loaded included): %.1f MB\n", double(ru.ru_maxrss) / 1024.0);
+    if (!skipped.empty()) tools::say("%zu scan(s) skipped (named above)\n", skipped.size());
     return skipped.empty() ? 0 : 3;
 }
 
 }  // namespace
 
 int runBench(int argc, char** argv) {
-    std::vector<std::string> scans;
-    std::string config;
-    int repeat = 20, threads = 1;
-    try {
-        TCLAP::CmdLine cmd("Time GSeg3D on scans: one warm-up pass, then median / p90 / min of the segment() call per "
-                           "scan over N repeats, per phase and step, points per second, peak memory. Without "
-                           "--config: the library defaults. Exit code: 0 done, 1 bad input, 2 bad usage, 3 done but "
-                           "some scans could not be timed (named).",
-                           ' ', "0.1");
-        TCLAP::UnlabeledMultiArg<std::string> scanArgs("scans", "KITTI .bin, PLY or rawlog files", true, "SCAN", cmd);
-        TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file", false, "", "FILE", cmd);
-        TCLAP::ValueArg<int> rep("", "repeat", "timed passes over all scans (default 20)", false, 20, "N", cmd);
-        TCLAP::ValueArg<int> thr("", "threads", "N independent segmenters on N threads, each timing every scan "
-                                 "(default 1)", false, 1, "N", cmd);
-        if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
-        scans = scanArgs.getValue(), config = cfg.getValue(), repeat = rep.getValue(), threads = thr.getValue();
-    } catch (const TCLAP::ArgException& e) {
-        std::fprintf(stderr, "gseg bench: %s (%s)\n", e.error().c_str(), e.argId().c_str());
-        return 2;
-    }
-    if (repeat < 1 || threads < 1 || threads > 256) {
-        std::fprintf(stderr, "gseg bench: --repeat must be >= 1 and --threads between 1 and 256\n");
-        return 2;
-    }
+    tools::CommandLine line("gseg bench",
+                            "Time GSeg3D on scans: one warm-up pass, then median / p90 / min of the segment() call per "
+                            "scan over N repeats, per phase and step, points per second, peak memory. Without "
+                            "--config: the library defaults. The scans may also be given without -i (old form: gseg "
+                            "bench SCAN...). Writes no file. Exit code: 0 done, 1 bad input, 2 bad usage, 3 done but "
+                            "some scans could not be timed (named).",
+                            false);
+    TCLAP::CmdLine& cmd = line.cmd();
+    TCLAP::MultiArg<std::string> input("i", "input", "a scan: KITTI .bin, PLY or rawlog (repeatable)", false, "SCAN", cmd);
+    TCLAP::UnlabeledMultiArg<std::string> scanArgs("scans", "scans, old form (same as -i)", false, "SCAN", cmd);
+    TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file", false, "", "FILE", cmd);
+    TCLAP::ValueArg<int> rep("", "repeat", "timed passes over all scans (default 20)", false, 20, "N", cmd);
+    TCLAP::ValueArg<int> thr("", "threads", "N independent segmenters on N threads, each timing every scan "
+                             "(default 1)", false, 1, "N", cmd);
+    if (const int code = line.parse(argc, argv); code >= 0) return code;
+    std::vector<std::string> scans = input.getValue();
+    scans.insert(scans.end(), scanArgs.getValue().begin(), scanArgs.getValue().end());
+    const std::string config = cfg.getValue();
+    const int repeat = rep.getValue(), threads = thr.getValue();
+    if (scans.empty()) return line.usageError("no scan to time: give -i SCAN (repeatable)");
+    if (repeat < 1 || threads < 1 || threads > 256)
+        return line.usageError("--repeat must be >= 1 and --threads between 1 and 256");
     try {
         return run(scans, config, repeat, threads);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "gseg bench: %s\n", ::gseg::mrpt::errorReason(e).c_str());
-        return 1;
+        return tools::kBadInput;
     }
 }
 

@@ -1,13 +1,14 @@
 // gseg eval: precision / recall on SemanticKITTI under the Ground Segmentation Benchmark protocol.
-#include "cli.hpp"
 #include "commands.hpp"
+#include "common/cli.hpp"
 #include "eval_plot.hpp"
 #include "eval_report.hpp"
-#include "progress.hpp"
 
 #include <gseg/ground_segmenter.hpp>
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/metrics.hpp>
+#include <gseg/progress.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/sensor_height.hpp>
 
@@ -118,11 +119,12 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
 
 /// The frames `todo` (indices into `frames`) are handed out one at a time to `threads` workers,
 /// each with its own segmenter; the segmenter is deterministic, so the results equal a serial run's.
+/// Progress counts the frames scored and names the skipped ones apart.
 std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const std::vector<std::size_t>& todo,
                                      const Setup& setup, int threads) {
     std::vector<FrameResult> results(frames.size());
-    std::atomic<std::size_t> next{0};
-    Progress progress("evaluating", todo.size());
+    std::atomic<std::size_t> next{0}, scored{0}, skipped{0};
+    Progress progress(tools::progressOut(), "gseg eval", "frames");
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; ++t)
         pool.emplace_back([&] {
@@ -130,12 +132,21 @@ std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const std
             bool first = true;
             for (std::size_t k; (k = next++) < todo.size();) {
                 const std::size_t i = todo[k];
-                results[i] = evaluate(seg, frames[i], setup, first);
-                first = first && !results[i].skipped.empty();
-                progress.step();
+                const FrameResult& r = results[i] = evaluate(seg, frames[i], setup, first);
+                first = first && !r.skipped.empty();
+                const std::size_t s = r.skipped.empty() ? skipped.load() : ++skipped;
+                const std::size_t n = r.skipped.empty() ? ++scored : scored.load();
+                if (r.skipped.empty())
+                    tools::detail("%s/%s: %zu points, precision %.2f %%, recall %.2f %%, F1 %.2f %%, %.1f ms\n",
+                                  frames[i].sequence.c_str(), frames[i].name.c_str(), r.row.points,
+                                  r.row.score.withVegetation.precision(), r.row.score.withVegetation.recall(),
+                                  r.row.score.withVegetation.f1(), r.row.ms);
+                progress.update(n, double(n + s) / double(todo.size()), s ? std::to_string(s) + " skipped" : "");
             }
         });
     for (auto& th : pool) th.join();
+    const std::size_t s = skipped.load();
+    progress.finish(scored.load(), s ? std::to_string(s) + " skipped" : "");
     return results;
 }
 
@@ -168,7 +179,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
         std::string counts;
         for (int r = 0; r < ranks.size(); ++r)
             counts += (r ? ", " : "") + std::to_string(std::count(owner.begin(), owner.end(), r));
-        std::printf("%zu frames split over %d processes by their points: %s\n", frames.size(), ranks.size(), counts.c_str());
+        tools::say("%zu frames split over %d processes by their points: %s\n", frames.size(), ranks.size(), counts.c_str());
     }
     return results;
 }
@@ -180,38 +191,69 @@ struct Cli {
     std::vector<std::string> sequences;
     int threads = 1;
     bool breakdown = false;
+    bool overwrite = false;  ///< -w
 };
 
 Setup makeSetup(const Cli& cli) {
-    Setup setup;  // library defaults = config/kitti_hdl64.yaml
-    if (!cli.config.empty()) {
-        const auto cfg = mrpt::loadConfig(cli.config);
-        setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto;
+    Setup setup;
+    mrpt::LoadedConfig cfg;  // library defaults = config/kitti_hdl64.yaml
+    try {
+        if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
+    } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
+        throw std::runtime_error(e.what());
     }
+    setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto;
+    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
+                  mrpt::toYaml(cfg).c_str());
     setup.predDir = cli.predDir;
     setup.breakdown = cli.breakdown;
     if (cli.breakdown && !cli.report.empty()) setup.pictureDir = cli.report + "_breakdown";
     return setup;
 }
 
+/// Every file the run writes, checked before any work (exit 2): not an input, not there already
+/// unless -w, in a folder that exists or can be made and takes a new file.
+void checkEvalOutputs(const Cli& cli, const Setup& setup, const std::vector<Frame>& frames) {
+    std::vector<io::NamedPath> inputs = {{"--config", cli.config}}, outputs;
+    for (const Frame& f : frames) inputs.push_back({"scan", f.scan}), inputs.push_back({"labels", f.label});
+    if (!cli.report.empty()) {
+        for (const char* suffix : {"_frames.csv", "_sequences.csv", "_table.md", "_range.png"})
+            outputs.push_back({"--report", cli.report + suffix});
+        if (cli.breakdown) outputs.push_back({"--report", cli.report + "_breakdown.csv"});
+    }
+    for (const Frame& f : frames) {
+        if (!setup.pictureDir.empty())
+            outputs.push_back({"--report", setup.pictureDir + "/" + f.sequence + "_" + f.name + ".png"});
+        if (!setup.predDir.empty()) outputs.push_back({"--labels-out-dir", setup.predDir + "/" + f.sequence + "_" + f.name + ".pred"});
+    }
+    io::checkOutputs(inputs, outputs, {cli.overwrite, true});
+}
+
 int run(const Cli& cli, tools::Ranks& ranks) {
     Setup setup;
     std::vector<Frame> frames;
     std::string error;  // every rank finds the frames; any rank's failure stops all alike
+    int code = tools::kBadInput;
     try {
         setup = makeSetup(cli);
         if (!cli.scan.empty()) {
-            if (cli.labels.empty()) throw std::runtime_error("--scan needs --labels");
+            if (cli.labels.empty()) throw std::invalid_argument("--scan needs --labels");
             frames.push_back({"scan", fs::path(cli.scan).stem().string(), cli.scan, cli.labels});
         } else {
             frames = findFrames(cli.root, cli.sequences);
         }
+        if (ranks.root()) checkEvalOutputs(cli, setup, frames);  // rank 0 writes the reports
         if (ranks.root() && !cli.predDir.empty()) fs::create_directories(cli.predDir);
         if (ranks.root() && !setup.pictureDir.empty()) fs::create_directories(setup.pictureDir);
+    } catch (const std::invalid_argument& e) {  // bad usage: an output that cannot be written
+        error = e.what(), code = tools::kBadUsage;
     } catch (const std::exception& e) {
         error = e.what();
     }
-    if (const std::string first = ranks.firstError(error); !first.empty()) throw std::runtime_error(first);
+    if (const std::string first = ranks.firstError(error); !first.empty()) {
+        std::fprintf(stderr, "gseg eval: %s\n", first.c_str());
+        return code;
+    }
     const auto results = evaluateOnRanks(frames, setup, cli.threads, ranks);
     if (!ranks.root()) return 0;
 
@@ -220,7 +262,7 @@ int run(const Cli& cli, tools::Ranks& ranks) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
         if (!results[i].heightNote.empty()) {
             ++fallbacks;
-            std::fprintf(stderr, "%s/%s: distToGround: auto: %s\n", frames[i].sequence.c_str(), frames[i].name.c_str(),
+            tools::note("%s/%s: distToGround: auto: %s\n", frames[i].sequence.c_str(), frames[i].name.c_str(),
                          results[i].heightNote.c_str());
         }
         if (results[i].skipped.empty()) {
@@ -230,14 +272,14 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         std::fprintf(stderr, "skipped %s/%s: %s\n", frames[i].sequence.c_str(), frames[i].name.c_str(),
                      results[i].skipped.c_str());
     }
-    std::printf("%zu frames evaluated, %zu skipped", rows.size(), frames.size() - rows.size());
-    if (setup.autoHeight) std::printf(", %zu without a height estimate (fallback used)", fallbacks);
-    std::printf("\n");
+    tools::say("%zu frames evaluated, %zu skipped", rows.size(), frames.size() - rows.size());
+    if (setup.autoHeight) tools::say(", %zu without a height estimate (fallback used)", fallbacks);
+    tools::say("\n");
     if (rows.empty()) throw std::runtime_error("no frame could be scored (see the skipped frames above)");
     const auto seqs = summarise(rows);
     const std::string table = markdownTable(seqs);
-    std::printf("%s\n%s", summaryText(seqs).c_str(), table.c_str());
-    if (cli.breakdown) std::printf("\n%s", breakdownText(seqs).c_str());
+    tools::say("%s\n%s", summaryText(seqs).c_str(), table.c_str());
+    if (cli.breakdown) tools::say("\n%s", breakdownText(seqs).c_str());
     if (!cli.report.empty()) {
         const fs::path dir = fs::path(cli.report).parent_path();
         if (!dir.empty()) fs::create_directories(dir);
@@ -245,10 +287,10 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         writeText(cli.report + "_sequences.csv", sequencesCsv(seqs));
         writeText(cli.report + "_table.md", table);
         plotRanges(cli.report + "_range.png", seqs);
-        std::printf("\nwrote %s_frames.csv, _sequences.csv, _table.md, _range.png\n", cli.report.c_str());
+        tools::say("\nwrote %s_frames.csv, _sequences.csv, _table.md, _range.png\n", cli.report.c_str());
         if (cli.breakdown) {
             writeText(cli.report + "_breakdown.csv", breakdownCsv(rows, seqs));
-            std::printf("wrote %s_breakdown.csv and a picture per frame in %s/\n", cli.report.c_str(),
+            tools::say("wrote %s_breakdown.csv and a picture per frame in %s/\n", cli.report.c_str(),
                         setup.pictureDir.c_str());
         }
     }
@@ -267,47 +309,47 @@ std::vector<std::string> splitCommas(const std::string& s) {
 
 int runEval(int argc, char** argv, tools::Ranks& ranks) {
     Cli cli;
-    try {
-        TCLAP::CmdLine cmd(
-            "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
-            "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped. Without "
-            "--config: the library defaults, which are exactly config/kitti_hdl64.yaml. Under mpirun or srun the frames are "
-            "split over the processes by their points (--threads workers in each) and rank 0 writes the reports.",
-            ' ', "0.1");
-        TCLAP::UnlabeledValueArg<std::string> root("root", "SemanticKITTI root (sequences/NN/velodyne, labels)", false,
-                                                   "", "ROOT", cmd);
-        TCLAP::ValueArg<std::string> seqs("", "sequences", "comma-separated sequences (default all)", false, "",
-                                          "00,08", cmd);
-        TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file (distToGround: auto is estimated "
-                                         "per frame)", false, "", "FILE", cmd);
-        TCLAP::ValueArg<std::string> report("", "report", "write PREFIX_frames.csv, _sequences.csv, _table.md, "
-                                            "_range.png", false, "", "PREFIX", cmd);
-        TCLAP::ValueArg<int> threads("", "threads", "worker threads (default: hardware threads)", false,
-                                     int(std::max(1u, std::thread::hardware_concurrency())), "N", cmd);
-        TCLAP::ValueArg<std::string> scan("", "scan", "score one scan instead of a tree", false, "", "X.bin", cmd);
-        TCLAP::ValueArg<std::string> labels("", "labels", "label file of --scan", false, "", "X.label", cmd);
-        TCLAP::ValueArg<std::string> preds("", "labels-out-dir", "write each frame's predictions (1 byte per point, "
-                                           "1 ground) as DIR/SEQ_FRAME.pred", false, "", "DIR", cmd);
-        TCLAP::SwitchArg breakdown("", "breakdown", "failure analysis: false ground by class, height above the local "
-                                   "labelled ground and range, missed ground by class and range, per frame and "
-                                   "sequence; with --report also PREFIX_breakdown.csv and a top-down PNG per frame "
-                                   "(true / false / missed ground) in PREFIX_breakdown/", cmd, false);
-        if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
-        cli = {root.getValue(), scan.getValue(), labels.getValue(), cfg.getValue(), report.getValue(),
-               preds.getValue(), splitCommas(seqs.getValue()), threads.getValue(), breakdown.getValue()};
-    } catch (const TCLAP::ArgException& e) {
-        std::fprintf(stderr, "gseg eval: %s (%s)\n", e.error().c_str(), e.argId().c_str());
-        return 2;
-    }
-    if (cli.root.empty() == cli.scan.empty() || cli.threads < 1 || cli.threads > 256) {
-        std::fprintf(stderr, "gseg eval: give either ROOT or --scan X.bin --labels X.label, and --threads 1..256\n");
-        return 2;
-    }
+    tools::CommandLine line(
+        "gseg eval",
+        "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
+        "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped. Without "
+        "--config: the library defaults, which are exactly config/kitti_hdl64.yaml. The root may also be given "
+        "without -i (old form: gseg eval ROOT). Under mpirun or srun the frames are split over the processes by their "
+        "points (--threads workers in each) and rank 0 writes the reports.",
+        true, ranks.root());
+    TCLAP::CmdLine& cmd = line.cmd();
+    TCLAP::ValueArg<std::string> input("i", "input", "SemanticKITTI root (sequences/NN/velodyne, labels)", false, "",
+                                       "ROOT", cmd);
+    TCLAP::UnlabeledValueArg<std::string> root("root", "the root, old form (same as -i)", false, "", "ROOT", cmd);
+    TCLAP::ValueArg<std::string> seqs("", "sequences", "comma-separated sequences (default all)", false, "", "00,08",
+                                      cmd);
+    TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file (distToGround: auto is estimated "
+                                     "per frame)", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> report("", "report", "write PREFIX_frames.csv, _sequences.csv, _table.md, "
+                                        "_range.png (the folder is made if missing)", false, "", "PREFIX", cmd);
+    TCLAP::ValueArg<int> threads("", "threads", "worker threads (default: hardware threads)", false,
+                                 int(std::max(1u, std::thread::hardware_concurrency())), "N", cmd);
+    TCLAP::ValueArg<std::string> scan("", "scan", "score one scan instead of a tree", false, "", "X.bin", cmd);
+    TCLAP::ValueArg<std::string> labels("", "labels", "label file of --scan", false, "", "X.label", cmd);
+    TCLAP::ValueArg<std::string> preds("", "labels-out-dir", "write each frame's predictions (1 byte per point, "
+                                       "1 ground) as DIR/SEQ_FRAME.pred", false, "", "DIR", cmd);
+    TCLAP::SwitchArg breakdown("", "breakdown", "failure analysis: false ground by class, height above the local "
+                               "labelled ground and range, missed ground by class and range, per frame and "
+                               "sequence; with --report also PREFIX_breakdown.csv and a top-down PNG per frame "
+                               "(true / false / missed ground) in PREFIX_breakdown/", cmd, false);
+    if (const int code = line.parse(argc, argv); code >= 0) return code;
+    if (!input.getValue().empty() && !root.getValue().empty())
+        return line.usageError("give the root once: -i ROOT (or the old form, gseg eval ROOT)");
+    cli = {input.getValue().empty() ? root.getValue() : input.getValue(), scan.getValue(), labels.getValue(),
+           cfg.getValue(), report.getValue(), preds.getValue(), splitCommas(seqs.getValue()), threads.getValue(),
+           breakdown.getValue(), line.overwrite()};
+    if (cli.root.empty() == cli.scan.empty() || cli.threads < 1 || cli.threads > 256)
+        return line.usageError("give either -i ROOT or --scan X.bin --labels X.label, and --threads 1..256");
     try {
         return run(cli, ranks);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "gseg eval: %s\n", e.what());
-        return 1;
+        return tools::kBadInput;
     }
 }
 

@@ -1,5 +1,6 @@
 // gseg: GSeg3D ground segmentation tools (segment one scan, evaluate, benchmark).
 #include "commands.hpp"
+#include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
 
@@ -23,8 +24,12 @@ const Command kCommands[] = {
 };
 
 void usage(std::FILE* out) {
-    std::fprintf(out, "usage: gseg <command> [options]   (gseg <command> --help for its options)\n\ncommands:\n");
+    std::fprintf(out, "%s\nusage: gseg <command> [options]   (gseg <command> --help for its options)\n\ncommands:\n",
+                 gseg::tools::versionLine("gseg").c_str());
     for (const Command& c : kCommands) std::fprintf(out, "  %-9s %s\n", c.name, c.summary);
+    std::fprintf(out, "\nevery command takes its inputs with -i (the positional form works too) and has -q/--quiet, "
+                      "-v/--verbose, --version and --help; those that write files refuse to replace one without "
+                      "-w/--overwrite\n");
 }
 
 int runCommand(int argc, char** argv, gseg::tools::Ranks& ranks) {
@@ -34,7 +39,11 @@ int runCommand(int argc, char** argv, gseg::tools::Ranks& ranks) {
     }
     const std::string cmd = argv[1];
     if (cmd == "-h" || cmd == "--help" || cmd == "help") {
-        usage(stdout);
+        if (ranks.root()) usage(stdout);
+        return 0;
+    }
+    if (cmd == "--version") {
+        if (ranks.root()) std::printf("%s\n", gseg::tools::versionLine("gseg").c_str());
         return 0;
     }
     for (const Command& c : kCommands)

@@ -1,6 +1,6 @@
 // gseg segment: label one scan as ground / non-ground.
-#include "cli.hpp"
 #include "commands.hpp"
+#include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/ply.hpp>
@@ -25,27 +25,30 @@ struct Cli {
 };
 
 void printPhase(const char* name, const PhaseReport& r) {
-    std::printf("  %s: %zu -> %zu ground points, %zu cells (%zu candidates, %zu ground), %.2f ms "
+    tools::say("  %s: %zu -> %zu ground points, %zu cells (%zu candidates, %zu ground), %.2f ms "
                 "[grid %.2f, classification %.2f, plane fit %.2f, expansion %.2f, refinement %.2f]\n",
                 name, r.inputPoints, r.groundPoints, r.occupiedCells, r.candidateCells, r.groundCells, r.ms.total(),
                 r.ms.grid, r.ms.classification, r.ms.planeFit, r.ms.expansion, r.ms.refinement);
 }
 
 int run(const Cli& cli) {
+    using tools::say;
     mrpt::LoadedConfig cfg;
     if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
+    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
+                  mrpt::toYaml(cfg).c_str());
     const mrpt::Scan scan = mrpt::loadScan(cli.scan, cli.index);
     const PointCloudView cloud(scan.xyzi.data(), scan.size(), 4 * sizeof(float));
     mrpt::ScanSegmenter segmenter(cfg);
     const mrpt::ScanSegmentation s = segmenter.segment(cloud, false);
     const Result& r = s.result;
-    if (cfg.distToGroundAuto) std::printf("distToGround auto: %s\n", s.height.describe().c_str());
+    if (cfg.distToGroundAuto) say("distToGround auto: %s\n", s.height.describe().c_str());
 
-    std::printf("%s\n", scan.description.c_str());
-    std::printf("points %zu, ground %zu (%.1f %%), non-ground %zu; segmentation %.2f ms\n", cloud.size(), r.numGround,
+    say("%s\n", scan.description.c_str());
+    say("points %zu, ground %zu (%.1f %%), non-ground %zu; segmentation %.2f ms\n", cloud.size(), r.numGround,
                 100.0 * double(r.numGround) / double(std::max<std::size_t>(1, cloud.size())), r.numNonGround, r.totalMs);
     if (s.nonFinitePoints)
-        std::printf("%zu non-finite point(s) (NaN or infinite coordinates) labelled non-ground\n", s.nonFinitePoints);
+        say("%zu non-finite point(s) (NaN or infinite coordinates) labelled non-ground\n", s.nonFinitePoints);
     printPhase("phase I ", r.phase1);
     printPhase("phase II", r.phase2);
 
@@ -72,7 +75,7 @@ int run(const Cli& cli) {
     }
     if (!cli.sceneOut.empty()) add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels));
     for (auto& out : outputs) out->commit();
-    for (const auto& out : outputs) std::printf("wrote %s\n", out->path().c_str());
+    for (const auto& out : outputs) say("wrote %s\n", out->path().c_str());
     return 0;
 }
 
@@ -80,41 +83,44 @@ int run(const Cli& cli) {
 
 int runSegment(int argc, char** argv) {
     Cli cli;
+    tools::CommandLine line("gseg segment", "Label every point of one scan as ground (1) or non-ground (0) with GSeg3D. "
+                            "The scan may also be given without -i (old form: gseg segment SCAN).", true);
+    TCLAP::CmdLine& cmd = line.cmd();
+    TCLAP::ValueArg<std::string> input("i", "input", "the scan: KITTI .bin (float32 x,y,z,intensity), PLY, or MRPT "
+                                       "rawlog", false, "", "SCAN", cmd);
+    TCLAP::UnlabeledValueArg<std::string> scan("scan", "the scan, old form (same as -i)", false, "", "SCAN", cmd);
+    TCLAP::ValueArg<std::string> config("c", "config", "YAML or INI parameter file (default: library defaults, "
+                                        "identical to config/kitti_hdl64.yaml)", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> labels("", "labels-out", "write one byte per input point, in input order: "
+                                        "1 ground, 0 non-ground", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud as binary PLY: x, y, z, intensity, colour "
+                                     "(green ground, red non-ground) and label (1 ground, 0 non-ground; "
+                                     "CloudCompare filters by it)", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> png("", "png-out", "write a top-down picture of ground and obstacles", false, "",
+                                     "FILE", cmd);
+    TCLAP::ValueArg<std::string> scene("", "scene-out", "write an MRPT 3D scene (.3Dscene, for SceneViewer3D of "
+                                       "mrpt-apps): ground points green, non-ground red", false, "", "FILE", cmd);
+    TCLAP::ValueArg<int> index("", "index", "rawlogs: segment the N-th LiDAR observation (0-based; default the "
+                               "first)", false, -1, "N", cmd);
+    if (const int code = line.parse(argc, argv); code >= 0) return code;
+    if (input.getValue().empty() == scan.getValue().empty())
+        return line.usageError("give the scan once: -i SCAN (or the old form, gseg segment SCAN)");
+    cli = {input.getValue().empty() ? scan.getValue() : input.getValue(), config.getValue(), labels.getValue(),
+           ply.getValue(), png.getValue(), scene.getValue(), index.getValue()};
     try {
-        TCLAP::CmdLine cmd("Label every point of one scan as ground (1) or non-ground (0) with GSeg3D.", ' ', "0.1");
-        TCLAP::UnlabeledValueArg<std::string> scan("scan", "KITTI .bin (float32 x,y,z,intensity), PLY, or MRPT rawlog",
-                                                   true, "", "SCAN", cmd);
-        TCLAP::ValueArg<std::string> config("c", "config", "YAML or INI parameter file (default: library defaults, "
-                                            "identical to config/kitti_hdl64.yaml)", false, "", "FILE", cmd);
-        TCLAP::ValueArg<std::string> labels("", "labels-out", "write one byte per input point, in input order: "
-                                            "1 ground, 0 non-ground", false, "", "FILE", cmd);
-        TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud as binary PLY: x, y, z, intensity, colour "
-                                         "(green ground, red non-ground) and label (1 ground, 0 non-ground; "
-                                         "CloudCompare filters by it)", false, "", "FILE", cmd);
-        TCLAP::ValueArg<std::string> png("", "png-out", "write a top-down picture of ground and obstacles", false, "",
-                                         "FILE", cmd);
-        TCLAP::ValueArg<std::string> scene("", "scene-out", "write an MRPT 3D scene (.3Dscene, for SceneViewer3D of "
-                                           "mrpt-apps): ground points green, non-ground red", false, "", "FILE", cmd);
-        TCLAP::ValueArg<int> index("", "index", "rawlogs: segment the N-th LiDAR observation (0-based; default the "
-                                   "first)", false, -1, "N", cmd);
-        if (const int code = parseArgs(cmd, argc, argv); code >= 0) return code;
-        cli = {scan.getValue(), config.getValue(), labels.getValue(), ply.getValue(), png.getValue(), scene.getValue(),
-               index.getValue()};
-        io::checkOutputsAreNotInputs({{"scan", cli.scan}, {"--config", cli.config}},
-                                     {{"--labels-out", cli.labelsOut}, {"--ply-out", cli.plyOut}, {"--png-out", cli.pngOut},
-                                      {"--scene-out", cli.sceneOut}});
-    } catch (const TCLAP::ArgException& e) {
-        std::fprintf(stderr, "gseg segment: %s (%s); see gseg segment --help\n", e.error().c_str(), e.argId().c_str());
-        return 2;
+        io::checkOutputs({{"scan", cli.scan}, {"--config", cli.config}},
+                         {{"--labels-out", cli.labelsOut}, {"--ply-out", cli.plyOut}, {"--png-out", cli.pngOut},
+                          {"--scene-out", cli.sceneOut}},
+                         {line.overwrite(), false});
     } catch (const std::invalid_argument& e) {
         std::fprintf(stderr, "gseg segment: %s\n", e.what());
-        return 2;
+        return tools::kBadUsage;
     }
     try {
         return run(cli);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "gseg segment: %s\n", mrpt::errorReason(e).c_str());
-        return 1;
+        return tools::kBadInput;
     }
 }
 

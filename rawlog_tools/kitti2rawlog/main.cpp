@@ -22,16 +22,18 @@
 // where the previous one ended, one frame step later): a long drive for benchmarks, streamed.
 // Every write and the close are checked; outputs appear complete or not at all, never over an input.
 
+#include "common/cli.hpp"
+
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/map/gz_output.hpp>
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/poses.hpp>
-#include <gseg/map/progress.hpp>
+#include <gseg/progress.hpp>
 #include <gseg/version.hpp>
 
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationRobotPose.h>
@@ -62,6 +64,7 @@ constexpr const char* kDefaultStart = "2011-09-26T00:00:00Z";
 struct Cli {
     std::string sequence, output, poses, calib, simplemap;
     bool noPoses = false;
+    bool overwrite = false;  ///< -w: replace outputs that exist
     long first = 0, last = -1, repeat = 1;
     double start = 0;  ///< [s since the UNIX epoch] time of the drive's t = 0
 };
@@ -95,14 +98,16 @@ enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2 };
 /// Parses the command line into `c`; returns -1 to go on, or the exit code (0 after --help /
 /// --version, 2 on bad usage, with the message printed).
 int parseCli(int argc, char** argv, Cli& c) {
+    gseg::tools::CommandLine line(
+        "kitti2rawlog",
+        "Convert a KITTI odometry sequence (velodyne/NNNNNN.bin, optional times.txt, poses.txt, calib.txt) into an "
+        "MRPT rawlog: per frame a CObservationOdometry and a CObservationRobotPose (when poses are known) and the "
+        "scan as a CObservationPointCloud (x, y, z, intensity). Time stamps: --start-time plus times.txt (10 Hz "
+        "without it). The old form `kitti2rawlog SEQUENCE_DIR -o OUT` still works. An output that exists is refused "
+        "unless -w. Exit code: 0 done, 1 bad input (nothing written), 2 bad usage.",
+        true);
+    TCLAP::CmdLine& cmd = line.cmd();
     try {
-        TCLAP::CmdLine cmd(
-            "Convert a KITTI odometry sequence (velodyne/NNNNNN.bin, optional times.txt, poses.txt, calib.txt) into an "
-            "MRPT rawlog: per frame a CObservationOdometry and a CObservationRobotPose (when poses are known) and the "
-            "scan as a CObservationPointCloud (x, y, z, intensity). Time stamps: --start-time plus times.txt (10 Hz "
-            "without it). The old form `kitti2rawlog SEQUENCE_DIR -o OUT` still works. Exit code: 0 done, 1 bad input "
-            "(nothing written), 2 bad usage.",
-            ' ', GSEG_VERSION);
         TCLAP::ValueArg<std::string> input("i", "input", "the KITTI sequence folder (e.g. sequences/00)", false, "",
                                            "SEQUENCE_DIR", cmd);
         TCLAP::UnlabeledValueArg<std::string> positional("sequence", "the sequence folder, old form (same as -i)", false,
@@ -124,12 +129,8 @@ int parseCli(int argc, char** argv, Cli& c) {
                                            "times.txt (default ") + kDefaultStart + ", the first KITTI recording day; "
                                            "KITTI odometry does not say when each sequence was recorded)",
                                            false, kDefaultStart, "YYYY-MM-DD[THH:MM:SS]", cmd);
-        if (!cmd.parse(argc, argv)) {
-            for (int i = 1; i < argc; ++i)
-                if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "--version"))
-                    return kDone;
-            return kBadUsage;
-        }
+        if (const int code = line.parse(argc, argv); code >= 0) return code;
+        c.overwrite = line.overwrite();
         if (!input.getValue().empty() && !positional.getValue().empty())
             throw std::invalid_argument("give the sequence folder once: -i SEQUENCE_DIR (or the old positional form)");
         c.sequence = input.getValue().empty() ? positional.getValue() : input.getValue();
@@ -142,12 +143,8 @@ int parseCli(int argc, char** argv, Cli& c) {
         if (c.last >= 0 && c.last < c.first) throw std::invalid_argument("--last is before --first");
         if (c.repeat < 1) throw std::invalid_argument("--repeat needs a count >= 1");
         c.start = parseStartTime(start.getValue());
-    } catch (const TCLAP::ArgException& e) {
-        std::fprintf(stderr, "kitti2rawlog: %s (%s); see kitti2rawlog --help\n", e.error().c_str(), e.argId().c_str());
-        return kBadUsage;
     } catch (const std::invalid_argument& e) {
-        std::fprintf(stderr, "kitti2rawlog: %s; see kitti2rawlog --help\n", e.what());
-        return kBadUsage;
+        return line.usageError(e.what());
     }
     return -1;
 }
@@ -272,12 +269,14 @@ void run(const Cli& c) {
     if (c.repeat > 1 && !poses) throw std::invalid_argument("--repeat needs poses (poses.txt in the sequence or --poses)");
     std::vector<std::string> outputs = {c.output};
     if (!c.simplemap.empty()) outputs.push_back(c.simplemap);
-    gseg::map::checkOutputs(outputs, inputsOf(c, scans));  // before anything is written
-    std::cerr << "kitti2rawlog: " << scans.size() << " scans (frames " << scans.front().first << ".." << scans.back().first
-              << "), " << (poses ? "with poses" : "no poses") << ", "
-              << (times.empty() ? "no times.txt: 10 Hz time stamps" : "times from times.txt") << " after "
-              << mrpt::system::dateTimeToString(mrpt::Clock::fromDouble(c.start)) << " UTC"
-              << (c.repeat > 1 ? ", " + std::to_string(c.repeat) + " rounds" : std::string()) << "\n";
+    std::vector<gseg::io::NamedPath> ins;
+    for (const std::string& in : inputsOf(c, scans)) ins.push_back({"input", in});
+    gseg::io::checkOutputs(ins, {{"-o", c.output}, {"--simplemap", c.simplemap}}, {c.overwrite, false});  // before any work
+    gseg::tools::note("kitti2rawlog: %zu scans (frames %ld..%ld), %s, %s after %s UTC%s\n", scans.size(), scans.front().first,
+                      scans.back().first, poses ? "with poses" : "no poses",
+                      times.empty() ? "no times.txt: 10 Hz time stamps" : "times from times.txt",
+                      mrpt::system::dateTimeToString(mrpt::Clock::fromDouble(c.start)).c_str(),
+                      c.repeat > 1 ? (", " + std::to_string(c.repeat) + " rounds").c_str() : "");
 
     std::vector<double> frameTimes;
     for (const auto& s : scans) frameTimes.push_back(times.empty() ? 0.1 * double(s.first) : times[std::size_t(s.first)]);
@@ -286,7 +285,7 @@ void run(const Cli& c) {
     mrpt::maps::CSimpleMap simplemap;
     gseg::map::CheckedGzOutput file(files.temporary(0), c.output);
     auto out = mrpt::serialization::archiveFrom(file);
-    gseg::map::Progress progress(stderr, "kitti2rawlog", "scans");
+    gseg::Progress progress(gseg::tools::progressOut(), "kitti2rawlog", "scans");
     const std::size_t total = scans.size() * std::size_t(c.repeat);
     Eigen::Isometry3d roundStart = Eigen::Isometry3d::Identity();
     for (std::size_t n = 0; n < total; ++n) {
@@ -302,6 +301,8 @@ void run(const Cli& c) {
             simplemap.insert(mrpt::poses::CPose3DPDFGaussian::Create(toPose(roundStart * (*poses)[i])), sf);
         }
         progress.update(n + 1, double(n + 1) / double(total));
+        gseg::tools::detail("kitti2rawlog: frame %ld (%s)%s\n", scans[i].first, scans[i].second.c_str(),
+                            r > 0 ? (", round " + std::to_string(r + 1)).c_str() : "");
     }
     file.close();
     if (!c.simplemap.empty()) {
@@ -311,7 +312,7 @@ void run(const Cli& c) {
     }
     files.commit();
     progress.finish(total);
-    std::cerr << "kitti2rawlog: wrote " << c.output << (c.simplemap.empty() ? "" : " and " + c.simplemap) << "\n";
+    gseg::tools::note("kitti2rawlog: wrote %s%s\n", c.output.c_str(), c.simplemap.empty() ? "" : (" and " + c.simplemap).c_str());
 }
 
 }  // namespace

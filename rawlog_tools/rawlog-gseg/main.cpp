@@ -13,14 +13,15 @@
 // alone; a failing input is named, leaves no output, and the others go on (exit 1). Under
 // mpirun/srun the inputs are split over the ranks by size, and rank 0 reports on all of them.
 #include "common/bytes.hpp"
+#include "common/cli.hpp"
 #include "common/ranks.hpp"
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/rawlog_segmenter.hpp>
+#include <gseg/progress.hpp>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/serialization/CSerializable.h>
 
 #include <algorithm>
@@ -41,39 +42,45 @@ struct Cli {
     std::string out, config, frame = "sensor";
     std::vector<std::string> sensors;
     bool replace = false;
+    bool overwrite = false;  ///< -w: replace outputs that exist
 };
 
 /// Exit codes (also in --help).
 enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2, kScansSkipped = 3 };
 
+/// Reports on the scans of one input: progress (gseg::Progress: a live line on a terminal, else a
+/// line every 10 s), the skipped scans (always: they make the exit code 3) and with --verbose a
+/// line per scan.
 class Reporter {
 public:
     /// `name`: the input, shown in the lines of a batch ("" for one input); the skipped scans'
     /// lines are also kept in `skipped` (for rank 0 to print those of other ranks).
-    Reporter(const std::string& name, std::vector<std::string>& skipped)
-        : tty_(::isatty(::fileno(stderr)) != 0), name_(name.empty() ? "" : name + ": "), skipped_(skipped) {}
+    Reporter(const std::string& name, std::vector<std::string>& skipped, gseg::Progress& progress)
+        : name_(name.empty() ? "" : name + ": "), skipped_(skipped), progress_(progress) {}
 
     void operator()(const gseg::mrpt::ScanReport& r) {
         if (!r.skipped.empty()) {
             char line[200];
             std::snprintf(line, sizeof line, "entry %zu ('%s') skipped, passed through unchanged: ", r.entry, r.label.c_str());
             skipped_.push_back(name_ + line + r.skipped);
-            std::fprintf(stderr, "%srawlog-gseg: %s\n", tty_ ? "\n" : "", skipped_.back().c_str());
+            if (gseg::tools::progressOut()) progress_.message("rawlog-gseg: " + skipped_.back());
+            else std::fprintf(stderr, "rawlog-gseg: %s\n", skipped_.back().c_str());
             return;
         }
         ++scans_;
-        if (tty_)
-            std::fprintf(stderr, "\rrawlog-gseg: %sentry %zu, %zu scans segmented (last: %zu points, %.1f %% ground%s)   ",
-                         name_.c_str(), r.entry, scans_, r.points, 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points)),
-                         r.distToGroundEstimated ? (", height " + std::to_string(r.distToGround).substr(0, 5) + " m").c_str() : "");
-        else if (scans_ % 100 == 1)
-            std::fprintf(stderr, "rawlog-gseg: %sentry %zu, %zu scans segmented\n", name_.c_str(), r.entry, scans_);
+        const double ground = 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points));
+        gseg::tools::detail("rawlog-gseg: %sentry %zu ('%s'): %zu points, %.1f %% ground%s\n", name_.c_str(), r.entry,
+                            r.label.c_str(), r.points, ground,
+                            r.distToGroundEstimated ? (", height " + std::to_string(r.distToGround).substr(0, 5) + " m").c_str() : "");
+        progress_.update(scans_, -1, "entry " + std::to_string(r.entry));
     }
 
+    std::size_t scans() const { return scans_; }
+
 private:
-    bool tty_;
     std::string name_;
     std::vector<std::string>& skipped_;
+    gseg::Progress& progress_;
     std::size_t scans_ = 0;
 };
 
@@ -97,17 +104,20 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
 
     FileResult result;
     gseg::mrpt::RawlogWriter writer(outPath);
+    gseg::Progress progress(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name), "scans");
+    Reporter reporter(name, result.skipped, progress);
     gseg::mrpt::RawlogSegmenter segmenter(
-        config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); }, Reporter(name, result.skipped));
+        config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); },
+        [&](const gseg::mrpt::ScanReport& r) { reporter(r); });
     gseg::mrpt::forEachRawlogEntry(in, [&](std::size_t entry, const auto& obj) {
         segmenter.push(entry, obj);
         return true;
     });
     segmenter.finish();
     writer.commit();
+    progress.finish(reporter.scans());
 
     const gseg::mrpt::RawlogTotals& t = segmenter.totals();
-    if (::isatty(::fileno(stderr))) std::fprintf(stderr, "\n");
     char text[300];
     std::snprintf(text, sizeof text, "%zu entries, %zu scans segmented, %zu points, %.1f %% ground, %.2f ms per scan",
                   t.entries, t.scans, t.points, 100.0 * double(t.ground) / double(std::max<std::size_t>(1, t.points)),
@@ -123,8 +133,7 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
 
 /// The inputs (-i, then --list) and their outputs: `-o` itself for one input given with -i (and
 /// -o not a folder), else DIR/<input file name>. Throws std::invalid_argument on a run that cannot
-/// be written (two inputs with one name, an output that is an input), std::runtime_error on an
-/// unreadable list.
+/// be written (two inputs with one name), std::runtime_error on an unreadable list.
 std::vector<std::pair<std::string, std::string>> plan(const Cli& cli, bool& batch) {
     std::vector<std::string> inputs = cli.inputs;
     if (!cli.list.empty()) {
@@ -139,17 +148,22 @@ std::vector<std::pair<std::string, std::string>> plan(const Cli& cli, bool& batc
     if (inputs.empty()) throw std::invalid_argument("no input: give -i IN (repeatable) or --list FILE");
     batch = inputs.size() > 1 || !cli.list.empty() || fs::is_directory(cli.out);
     std::vector<std::pair<std::string, std::string>> jobs;
-    std::vector<gseg::io::NamedPath> ins = {{"--config", cli.config}, {"--list", cli.list}}, outs;
     std::set<std::string> names;
     for (const std::string& in : inputs) {
         const std::string name = fs::path(in).filename().string();
         if (batch && !names.insert(name).second)
             throw std::invalid_argument("two inputs named " + name + ": their outputs in " + cli.out + " would collide");
         jobs.emplace_back(in, batch ? (fs::path(cli.out) / name).string() : cli.out);
-        ins.push_back({"input", in}), outs.push_back({"-o", jobs.back().second});
     }
-    gseg::io::checkOutputsAreNotInputs(ins, outs);
     return jobs;
+}
+
+/// Before any work (by rank 0, which makes the folder of a batch): every output can be written,
+/// is no input, and does not exist unless -w. Throws std::invalid_argument naming it.
+void checkOutputs(const Cli& cli, const std::vector<std::pair<std::string, std::string>>& jobs, bool batch) {
+    std::vector<gseg::io::NamedPath> ins = {{"--config", cli.config}, {"--list", cli.list}}, outs;
+    for (const auto& job : jobs) ins.push_back({"input", job.first}), outs.push_back({"-o", job.second});
+    gseg::io::checkOutputs(ins, outs, {cli.overwrite, batch});
 }
 
 /// Rank 0 prints every input's result in input order (and the skipped scans of inputs other
@@ -162,7 +176,7 @@ int report(const std::vector<std::pair<std::string, std::string>>& jobs, const s
     for (std::size_t i = 0; i < jobs.size(); ++i) {
         const std::string& in = jobs[i].first;
         const std::string what = batch ? in + ": " : "";
-        if (owner[i] != 0)
+        if (owner[i] != 0)  // errors: printed whatever the verbosity
             for (const std::string& line : results[i].skipped) std::fprintf(stderr, "rawlog-gseg: %s\n", line.c_str());
         if (results[i].code == kBadInput) {
             const bool named = results[i].message.rfind(in, 0) == 0;  // reader errors start with the file
@@ -170,7 +184,7 @@ int report(const std::vector<std::pair<std::string, std::string>>& jobs, const s
                          named ? "" : what.c_str(), results[i].message.c_str());
             failed.push_back(in);
         } else {
-            std::printf("rawlog-gseg: %s%s\n", what.c_str(), results[i].message.c_str());
+            gseg::tools::say("rawlog-gseg: %s%s\n", what.c_str(), results[i].message.c_str());
             code = std::max(code, results[i].code);
         }
     }
@@ -179,7 +193,7 @@ int report(const std::vector<std::pair<std::string, std::string>>& jobs, const s
         for (const std::string& f : failed) names += (names.empty() ? ": " : ", ") + f;
         for (int r = 0; r < processes && processes > 1; ++r)
             split += (r ? ", " : " (inputs per process: ") + std::to_string(std::count(owner.begin(), owner.end(), r));
-        std::printf("rawlog-gseg: %zu of %zu rawlogs written%s%s%s\n", jobs.size() - failed.size(), jobs.size(),
+        gseg::tools::say("rawlog-gseg: %zu of %zu rawlogs written%s%s%s\n", jobs.size() - failed.size(), jobs.size(),
                     split.empty() ? "" : (split + ")").c_str(), failed.empty() ? "" : ", failed", names.c_str());
     }
     std::fflush(stdout);
@@ -195,7 +209,15 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
     try {
         if (cli.frame != "sensor" && cli.frame != "vehicle") throw std::invalid_argument("--frame must be sensor or vehicle");
         jobs = plan(cli, batch);
-        if (!cli.config.empty()) gseg::mrpt::loadConfig(cli.config);  // a bad config fails once, not per input
+        if (ranks.root()) checkOutputs(cli, jobs, batch);
+        try {
+            if (!cli.config.empty()) gseg::mrpt::loadConfig(cli.config);  // a bad config fails once, not per input
+        } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
+            throw std::runtime_error(e.what());
+        }
+        if (ranks.root() && !cli.config.empty())
+            gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
+                                gseg::mrpt::toYaml(gseg::mrpt::loadConfig(cli.config)).c_str());
         if (batch && ranks.root()) fs::create_directories(cli.out);
     } catch (const std::invalid_argument& e) {
         error = e.what(), code = kBadUsage;
@@ -237,40 +259,32 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
 }
 
 int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
-    Cli cli;
-    try {
-        TCLAP::CmdLine cmd("Split every LiDAR scan of a rawlog into <label>_ground and <label>_obstacles point clouds "
-                           "with GSeg3D. Several inputs (-i repeated, or --list) go into the folder -o DIR under their "
-                           "file names, each as a run on it alone; a failing input is named and leaves no output, the "
-                           "others are written. Under mpirun or srun the inputs are split over the processes. Exit code: "
-                           "0 done, 1 bad input (nothing written for it), 2 bad usage, 3 done but some scans could not "
-                           "be segmented (passed through unchanged and named on stderr).",
-                           ' ', "0.1");
-        TCLAP::MultiArg<std::string> in("i", "input", "input rawlog (plain or gzip, either layout); repeatable", false,
-                                        "IN", cmd);
-        TCLAP::ValueArg<std::string> list("", "list", "a file listing input rawlogs, one a line (# comments)", false, "",
-                                          "FILE", cmd);
-        TCLAP::ValueArg<std::string> outArg("o", "output", "output rawlog (gzip); with several inputs or --list, the "
-                                            "folder for them (made if missing)", true, "", "OUT|DIR", cmd);
-        TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameters (distToGround: auto allowed)", false,
-                                         "", "FILE", cmd);
-        TCLAP::SwitchArg replace("", "replace", "drop the original scans (default: keep them)", cmd);
-        TCLAP::MultiArg<std::string> sensor("", "sensor", "segment only observations with this sensorLabel "
-                                            "(repeatable; default all LiDAR observations)", false, "LABEL", cmd);
-        TCLAP::ValueArg<std::string> frame("", "frame", "output points in the sensor frame (default) or the vehicle "
-                                           "frame", false, "sensor", "sensor|vehicle", cmd);
-        if (!cmd.parse(argc, argv)) {
-            for (int i = 1; i < argc; ++i)
-                if (!std::strcmp(argv[i], "-h") || !std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "--version"))
-                    return kDone;
-            return kBadUsage;
-        }
-        cli = {in.getValue(), list.getValue(), outArg.getValue(), cfg.getValue(), frame.getValue(), sensor.getValue(),
-               replace.getValue()};
-    } catch (const TCLAP::ArgException& e) {
-        std::fprintf(stderr, "rawlog-gseg: %s (%s)\n", e.error().c_str(), e.argId().c_str());
-        return kBadUsage;
-    }
+    gseg::tools::CommandLine line(
+        "rawlog-gseg",
+        "Split every LiDAR scan of a rawlog into <label>_ground and <label>_obstacles point clouds with GSeg3D. Several "
+        "inputs (-i repeated, or --list) go into the folder -o DIR under their file names, each as a run on it alone; a "
+        "failing input is named and leaves no output, the others are written. An output that exists is refused unless "
+        "-w. Under mpirun or srun the inputs are split over the processes. Exit code: 0 done, 1 bad input (nothing "
+        "written for it), 2 bad usage, 3 done but some scans could not be segmented (passed through unchanged and named "
+        "on stderr).",
+        true, ranks.root());
+    TCLAP::CmdLine& cmd = line.cmd();
+    TCLAP::MultiArg<std::string> in("i", "input", "input rawlog (plain or gzip, either layout); repeatable", false, "IN",
+                                    cmd);
+    TCLAP::ValueArg<std::string> list("", "list", "a file listing input rawlogs, one a line (# comments)", false, "",
+                                      "FILE", cmd);
+    TCLAP::ValueArg<std::string> outArg("o", "output", "output rawlog (gzip); with several inputs or --list, the "
+                                        "folder for them (made if missing)", true, "", "OUT|DIR", cmd);
+    TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameters (distToGround: auto allowed)", false, "",
+                                     "FILE", cmd);
+    TCLAP::SwitchArg replace("", "replace", "drop the original scans (default: keep them)", cmd);
+    TCLAP::MultiArg<std::string> sensor("", "sensor", "segment only observations with this sensorLabel "
+                                        "(repeatable; default all LiDAR observations)", false, "LABEL", cmd);
+    TCLAP::ValueArg<std::string> frame("", "frame", "output points in the sensor frame (default) or the vehicle "
+                                       "frame", false, "sensor", "sensor|vehicle", cmd);
+    if (const int code = line.parse(argc, argv); code >= 0) return code;
+    const Cli cli = {in.getValue(),       list.getValue(),   outArg.getValue(), cfg.getValue(),
+                     frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite()};
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
         return runBatch(cli, ranks);

@@ -8,6 +8,10 @@
 
 #include "rawlog_octomap.hpp"
 
+#include "common/cli.hpp"
+
+#include <gseg/io/atomic_file.hpp>
+
 #include <gseg/map/world_scan.hpp>
 #include <gseg/map/output_files.hpp>
 
@@ -71,16 +75,20 @@ double median(std::vector<double> v) {
 void runBench(const Cli& cli) {
     Cli ours = cli;
     ours.prefix = cli.prefix + "_bench";
+    ours.overwrite = true;  // every round writes them again (checked here, before the first)
     const std::string plainBt = cli.prefix + "_bench_plain.bt";
-    gseg::map::checkOutputs({plainBt}, {cli.input});
+    std::vector<gseg::io::NamedPath> outputs = {{"-o", plainBt}};
+    for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(ours.prefix)) outputs.push_back({"-o", path});
+    gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
+                           outputs, {cli.overwrite, false});
 #ifdef NDEBUG
     const char* build = "Release";
 #else
     const char* build = "Debug (assertions on)";
 #endif
-    std::printf("rawlog-octomap --bench: %s, %d round(s), build %s, %u hardware thread(s), %u worker thread(s)\n",
+    gseg::tools::say("rawlog-octomap --bench: %s, %d round(s), build %s, %u hardware thread(s), %u worker thread(s)\n",
                 cli.input.c_str(), cli.benchRounds, build, std::thread::hardware_concurrency(), cli.threads);
-    std::printf("%-6s %-16s %10s %12s\n", "round", "run", "wall [s]", "note");
+    gseg::tools::say("%-6s %-16s %10s %12s\n", "round", "run", "wall [s]", "note");
     std::vector<double> plain, plainInsert, fast;
     RunReport last;
     for (int round = 0; round < cli.benchRounds; ++round) {
@@ -88,23 +96,23 @@ void runBench(const Cli& cli) {
             if ((round % 2 == 0) == (k == 0)) {
                 const AnchorTimes a = plainOctomap(cli, plainBt);
                 plain.push_back(a.total), plainInsert.push_back(a.insert);
-                std::printf("%-6d %-16s %10.3f   insertPointCloud %.3f s, %zu scans, %zu points\n", round + 1,
+                gseg::tools::say("%-6d %-16s %10.3f   insertPointCloud %.3f s, %zu scans, %zu points\n", round + 1,
                             "plain OctoMap", a.total, a.insert, a.scans, a.points);
             } else {
                 last = buildMaps(ours, true);
                 fast.push_back(last.wallSeconds);
-                std::printf("%-6d %-16s %10.3f   %zu scans\n", round + 1, "rawlog-octomap", last.wallSeconds,
+                gseg::tools::say("%-6d %-16s %10.3f   %zu scans\n", round + 1, "rawlog-octomap", last.wallSeconds,
                             last.stats.scans);
             }
             std::fflush(stdout);
         }
     }
     const double p = median(plain), pi = median(plainInsert), f = median(fast);
-    std::printf("median: plain OctoMap %.3f s (insertPointCloud alone %.3f s), rawlog-octomap %.3f s: %.1fx faster "
+    gseg::tools::say("median: plain OctoMap %.3f s (insertPointCloud alone %.3f s), rawlog-octomap %.3f s: %.1fx faster "
                 "(%.1fx against insertPointCloud alone)\n",
                 p, pi, f, p / f, pi / f);
     const PhaseTimes& t = last.times;
-    std::printf("rawlog-octomap, last round [s]: read %.3f, segmentation %.3f, transform %.3f, ray casting %.3f "
+    gseg::tools::say("rawlog-octomap, last round [s]: read %.3f, segmentation %.3f, transform %.3f, ray casting %.3f "
                 "(summed over %u worker thread(s)), map update %.3f, writing %.3f\n",
                 t.read, t.segmentation, t.transform, t.rayCasting, cli.threads, t.mapUpdate, t.writing);
 }

@@ -11,9 +11,12 @@
 #include "rawlog_octomap.hpp"
 #include "remote_workers.hpp"
 
+#include "common/cli.hpp"
+
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/map/ordered_pipeline.hpp>
 #include <gseg/map/output_files.hpp>
-#include <gseg/map/progress.hpp>
+#include <gseg/progress.hpp>
 
 #include <chrono>
 #include <malloc.h>
@@ -25,27 +28,6 @@
 
 namespace rawlog_octomap {
 namespace {
-
-const char* kUsage =
-    "usage: rawlog-octomap -i IN.rawlog -o PREFIX [--poses FILE] [--calib FILE] [--pose-tolerance 0.02]\n"
-    "                      [--resolution 0.2] [--max-range 50] [--clearance 2] [-c FILE.yaml]\n"
-    "                      [--origin first|X,Y,Z] [--threads N] [--rank0-maps-only] [--bench N]\n"
-    "  writes PREFIX_ground.bt, PREFIX_obstacles.bt, PREFIX_traversability.ot, PREFIX_traversability.png\n"
-    "  --poses FILE    TUM trajectory (t x y z qx qy qz qw, vehicle pose, matched by time stamp) or KITTI\n"
-    "                  poses (3x4 per scan, with calib.txt beside it or --calib); default: poses in the rawlog\n"
-    "  --pose-tolerance S  [s] largest time difference between a scan and its TUM pose\n"
-    "  --resolution M  [m] voxel edge, 0.01 to 10      --max-range M  [m] ray length limit\n"
-    "  --clearance M   [m] obstacles higher than this above the ground do not block a cell\n"
-    "  -c FILE         gseg parameters (YAML or INI, see config/)\n"
-    "  --origin first  subtract the first sensor position (whole metres) from every position: for poses in\n"
-    "                  UTM or other large coordinates (the maps span +-32768 voxels); or --origin X,Y,Z\n"
-    "  --threads N     worker threads for segmentation and ray casting (default: one per core; 0: none)\n"
-    "                  in each process; under mpirun/srun rank 0 reads and maps, and every rank works with\n"
-    "                  N threads, at least one (--threads 0: one rank per core)\n"
-    "  --rank0-maps-only  under mpirun/srun rank 0 reads, maps and writes but works on no scan (a rank 0\n"
-    "                  on a node of its own, or a slow disk)\n"
-    "  --bench N       time plain OctoMap (insertPointCloud, discretized) and rawlog-octomap alternately,\n"
-    "                  N rounds each, on the same rawlog; maps go to PREFIX_bench*\n";
 
 double parseNumber(const std::string& flag, const std::string& v) {
     std::size_t used = 0;
@@ -71,37 +53,67 @@ unsigned parseCount(const std::string& flag, const std::string& v, unsigned max)
     return unsigned(n);
 }
 
-Cli parseCli(int argc, char** argv) {
-    Cli c;
-    c.threads = std::max(1u, std::thread::hardware_concurrency());
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-            return argv[++i];
+/// Parses the command line into `c` (TCLAP, the same on every MPI rank; only `printing` prints).
+/// Returns -1 to go on, else the exit code (0 after --help / --version, 2 on bad usage).
+int parseCli(int argc, char** argv, bool printing, Cli& c) {
+    gseg::tools::CommandLine line(
+        "rawlog-octomap",
+        "Traversability OctoMaps (ground / obstacles) from a rawlog of 3D LiDAR scans: writes PREFIX_ground.bt, "
+        "PREFIX_obstacles.bt, PREFIX_traversability.ot and PREFIX_traversability.png (refused if one exists, unless "
+        "-w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
+        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input or scans "
+        "skipped (named), 2 bad usage.",
+        true, printing);
+    TCLAP::CmdLine& cmd = line.cmd();
+    TCLAP::ValueArg<std::string> input("i", "input", "input rawlog (plain or gzip)", true, "", "IN.rawlog", cmd);
+    TCLAP::ValueArg<std::string> prefix("o", "output", "prefix of the four map files", true, "", "PREFIX", cmd);
+    TCLAP::ValueArg<std::string> poses("", "poses", "TUM trajectory (t x y z qx qy qz qw, vehicle pose, matched by time "
+                                       "stamp) or KITTI poses (3x4 per scan, with calib.txt beside it or --calib); "
+                                       "default: poses in the rawlog", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> calib("", "calib", "KITTI calib.txt (Tr) for KITTI poses", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> tolerance("", "pose-tolerance", "[s] largest time difference between a scan and its "
+                                           "TUM pose (default 0.02)", false, "", "S", cmd);
+    TCLAP::ValueArg<std::string> resolution("", "resolution", "[m] voxel edge, 0.01 to 10 (default 0.2)", false, "",
+                                            "M", cmd);
+    TCLAP::ValueArg<std::string> maxRange("", "max-range", "[m] ray length limit (default 50)", false, "", "M", cmd);
+    TCLAP::ValueArg<std::string> clearance("", "clearance", "[m] obstacles higher than this above the ground do not "
+                                           "block a cell (default 2)", false, "", "M", cmd);
+    TCLAP::ValueArg<std::string> config("c", "config", "gseg parameters (YAML or INI, see config/)", false, "", "FILE",
+                                        cmd);
+    TCLAP::ValueArg<std::string> origin("", "origin", "'first': subtract the first sensor position (whole metres) from "
+                                        "every position, for poses in UTM or other large coordinates (the maps span "
+                                        "+-32768 voxels); or X,Y,Z", false, "", "first|X,Y,Z", cmd);
+    TCLAP::ValueArg<std::string> threads("", "threads", "worker threads for segmentation and ray casting in each "
+                                         "process (default: one per core; 0: none); under mpirun/srun every rank works "
+                                         "with N threads, at least one (--threads 0: one rank per core)", false, "", "N",
+                                         cmd);
+    TCLAP::SwitchArg rank0MapsOnly("", "rank0-maps-only", "under mpirun/srun rank 0 reads, maps and writes but works on "
+                                   "no scan (a rank 0 on a node of its own, or a slow disk)", cmd);
+    TCLAP::ValueArg<std::string> bench("", "bench", "time plain OctoMap (insertPointCloud, discretized) and "
+                                       "rawlog-octomap alternately, N rounds each, on the same rawlog; maps go to "
+                                       "PREFIX_bench*", false, "", "N", cmd);
+    if (const int code = line.parse(argc, argv); code >= 0) return code;
+    try {
+        c.threads = std::max(1u, std::thread::hardware_concurrency());
+        c.input = input.getValue(), c.prefix = prefix.getValue(), c.config = config.getValue();
+        c.poses.poses = poses.getValue(), c.poses.calib = calib.getValue(), c.poses.origin = origin.getValue();
+        auto number = [](TCLAP::ValueArg<std::string>& a, double& to) {
+            if (a.isSet()) to = parseNumber("--" + a.getName(), a.getValue());
         };
-        if (a == "-i" || a == "--input") c.input = value();
-        else if (a == "-o" || a == "--output") c.prefix = value();
-        else if (a == "--poses") c.poses.poses = value();
-        else if (a == "--calib") c.poses.calib = value();
-        else if (a == "-c" || a == "--config") c.config = value();
-        else if (a == "--pose-tolerance") c.poses.poseTolerance = parseNumber(a, value());
-        else if (a == "--resolution") c.options.resolution = parseNumber(a, value());
-        else if (a == "--max-range") c.options.maxRange = parseNumber(a, value());
-        else if (a == "--clearance") c.options.clearance = parseNumber(a, value());
-        else if (a == "--origin") c.poses.origin = value();
-        else if (a == "--threads") c.threads = parseCount(a, value(), 256);
-        else if (a == "--rank0-maps-only") c.rank0MapsOnly = true;
-        else if (a == "--bench") c.benchRounds = int(std::max(1u, parseCount(a, value(), 100)));
-        else if (a == "-h" || a == "--help") {
-            c.help = true;
-            return c;
-        } else throw std::invalid_argument("unexpected argument '" + a + "'");
+        number(tolerance, c.poses.poseTolerance);
+        number(resolution, c.options.resolution);
+        number(maxRange, c.options.maxRange);
+        number(clearance, c.options.clearance);
+        if (threads.isSet()) c.threads = parseCount("--threads", threads.getValue(), 256);
+        c.rank0MapsOnly = rank0MapsOnly.getValue();
+        if (bench.isSet()) c.benchRounds = int(std::max(1u, parseCount("--bench", bench.getValue(), 100)));
+        c.overwrite = line.overwrite();
+        c.poses.input = c.input;
+        c.options.validate();
+    } catch (const std::invalid_argument& e) {
+        return line.usageError(e.what());
     }
-    if (c.input.empty() || c.prefix.empty()) throw std::invalid_argument("needs -i IN.rawlog and -o PREFIX");
-    c.poses.input = c.input;
-    c.options.validate();
-    return c;
+    return -1;
 }
 
 double peakResidentMb() {
@@ -117,51 +129,53 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 void printReport(const RunReport& r, double resolution) {
     const gseg::map::MapStats& s = r.stats;
     const double cellArea = resolution * resolution;
-    std::printf("rawlog-octomap: %zu scans (%zu from _ground/_obstacles pairs, %zu raw scans not segmented again, %zu "
+    gseg::tools::say("rawlog-octomap: %zu scans (%zu from _ground/_obstacles pairs, %zu raw scans not segmented again, %zu "
                 "skipped), poses from %s, sensor path %.2f m; points: %zu ground, %zu obstacle, %zu not used; %zu rays\n",
                 s.scans + r.skipped.size(), r.presegmented, r.rawWithPair, r.skipped.size(), r.poseSource.c_str(),
                 s.pathLength, s.groundPoints, s.obstaclePoints, s.pointsSkipped, s.rays);
-    if (r.reflections) std::printf("%zu points more than belowGroundMargin below the ground left out (reflections)\n", r.reflections);
+    if (r.reflections) gseg::tools::say("%zu points more than belowGroundMargin below the ground left out (reflections)\n", r.reflections);
     if (!r.heightFallbacks.empty())
-        std::printf("distToGround: auto found no estimate in %zu scan(s), first: %s\n", r.heightFallbacks.size(),
+        gseg::tools::say("distToGround: auto found no estimate in %zu scan(s), first: %s\n", r.heightFallbacks.size(),
                     r.heightFallbacks[0].c_str());
     if (r.origin)
-        std::printf("map origin: (%.3f, %.3f, %.3f) m of the poses' world is (0, 0, 0) in the maps\n", r.origin->x(),
+        gseg::tools::say("map origin: (%.3f, %.3f, %.3f) m of the poses' world is (0, 0, 0) in the maps\n", r.origin->x(),
                     r.origin->y(), r.origin->z());
-    std::printf("voxels (%.2f m): %zu ground, %zu obstacle, %zu free; %zu obstacle voxels cleared (seen through), "
+    gseg::tools::say("voxels (%.2f m): %zu ground, %zu obstacle, %zu free; %zu obstacle voxels cleared (seen through), "
                 "%zu ground voxels under obstacles\n",
                 resolution, s.groundVoxels, s.obstacleVoxels, s.freeVoxels, s.clearedObstacleVoxels, s.groundUnderObstacle);
-    std::printf("map memory: %.1f MB (%zu bricks of 8x8x8 voxels, %zu words of 4x4x4 with a value per voxel)\n",
+    gseg::tools::say("map memory: %.1f MB (%zu bricks of 8x8x8 voxels, %zu words of 4x4x4 with a value per voxel)\n",
                 double(s.mapBytes) / 1e6, s.bricks, s.brickValueBlocks);
-    std::printf("top-down grid: %zu traversable (%.1f m^2), %zu obstacle (%.1f m^2), %zu unknown cells\n",
+    gseg::tools::say("top-down grid: %zu traversable (%.1f m^2), %zu obstacle (%.1f m^2), %zu unknown cells\n",
                 s.cellsTraversable, double(s.cellsTraversable) * cellArea, s.cellsObstacle,
                 double(s.cellsObstacle) * cellArea, s.cellsUnknown);
     const PhaseTimes& t = r.times;
     const std::size_t processes = r.scansByProcess.size();
     std::string where = r.workers ? "summed over " + std::to_string(r.workers) + " worker thread(s)" : "one thread";
     if (processes > 1) where += " in " + std::to_string(processes) + " processes";
-    std::printf("time [s]: read %.2f, segmentation %.2f, transform %.2f, ray casting %.2f (%s), map update %.2f, "
+    gseg::tools::say("time [s]: read %.2f, segmentation %.2f, transform %.2f, ray casting %.2f (%s), map update %.2f, "
                 "writing %.2f; wall %.2f, %.1f scans/s\n",
                 t.read, t.segmentation, t.transform, t.rayCasting, where.c_str(), t.mapUpdate, t.writing, r.wallSeconds,
                 r.wallSeconds > 0 ? double(s.scans) / r.wallSeconds : 0.0);
-    std::printf("peak memory: %.0f MB while integrating, %.0f MB with writing%s\n", r.peakMbBeforeWriting, r.peakMb,
+    gseg::tools::say("peak memory: %.0f MB while integrating, %.0f MB with writing%s\n", r.peakMbBeforeWriting, r.peakMb,
                 processes > 1 ? " (rank 0)" : "");
     if (processes > 1) {
         std::string split;
         for (std::size_t p = 0; p < processes; ++p)
             split += (p ? ", " : "") + std::to_string(r.scansByProcess[p]) + " on rank " + std::to_string(p);
-        std::printf("scans worked on: %s\n", split.c_str());
+        gseg::tools::say("scans worked on: %s\n", split.c_str());
     }
-    for (const auto& p : r.written) std::printf("wrote %s\n", p.c_str());
+    for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
 }
 
 }  // namespace
 
 RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     const auto start = std::chrono::steady_clock::now();
-    // Fail early: every output can be written and none is an input, before any work.
-    gseg::map::checkOutputs(gseg::map::TraversabilityMap::outputPaths(cli.prefix),
-                            {cli.input, cli.poses.poses, cli.poses.calib, cli.config});
+    // Fail early: every output can be written, none is an input or exists (unless -w), before any work.
+    std::vector<gseg::io::NamedPath> outputs;
+    for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(cli.prefix)) outputs.push_back({"-o", path});
+    gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
+                           outputs, {cli.overwrite, false});
     const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
     ScanStream stream(cli.poses);
 
@@ -172,7 +186,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     // --threads 0 one rank per core is the usual MPI layout): otherwise it would only read and map.
     const unsigned remoteWorkers = remote ? remote->count() : 0;
     const unsigned local = remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
-    gseg::map::Progress progress(stderr, "rawlog-octomap", "scans");
+    gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
     RunReport report;
     report.workers = local + remoteWorkers;
     report.scansByProcess.assign(std::size_t(remote ? remote->processes() : 1), 0);
@@ -185,6 +199,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         if (!r.skipped.empty()) {
             report.skipped.push_back(r.describe + ": " + r.skipped);
             if (!quiet) progress.message("rawlog-octomap: skipped " + report.skipped.back());
+            if (!quiet && !gseg::tools::progressOut())  // --quiet: a skipped scan is still an error
+                std::fprintf(stderr, "rawlog-octomap: skipped %s\n", report.skipped.back().c_str());
         } else {
             const auto t0 = std::chrono::steady_clock::now();
             map.apply(r.update);
@@ -194,6 +210,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
             if (!r.heightNote.empty()) report.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
         }
         if (!quiet) progress.update(k + 1, r.fraction);
+        if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
     gseg::map::runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
                                                {report.workers, 2 * std::size_t(std::max(1u, report.workers)) + 2});
@@ -224,17 +241,8 @@ namespace {
 
 /// One rank's part of the run; the exit code (rank 0's decides for all).
 int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
-    Cli cli;
-    try {
-        cli = parseCli(argc, argv);  // the same on every rank: the same arguments
-    } catch (const std::invalid_argument& e) {
-        std::cerr << "rawlog-octomap: " << e.what() << "\n";
-        return 2;
-    }
-    if (cli.help) {
-        std::cout << kUsage;
-        return 0;
-    }
+    Cli cli;  // every rank parses the same arguments and stops alike; rank 0 prints
+    if (const int code = parseCli(argc, argv, ranks.root(), cli); code >= 0) return code;
     if (cli.benchRounds > 0 && ranks.size() > 1) {
         std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
         return 2;
@@ -245,6 +253,9 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     }
     RemoteWorkers remote(ranks);  // told to stop when this returns, whatever happened
     try {
+        if (!cli.config.empty())
+            gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
+                                gseg::mrpt::toYaml(gseg::mrpt::loadConfig(cli.config)).c_str());
         if (cli.benchRounds > 0) {
             runBench(cli);
             return 0;

@@ -18,7 +18,7 @@ struct Cli {
     unsigned threads = 0;  ///< worker threads (0: everything on one thread)
     bool rank0MapsOnly = false;  ///< under MPI, rank 0 works on no scan (it reads, maps and writes)
     int benchRounds = 0;   ///< --bench N
-    bool help = false;     ///< -h: print the usage and stop
+    bool overwrite = false;  ///< -w: replace map files that exist
 };
 
 class RemoteWorkers;
@@ -42,7 +42,7 @@ struct RunReport {
 };
 
 /// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless
-/// `quiet`. `remote`: the worker threads of the other MPI ranks, used beside this process's
+/// `quiet` (or --quiet). `remote`: the worker threads of the other MPI ranks, used beside this process's
 /// `cli.threads` (null: this process alone). Throws std::invalid_argument (bad usage) or
 /// std::runtime_error (bad input, naming it).
 RunReport buildMaps(const Cli& cli, bool quiet = false, RemoteWorkers* remote = nullptr);

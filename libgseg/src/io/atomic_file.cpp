@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <stdexcept>
 #include <fcntl.h>
@@ -200,35 +201,85 @@ std::vector<std::string> registeredTemporaries() {
 }
 
 void checkOutputsAreNotInputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
+    // Each path is looked at once (a run may name thousands of inputs and outputs).
     namespace fs = std::filesystem;
-    auto identity = [](const std::string& p, struct stat& st) { return ::stat(p.c_str(), &st) == 0; };
-    auto normal = [](const std::string& p) {
-        std::error_code ec;
-        const fs::path c = fs::weakly_canonical(fs::absolute(p, ec), ec);
-        return ec ? fs::path(p).lexically_normal() : c;
+    using FileId = std::pair<dev_t, ino_t>;
+    auto identity = [](const std::string& p, FileId& id) {
+        struct stat st {};
+        if (::stat(p.c_str(), &st) != 0) return false;
+        id = {st.st_dev, st.st_ino};
+        return true;
     };
-    for (std::size_t o = 0; o < outputs.size(); ++o) {
-        const NamedPath& out = outputs[o];
+    std::map<std::string, fs::path> folders;  // canonical form of each output folder, found once
+    auto normal = [&](const std::string& p) {
+        const fs::path path(p), folder = path.parent_path();
+        auto known = folders.find(folder.string());
+        if (known == folders.end()) {
+            std::error_code ec;
+            const fs::path c = fs::weakly_canonical(fs::absolute(folder.empty() ? fs::path(".") : folder, ec), ec);
+            known = folders.emplace(folder.string(), ec ? folder.lexically_normal() : c).first;
+        }
+        return (known->second / path.filename()).lexically_normal().string();
+    };
+    std::map<FileId, const NamedPath*> inputIds, outputIds;
+    for (const NamedPath& in : inputs)
+        if (FileId id; !in.path.empty() && identity(in.path, id)) inputIds.emplace(id, &in);
+    std::map<std::string, const NamedPath*> outputNames;
+    auto twice = [](const NamedPath& out, const NamedPath& earlier) {
+        return std::invalid_argument(out.argument + " and " + earlier.argument + " name the same file " + out.path);
+    };
+    for (const NamedPath& out : outputs) {
         if (out.path.empty()) continue;
-        struct stat so {};
-        const bool outExists = identity(out.path, so);
-        for (const NamedPath& in : inputs) {
-            struct stat si {};
-            if (in.path.empty() || !outExists || !identity(in.path, si)) continue;
-            if (so.st_dev == si.st_dev && so.st_ino == si.st_ino)
-                throw std::invalid_argument(out.argument + " " + out.path + " is the " + in.argument + " " + in.path +
-                                            " (the same file): refusing to overwrite an input");
+        if (FileId id; identity(out.path, id)) {  // an existing file: by device and inode (links too)
+            if (const auto in = inputIds.find(id); in != inputIds.end())
+                throw std::invalid_argument(out.argument + " " + out.path + " is the " + in->second->argument + " " +
+                                            in->second->path + " (the same file): refusing to overwrite an input");
+            if (const auto seen = outputIds.find(id); seen != outputIds.end()) throw twice(out, *seen->second);
+            outputIds.emplace(id, &out);
         }
-        for (std::size_t k = 0; k < o; ++k) {
-            if (outputs[k].path.empty()) continue;
-            struct stat sk {};
-            const bool same = outExists && identity(outputs[k].path, sk)
-                                  ? so.st_dev == sk.st_dev && so.st_ino == sk.st_ino
-                                  : normal(out.path) == normal(outputs[k].path);
-            if (same)
-                throw std::invalid_argument(out.argument + " and " + outputs[k].argument + " name the same file " +
-                                            out.path);
+        if (const auto [seen, added] = outputNames.emplace(normal(out.path), &out); !added) throw twice(out, *seen->second);
+    }
+}
+
+namespace {
+
+/// Whether `folder` accepts a new file: one is made and removed. "" if so, else why not.
+std::string cannotWriteIn(const std::string& folder) {
+    const std::string probe = (std::filesystem::path(folder) / (".gseg-probe-" + std::to_string(::getpid()))).string();
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+    if (fd < 0) return std::strerror(errno);
+    ::close(fd);
+    ::unlink(probe.c_str());
+    return "";
+}
+
+}  // namespace
+
+void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules) {
+    namespace fs = std::filesystem;
+    checkOutputsAreNotInputs(inputs, outputs);
+    std::vector<std::string> writable;  // folders tried already (a run may write thousands of files into one)
+    for (const NamedPath& out : outputs) {
+        if (out.path.empty()) continue;
+        const std::string what = out.argument + " " + out.path;
+        std::error_code ec;
+        if (fs::exists(fs::symlink_status(out.path, ec))) {
+            if (fs::is_directory(out.path, ec)) throw std::invalid_argument(what + " is a folder, not a file");
+            if (!rules.overwrite) throw std::invalid_argument(what + " exists: give -w (--overwrite) to replace it");
         }
+        fs::path folder = fs::path(out.path).parent_path();
+        if (folder.empty()) folder = ".";
+        if (std::find(writable.begin(), writable.end(), folder.string()) != writable.end()) continue;
+        const std::string given = folder.string();
+        while (rules.makeFolders && !fs::exists(folder, ec) && folder.parent_path() != folder)  // the one to make it in
+            folder = folder.parent_path().empty() ? fs::path(".") : folder.parent_path();
+        if (!fs::exists(folder, ec))
+            throw std::invalid_argument(what + ": the folder " + folder.string() + " does not exist");
+        if (!fs::is_directory(folder, ec))
+            throw std::invalid_argument(what + ": " + folder.string() + " is not a folder");
+        if (const std::string why = cannotWriteIn(folder.string()); !why.empty())
+            throw std::invalid_argument(what + ": cannot write in the folder " + folder.string() + " (" + why + ")");
+        writable.push_back(given);
     }
 }
 

@@ -29,11 +29,6 @@ bool exists(const std::string& path) {
     return ::lstat(path.c_str(), &st) == 0;
 }
 
-std::string folderOf(const std::string& path) {
-    const fs::path parent = fs::path(path).parent_path();
-    return parent.empty() ? "." : parent.string();
-}
-
 }  // namespace
 
 std::string reasonOf(const std::exception& e) {
@@ -115,30 +110,6 @@ void AtomicFiles::commit() {
     }
     committed_ = true;
     dropBackups();
-}
-
-void checkOutputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {
-    for (const auto& out : outputs) {
-        const std::string folder = folderOf(out);
-        std::error_code ec;
-        if (!fs::is_directory(folder, ec))
-            throw std::runtime_error(out + ": the folder " + folder + (fs::exists(folder, ec) ? " is not a folder" : " does not exist"));
-        if (fs::is_directory(out, ec)) throw std::runtime_error(out + ": is a folder, cannot write a file there");
-        const std::string probe = besideWithPrefix(out, "probe");
-        const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
-        if (fd < 0) throw std::runtime_error(out + ": cannot write in the folder " + folder + " (" + reason() + ")");
-        ::close(fd);
-        ::unlink(probe.c_str());
-        for (const auto& in : inputs) {
-            if (in.empty() || !fs::exists(out, ec) || !fs::exists(in, ec)) continue;
-            if (fs::equivalent(in, out, ec))
-                throw std::invalid_argument(out + ": is the input " + in + "; writing it would destroy the input");
-        }
-    }
-    for (std::size_t i = 0; i < outputs.size(); ++i)
-        for (std::size_t j = 0; j < i; ++j)
-            if (fs::weakly_canonical(outputs[i]) == fs::weakly_canonical(outputs[j]))
-                throw std::invalid_argument(outputs[i] + ": given as two outputs");
 }
 
 }  // namespace gseg::map

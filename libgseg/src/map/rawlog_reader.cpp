@@ -1,6 +1,7 @@
 #include <gseg/map/rawlog_reader.hpp>
 
 #include <gseg/map/output_files.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
 
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/serialization/CArchive.h>
@@ -35,7 +36,7 @@ std::shared_ptr<::mrpt::serialization::CSerializable> RawlogReader::next() {
     } catch (const ::mrpt::serialization::CExceptionEOF&) {
         return nullptr;  // clean end of the file
     } catch (const std::exception& e) {
-        throw std::runtime_error(path_ + ": entry " + std::to_string(index_) + " is corrupt or truncated (" + reasonOf(e) + ")");
+        throw std::runtime_error(gseg::mrpt::rawlogReadError(path_, index_, e));
     }
     ++index_;
     return obj;

@@ -8,6 +8,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -28,7 +29,35 @@ std::string classBeingRead(const std::string& what) {
     return "";
 }
 
+// The class named by MRPT's "Stored object has class 'X' which is not registered", if X looks
+// like a C++ class name (a rawlog with a class this program does not link); "" otherwise (random
+// bytes read as a name).
+std::string unknownClass(const std::string& what) {
+    const std::string tag = "has class '";
+    const std::size_t at = what.find(tag);
+    if (at == std::string::npos || what.find("not registered") == std::string::npos) return "";
+    const std::size_t b = at + tag.size(), e = what.find('\'', b);
+    const std::string name = what.substr(b, e == std::string::npos ? 0 : e - b);
+    const bool looksLikeOne = !name.empty() && name.size() < 200 && (std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_') &&
+                              std::all_of(name.begin(), name.end(), [](char c) {
+                                  return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == ':';
+                              });
+    return looksLikeOne ? name : "";
+}
+
 }  // namespace
+
+std::string rawlogReadError(const std::string& name, std::size_t index, const std::exception& e) {
+    const std::string what = e.what(), cls = classBeingRead(what), unknown = unknownClass(what);
+    const std::string entry = name + ": entry " + std::to_string(index);
+    if (!unknown.empty())
+        return entry + " is a " + unknown + ", a class this program does not know (" + errorReason(e) + ")";
+    const bool truncated = what.find("ends inside an entry") != std::string::npos;
+    if (index == 0 && cls.empty() && !truncated)
+        return name + ": not an MRPT rawlog (a rawlog is a stream of serialized MRPT objects, optionally gzip-compressed; "
+                      "this file does not start with one)";
+    return entry + (cls.empty() ? "" : " (" + cls + ")") + " is corrupt or truncated (" + errorReason(e) + ")";
+}
 
 namespace {
 
@@ -74,10 +103,7 @@ void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, co
         } catch (const ::mrpt::serialization::CExceptionEOF&) {
             return;  // clean end of the file
         } catch (const std::exception& e) {
-            const std::string cls = classBeingRead(e.what());
-            throw std::runtime_error(name + ": entry " + std::to_string(index) + (cls.empty() ? "" : " (" + cls + ")") +
-                                     (index == 0 ? " is unreadable, not an MRPT rawlog? (" : " is corrupt or truncated (") +
-                                     errorReason(e) + ")");
+            throw std::runtime_error(rawlogReadError(name, index, e));
         }
         if (!obj) throw std::runtime_error(name + ": entry " + std::to_string(index) + " is an empty object");
         if (!visit(index, obj)) return;

@@ -78,4 +78,17 @@ struct NamedPath {
 /// ignored. Call it before anything is written.
 void checkOutputsAreNotInputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
 
+/// What checkOutputs() allows.
+struct OutputRules {
+    bool overwrite = false;    ///< an existing output may be replaced (the tools' -w / --overwrite)
+    bool makeFolders = false;  ///< a missing folder is fine if it can be made (the tool makes it)
+};
+
+/// Checks before any work that every output can be written, and throws std::invalid_argument
+/// (bad usage) naming the argument and the path otherwise: checkOutputsAreNotInputs(); an output
+/// that exists is refused unless `rules.overwrite`, one that is a folder always; its folder must
+/// exist (or with `rules.makeFolders` its nearest existing parent) and accept a new file (tried:
+/// permissions, read-only file systems and root all count). Empty paths are ignored.
+void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules);
+
 }  // namespace gseg::io

@@ -45,10 +45,4 @@ private:
     bool committed_ = false;
 };
 
-/// Checks before any work that every output can be written: its folder exists, is a folder and
-/// accepts a new file (tried: permissions, read-only file systems and root all count), and the
-/// output itself is not a folder (std::runtime_error naming the path); and that no output is the
-/// same file as one of `inputs` (std::invalid_argument naming both), also through links.
-void checkOutputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs = {});
-
 }  // namespace gseg::map

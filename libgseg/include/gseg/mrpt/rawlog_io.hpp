@@ -33,6 +33,12 @@ void forEachRawlogEntry(const std::string& path, const RawlogVisitor& visit);
 /// The same from an open stream (plain or already decompressed); `name` stands for it in messages.
 void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, const RawlogVisitor& visit);
 
+/// The one-line message for entry `index` of the rawlog `name` that MRPT could not read (`e`). A
+/// file whose first entry is no serialized MRPT object at all (a text file, another format) "is
+/// not an MRPT rawlog"; otherwise the entry, the class being read and MRPT's reason ("corrupt or
+/// truncated", or a class this program does not know).
+std::string rawlogReadError(const std::string& name, std::size_t index, const std::exception& e);
+
 /// A gzip rawlog written completely or not at all: objects are serialized by MRPT, compressed
 /// with zlib and written through gseg::io::AtomicFile, so every write and the close are checked
 /// (MRPT's CFileGZOutputStream ignores a failed final flush: a full disk gave a truncated file and

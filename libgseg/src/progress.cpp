@@ -1,10 +1,10 @@
-#include <gseg/map/progress.hpp>
+#include <gseg/progress.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <unistd.h>
 
-namespace gseg::map {
+namespace gseg {
 
 std::string formatDuration(double seconds) {
     const long s = std::lround(std::max(0.0, seconds));
@@ -17,10 +17,15 @@ std::string formatDuration(double seconds) {
 
 Progress::Progress(std::FILE* out, std::string label, std::string unit, int tty, double interval, Clock clock)
     : out_(out), label_(std::move(label)), unit_(std::move(unit)),
-      tty_(tty < 0 ? ::isatty(::fileno(out)) == 1 : tty == 1), interval_(interval), clock_(std::move(clock)),
+      tty_(tty < 0 ? out && ::isatty(::fileno(out)) == 1 : tty == 1), interval_(interval), clock_(std::move(clock)),
       start_(clock_()) {}
 
 std::string Progress::line(std::size_t done, double fraction, const std::string& note) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return compose(done, fraction, note);
+}
+
+std::string Progress::compose(std::size_t done, double fraction, const std::string& note) const {
     const double elapsed = clock_() - start_;
     char buf[160];
     int n = std::snprintf(buf, sizeof buf, "%s: %zu %s, %.1f %s/s", label_.c_str(), done, unit_.c_str(),
@@ -35,16 +40,20 @@ std::string Progress::line(std::size_t done, double fraction, const std::string&
 }
 
 void Progress::update(std::size_t done, double fraction, const std::string& note) {
+    if (!out_) return;
+    std::lock_guard<std::mutex> lock(mutex_);
     const double now = clock_();
     if (now - lastPrint_ < (tty_ ? 0.2 : interval_)) return;
     lastPrint_ = now;
-    const std::string text = line(done, fraction, note);
+    const std::string text = compose(done, fraction, note);
     if (tty_) std::fprintf(out_, "\r%s\033[K", text.c_str());
     else std::fprintf(out_, "%s\n", text.c_str());
     std::fflush(out_);
 }
 
 void Progress::message(const std::string& text) {
+    if (!out_) return;
+    std::lock_guard<std::mutex> lock(mutex_);
     if (tty_) std::fprintf(out_, "\r%s\033[K\n", text.c_str());
     else std::fprintf(out_, "%s\n", text.c_str());
     lastPrint_ = -1e300;  // redraw the live line at the next update
@@ -52,10 +61,12 @@ void Progress::message(const std::string& text) {
 }
 
 void Progress::finish(std::size_t done, const std::string& note) {
-    const std::string text = line(done, -1, note) + ", " + formatDuration(clock_() - start_) + " in all";
+    if (!out_) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::string text = compose(done, -1, note) + ", " + formatDuration(clock_() - start_) + " in all";
     if (tty_) std::fprintf(out_, "\r%s\033[K\n", text.c_str());
     else std::fprintf(out_, "%s\n", text.c_str());
     std::fflush(out_);
 }
 
-}  // namespace gseg::map
+}  // namespace gseg

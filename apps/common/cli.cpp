@@ -1,0 +1,112 @@
+#include "common/cli.hpp"
+
+#include <gseg/version.hpp>
+
+#include <cstdarg>
+#include <iostream>
+#include <vector>
+
+namespace gseg::tools {
+namespace {
+
+Verbosity g_verbosity = Verbosity::Normal;
+
+void vprint(std::FILE* out, const char* format, std::va_list args) {
+    std::vfprintf(out, format, args);
+    std::fflush(out);  // in order with stderr and with other ranks' lines
+}
+
+}  // namespace
+
+Verbosity verbosity() { return g_verbosity; }
+void setVerbosity(Verbosity v) { g_verbosity = v; }
+
+void say(const char* format, ...) {
+    if (g_verbosity == Verbosity::Quiet) return;
+    std::va_list args;
+    va_start(args, format);
+    vprint(stdout, format, args);
+    va_end(args);
+}
+
+void detail(const char* format, ...) {
+    if (g_verbosity != Verbosity::Verbose) return;
+    std::va_list args;
+    va_start(args, format);
+    vprint(stdout, format, args);
+    va_end(args);
+}
+
+void note(const char* format, ...) {
+    if (g_verbosity == Verbosity::Quiet) return;
+    std::va_list args;
+    va_start(args, format);
+    vprint(stderr, format, args);
+    va_end(args);
+}
+
+std::string versionLine(const std::string& toolName) {
+    return toolName + (toolName.rfind("gseg", 0) == 0 ? " " : " (gseg) ") + GSEG_VERSION;
+}
+
+std::FILE* progressOut() { return g_verbosity == Verbosity::Quiet ? nullptr : stderr; }
+
+/// TCLAP's output with gseg's conventions: the version in --help and --version, a usage error as
+/// one line. Records what happened, for parse()'s exit code.
+class CommandLine::Output : public TCLAP::StdOutput {
+public:
+    Output(const std::string& name, bool printing) : name_(name), printing_(printing) {}
+
+    void usage(TCLAP::CmdLineInterface& c) override {
+        done_ = true;
+        if (!printing_) return;
+        std::cout << versionLine(name_) << "\n";
+        TCLAP::StdOutput::usage(c);
+        std::cout << std::flush;
+    }
+    void version(TCLAP::CmdLineInterface&) override {
+        done_ = true;
+        if (printing_) std::cout << versionLine(name_) << std::endl;
+    }
+    void failure(TCLAP::CmdLineInterface&, TCLAP::ArgException& e) override {
+        failed_ = true;
+        if (printing_)
+            std::cerr << name_ << ": " << e.error() << " (" << e.argId() << "); see " << name_ << " --help" << std::endl;
+    }
+
+    bool done_ = false, failed_ = false;
+
+private:
+    std::string name_;
+    bool printing_;
+};
+
+CommandLine::CommandLine(std::string name, const std::string& description, bool writesFiles, bool printing)
+    : name_(std::move(name)), printing_(printing), cmd_(description, ' ', GSEG_VERSION),
+      output_(std::make_unique<Output>(name_, printing)),
+      quiet_("q", "quiet", "print errors only (no progress, no summary)", cmd_, false),
+      verbose_("v", "verbose", "print more detail (the parameters in effect, one line per item)", cmd_, false) {
+    delete cmd_.getOutput();  // TCLAP's default output, not deleted once replaced
+    cmd_.setOutput(output_.get());
+    if (writesFiles)
+        overwrite_ = std::make_unique<TCLAP::SwitchArg>("w", "overwrite", "replace outputs that exist (default: refuse, "
+                                                        "exit 2, before any work)", cmd_, false);
+}
+
+CommandLine::~CommandLine() = default;
+
+int CommandLine::parse(int argc, char** argv) {
+    std::vector<const char*> args(argv, argv + argc);
+    args.at(0) = name_.c_str();  // the name in TCLAP's usage lines, not the path of the executable
+    if (!cmd_.parse(int(args.size()), args.data())) return output_->failed_ || !output_->done_ ? kBadUsage : kDone;
+    if (quiet_.getValue() && verbose_.getValue()) return usageError("give --quiet or --verbose, not both");
+    setVerbosity(quiet_.getValue() ? Verbosity::Quiet : verbose_.getValue() ? Verbosity::Verbose : Verbosity::Normal);
+    return -1;
+}
+
+int CommandLine::usageError(const std::string& what) const {
+    if (printing_) std::fprintf(stderr, "%s: %s; see %s --help\n", name_.c_str(), what.c_str(), name_.c_str());
+    return kBadUsage;
+}
+
+}  // namespace gseg::tools

@@ -1,0 +1,72 @@
+#pragma once
+/// \file cli.hpp
+/// What every gseg tool's command line has, in one place (#11 item 4): MRPT's TCLAP; `--help` and
+/// `--version` with gseg's version (exit 0); `-q/--quiet` (errors only) and `-v/--verbose` (more
+/// detail); `-w/--overwrite` for the tools that write files; a usage error as one line naming the
+/// tool (exit 2). MRPT's TCLAP never exits from inside the parser: every MPI rank parses the same
+/// arguments and returns the same code, only rank 0 prints.
+
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace gseg::tools {
+
+/// Exit codes of every tool.
+enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2, kPartlyDone = 3 };
+
+enum class Verbosity { Quiet, Normal, Verbose };
+
+/// The process's verbosity (set by CommandLine::parse(); Normal before).
+Verbosity verbosity();
+void setVerbosity(Verbosity v);
+
+/// What a tool says besides errors: say() to stdout unless --quiet; detail() to stdout with
+/// --verbose only; note() to stderr unless --quiet (remarks that are not errors). Errors are
+/// printed with std::fprintf(stderr, ...) whatever the verbosity.
+void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
+void detail(const char* format, ...) __attribute__((format(printf, 1, 2)));
+void note(const char* format, ...) __attribute__((format(printf, 1, 2)));
+/// "rawlog-gseg (gseg) 0.1.0", "gseg segment 0.1.0": what --version prints.
+std::string versionLine(const std::string& toolName);
+
+/// Where gseg::Progress writes: stderr, or nowhere (null) with --quiet.
+std::FILE* progressOut();
+
+/// A tool's command line. Construct it, add the tool's own arguments to cmd(), call parse().
+class CommandLine {
+public:
+    /// `name` as the user calls the tool ("rawlog-gseg", "gseg segment"); `description` for
+    /// --help; `writesFiles` adds -w/--overwrite. `printing` false (MPI ranks other than 0): the
+    /// same parsing and exit codes, nothing printed.
+    CommandLine(std::string name, const std::string& description, bool writesFiles, bool printing = true);
+    ~CommandLine();
+    CommandLine(const CommandLine&) = delete;
+    CommandLine& operator=(const CommandLine&) = delete;
+
+    TCLAP::CmdLine& cmd() { return cmd_; }
+
+    /// Parses; sets the verbosity. Returns -1 to go on, kDone after --help or --version (printed),
+    /// kBadUsage after a usage error (one line printed on stderr).
+    int parse(int argc, char** argv);
+
+    /// -w / --overwrite was given (false for a tool that writes no file).
+    bool overwrite() const { return overwrite_ && overwrite_->getValue(); }
+
+    /// A usage error found after parsing: prints "<name>: <what>; see <name> --help" (when
+    /// printing) and returns kBadUsage.
+    int usageError(const std::string& what) const;
+
+private:
+    class Output;
+    std::string name_;
+    bool printing_;
+    TCLAP::CmdLine cmd_;
+    std::unique_ptr<Output> output_;
+    TCLAP::SwitchArg quiet_, verbose_;
+    std::unique_ptr<TCLAP::SwitchArg> overwrite_;
+};
+
+}  // namespace gseg::tools
