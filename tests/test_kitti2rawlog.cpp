@@ -2,6 +2,7 @@
 #include <gseg/io/kitti.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
+#include <support/child.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -12,9 +13,14 @@
 #include <mrpt/obs/CObservationRobotPose.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <csignal>
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <spawn.h>
+#include <sys/inotify.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -318,3 +324,47 @@ TEST(Kitti2Rawlog, InputOptionAndTheOldPositionalFormGiveTheSameRawlog) {
 }
 
 }  // namespace
+
+// #9 item 9 for the map layer's outputs (kitti2rawlog, rawlog-octomap): a run ended by a signal
+// leaves no temporary file. The only scan is a pipe nobody writes to: kitti2rawlog has made its
+// temporary rawlog and waits in open() when SIGTERM arrives; inotify says when the temporary
+// exists (no sleeps).
+TEST(Kitti2Rawlog, InterruptedRunLeavesNoTemporary) {
+    const fs::path dir = gseg::test::freshDir("kitti2rawlog", "interrupted");
+    fs::create_directories(dir / "seq/velodyne");
+    ASSERT_EQ(::mkfifo((dir / "seq/velodyne/000000.bin").c_str(), 0600), 0);
+    const int watch = ::inotify_init1(IN_CLOEXEC);
+    ASSERT_GE(watch, 0);
+    ASSERT_GE(::inotify_add_watch(watch, dir.c_str(), IN_CREATE), 0);
+    ::alarm(120);  // a tool that never made its temporary would leave read() below blocked
+    const std::string tool = gseg::test::tool("kitti2rawlog"), seq = (dir / "seq").string(),
+                      out = (dir / "out.rawlog").string();
+    const char* argv[] = {tool.c_str(), "-i", seq.c_str(), "-o", out.c_str(), "-q", nullptr};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT, 0644);
+    pid_t pid = 0;
+    ASSERT_EQ(::posix_spawn(&pid, tool.c_str(), &actions, nullptr, const_cast<char**>(argv), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    alignas(inotify_event) char events[4096];
+    std::string created;
+    while (created.find("out.rawlog") == std::string::npos) {  // the first file made in dir
+        const ssize_t n = ::read(watch, events, sizeof events);
+        ASSERT_GT(n, 0);
+        for (ssize_t at = 0; at < n;) {
+            const auto* e = reinterpret_cast<const inotify_event*>(events + at);
+            if (e->len) created += std::string(e->name) + " ";
+            at += ssize_t(sizeof(inotify_event) + e->len);
+        }
+    }
+    ::close(watch);
+    EXPECT_NE(gseg::test::entriesContaining(dir.string(), "out.rawlog"), "") << "mid-run: the temporary exists";
+    ::kill(pid, SIGTERM);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ::alarm(0);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "out.rawlog"), "") << "created: " << created;
+    EXPECT_NE(gseg::test::readText((dir / "stderr.txt").string()).find("kitti2rawlog: interrupted (SIGTERM)"),
+              std::string::npos);
+}

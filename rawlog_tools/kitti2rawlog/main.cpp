@@ -29,6 +29,7 @@
 #include <gseg/map/gz_output.hpp>
 #include <gseg/map/output_files.hpp>
 #include <gseg/map/poses.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/version.hpp>
 
@@ -320,6 +321,7 @@ void run(const Cli& c) {
 int main(int argc, char** argv) {
     Cli cli;
     if (const int code = parseCli(argc, argv, cli); code >= 0) return code;
+    gseg::io::installTemporaryCleanup("kitti2rawlog");  // an interrupted run leaves no temporary
     try {
         run(cli);
         return kDone;
@@ -327,7 +329,7 @@ int main(int argc, char** argv) {
         std::cerr << "kitti2rawlog: " << e.what() << "\n";
         return kBadUsage;
     } catch (const std::exception& e) {
-        std::cerr << "kitti2rawlog: " << gseg::map::reasonOf(e) << "\n";
+        std::cerr << "kitti2rawlog: " << gseg::mrpt::errorReason(e) << "\n";
         return kBadInput;
     }
 }

@@ -16,6 +16,7 @@
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/ordered_pipeline.hpp>
 #include <gseg/map/output_files.hpp>
+#include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 
 #include <chrono>
@@ -252,6 +253,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         return 0;
     }
     RemoteWorkers remote(ranks);  // told to stop when this returns, whatever happened
+    gseg::io::installTemporaryCleanup("rawlog-octomap");  // an interrupted run leaves no temporary
     try {
         if (!cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
@@ -271,7 +273,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         std::cerr << "rawlog-octomap: " << e.what() << "\n";
         return 2;
     } catch (const std::exception& e) {
-        std::cerr << "rawlog-octomap: " << gseg::map::reasonOf(e) << "\n";
+        std::cerr << "rawlog-octomap: " << gseg::mrpt::errorReason(e) << "\n";
         return 1;
     }
 }

@@ -3,6 +3,7 @@
 #include "common/bytes.hpp"
 
 #include <gseg/map/output_files.hpp>
+#include <gseg/mrpt/errors.hpp>
 
 #include <mrpt/io/CStream.h>
 #include <mrpt/serialization/CArchive.h>
@@ -168,7 +169,7 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
         const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
         for (unsigned i = 0; i < threads; ++i) workers.emplace_back(cfg, cli.options);
     } catch (const std::exception& e) {
-        setupError = gseg::map::reasonOf(e);
+        setupError = gseg::mrpt::errorReason(e);
     }
     ranks.send(0, kHelloTag, ByteWriter().u64(threads).bytes());
     auto serve = [&](unsigned thread) {
@@ -183,7 +184,7 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
                 r.rank = ranks.rank();
                 reply = encodeResult(r);
             } catch (const std::exception& e) {  // the worker's errors name the scan
-                const std::string reason = gseg::map::reasonOf(e);
+                const std::string reason = gseg::mrpt::errorReason(e);
                 reply = encodeError(reason.rfind(scan, 0) == 0 ? reason : scan + " on rank " + std::to_string(ranks.rank()) + ": " + reason);
             }
             ranks.send(0, kResultTag + int(thread), reply);

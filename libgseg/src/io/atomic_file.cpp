@@ -120,6 +120,10 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
 
 AtomicFile::~AtomicFile() { discard(); }
 
+TemporaryRegistration::TemporaryRegistration(const std::string& path) : slot_(registerTemporary(path)) {}
+
+TemporaryRegistration::~TemporaryRegistration() { unregisterTemporary(slot_); }
+
 void AtomicFile::discard() noexcept {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;

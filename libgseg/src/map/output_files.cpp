@@ -31,17 +31,6 @@ bool exists(const std::string& path) {
 
 }  // namespace
 
-std::string reasonOf(const std::exception& e) {
-    std::string what = e.what(), line;
-    for (std::size_t from = 0; from <= what.size();) {
-        const std::size_t to = std::min(what.find('\n', from), what.size());
-        line = what.substr(from, to - from);
-        if (!line.empty() && line.rfind("====", 0) != 0) return line;
-        from = to + 1;
-    }
-    return what.empty() ? "unknown error" : what;
-}
-
 std::string temporaryPathFor(const std::string& path) { return besideWithPrefix(path, "tmp"); }
 
 void writeFileChecked(const std::string& path, const std::string& bytes) {
@@ -72,7 +61,10 @@ void writeFileChecked(const std::string& path, const std::function<void(std::ost
 }
 
 AtomicFiles::AtomicFiles(std::vector<std::string> paths) : paths_(std::move(paths)) {
-    for (const auto& p : paths_) temps_.push_back(temporaryPathFor(p));
+    for (const auto& p : paths_) {
+        temps_.push_back(temporaryPathFor(p));
+        registered_.emplace_back(temps_.back());
+    }
 }
 
 AtomicFiles::~AtomicFiles() {

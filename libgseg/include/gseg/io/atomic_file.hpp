@@ -48,6 +48,23 @@ private:
     std::uint64_t written_ = 0;
 };
 
+/// A temporary file that another writer creates by path (not an AtomicFile), registered for the
+/// same cleanup on signals and crashes as AtomicFile's: the handler removes it. Destruction only
+/// unregisters the path; the file itself is the writer's business.
+class TemporaryRegistration {
+public:
+    /// Throws std::runtime_error if the path is too long or too many temporaries are registered.
+    explicit TemporaryRegistration(const std::string& path);
+    ~TemporaryRegistration();
+    TemporaryRegistration(TemporaryRegistration&& other) noexcept : slot_(other.slot_) { other.slot_ = -1; }
+    TemporaryRegistration(const TemporaryRegistration&) = delete;
+    TemporaryRegistration& operator=(const TemporaryRegistration&) = delete;
+    TemporaryRegistration& operator=(TemporaryRegistration&&) = delete;
+
+private:
+    int slot_ = -1;
+};
+
 /// Writes `bytes` to `path` through an AtomicFile. Throws std::runtime_error on failure (and
 /// leaves neither a partial file nor a temporary).
 void writeFileAtomic(const std::string& path, const void* bytes, std::size_t size);

@@ -2,17 +2,14 @@
 /// \file output_files.hpp
 /// Output files written completely or not at all, checked before any work, never over an input.
 
-#include <exception>
+#include <gseg/io/atomic_file.hpp>
+
 #include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 namespace gseg::map {
-
-/// The line of an exception's message that says what went wrong: MRPT's exceptions start with a
-/// "==== MRPT exception ====" banner and end with a call stack.
-std::string reasonOf(const std::exception& e);
 
 /// `<folder>/.tmp<pid>_<name>` beside `path` (same folder, so the final rename is atomic).
 std::string temporaryPathFor(const std::string& path);
@@ -24,7 +21,9 @@ void writeFileChecked(const std::string& path, const std::string& bytes);
 void writeFileChecked(const std::string& path, const std::function<void(std::ostream&)>& fill);
 
 /// A set of output files that appear together or not at all. Write file i to temporary(i), then
-/// commit(). Without commit() (an exception on the way), the destructor removes the temporaries.
+/// commit(). Without commit() (an exception on the way), the destructor removes the temporaries;
+/// they are registered with gseg::io's cleanup, so a tool that called
+/// gseg::io::installTemporaryCleanup() also loses none on a signal or crash.
 class AtomicFiles {
 public:
     explicit AtomicFiles(std::vector<std::string> paths);
@@ -42,6 +41,7 @@ public:
 
 private:
     std::vector<std::string> paths_, temps_;
+    std::vector<gseg::io::TemporaryRegistration> registered_;
     bool committed_ = false;
 };
 
