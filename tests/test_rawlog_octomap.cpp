@@ -306,6 +306,25 @@ TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
     fs::remove_all(dir);
 }
 
+// The default worker count is the cores the process may use (taskset, cpusets, mpirun's binding
+// of a rank to a core), not the machine's: two threads bound to one core only take turns.
+TEST(RawlogOctomap, DefaultWorkersAreTheCoresTheProcessMayUse) {
+    if (std::system("taskset -c 0 true > /dev/null 2>&1") != 0) GTEST_SKIP() << "taskset (util-linux) is not available";
+    const std::string dir = tempDir("affinity");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
+    const ToolRun one = runTool("rawlog-octomap", args + "/one", dir, "", "taskset -c 0 ");
+    ASSERT_EQ(one.status, 0) << one.err;
+    EXPECT_NE(one.out.find("(summed over 1 worker thread(s))"), std::string::npos) << one.out;
+    // Given explicitly, --threads wins; the maps are the same.
+    const ToolRun three = runTool("rawlog-octomap", args + "/three --threads 3", dir, "", "taskset -c 0 ");
+    ASSERT_EQ(three.status, 0) << three.err;
+    EXPECT_NE(three.out.find("(summed over 3 worker thread(s))"), std::string::npos) << three.out;
+    expectSameMaps(dir + "/one", dir + "/three");
+    fs::remove_all(dir);
+}
+
 TEST(RawlogOctomap, ProgressShowsScansPerSecondAndTimeLeft) {
     const std::string dir = tempDir("progress");
     writeDrive(dir + "/drive.rawlog");

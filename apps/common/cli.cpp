@@ -2,9 +2,13 @@
 
 #include <gseg/version.hpp>
 
+#include <algorithm>
 #include <cstdarg>
 #include <iostream>
+#include <thread>
 #include <vector>
+
+#include <sched.h>
 
 namespace gseg::tools {
 namespace {
@@ -47,6 +51,16 @@ void note(const char* format, ...) {
 
 std::string versionLine(const std::string& toolName) {
     return toolName + (toolName.rfind("gseg", 0) == 0 ? " " : " (gseg) ") + GSEG_VERSION;
+}
+
+unsigned usableCores() {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (::sched_getaffinity(0, sizeof set, &set) == 0) {
+        const int n = CPU_COUNT(&set);
+        if (n > 0) return unsigned(n);
+    }
+    return std::max(1u, std::thread::hardware_concurrency());
 }
 
 std::FILE* progressOut() { return g_verbosity == Verbosity::Quiet ? nullptr : stderr; }

@@ -32,6 +32,12 @@ void note(const char* format, ...) __attribute__((format(printf, 1, 2)));
 /// "rawlog-gseg (gseg) 0.1.0", "gseg segment 0.1.0": what --version prints.
 std::string versionLine(const std::string& toolName);
 
+/// The cores this process may run on: its CPU affinity (taskset, a Slurm or container cpuset, an
+/// MPI launcher's binding: `mpirun -np 1` binds its rank to one core), at least 1. The default
+/// worker count of every tool: std::thread::hardware_concurrency() counts the machine's cores,
+/// and threads beyond the process's own only take turns on them.
+unsigned usableCores();
+
 /// Where gseg::Progress writes: stderr, or nowhere (null) with --quiet.
 std::FILE* progressOut();
 

@@ -23,10 +23,35 @@
 #include <stdexcept>
 #include <thread>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 namespace rawlog_octomap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// OctoMap's writeBinary() prints " done." to stderr (its OCTOMAP_DEBUG is on in Debian's build);
+/// the benchmark's table should not carry it. Restores stderr on every path.
+class QuietStderr {
+public:
+    QuietStderr() : saved_(::dup(STDERR_FILENO)) {
+        const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+        if (saved_ >= 0 && null >= 0) std::fflush(stderr), ::dup2(null, STDERR_FILENO);
+        if (null >= 0) ::close(null);
+    }
+    ~QuietStderr() {
+        if (saved_ < 0) return;
+        std::fflush(stderr);
+        ::dup2(saved_, STDERR_FILENO);
+        ::close(saved_);
+    }
+    QuietStderr(const QuietStderr&) = delete;
+    QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+    int saved_;
+};
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -59,7 +84,12 @@ AnchorTimes plainOctomap(const Cli& cli, const std::string& bt) {
         a.insert += since(t0);
         ++a.scans, a.points += cloud.size();
     }
-    if (!tree.writeBinary(bt)) throw std::runtime_error(bt + ": cannot write");
+    bool written = false;
+    {
+        const QuietStderr quiet;
+        written = tree.writeBinary(bt);
+    }
+    if (!written) throw std::runtime_error(bt + ": cannot write");
     a.total = since(start);
     return a;
 }
@@ -86,8 +116,9 @@ void runBench(const Cli& cli) {
 #else
     const char* build = "Debug (assertions on)";
 #endif
-    gseg::tools::say("rawlog-octomap --bench: %s, %d round(s), build %s, %u hardware thread(s), %u worker thread(s)\n",
-                cli.input.c_str(), cli.benchRounds, build, std::thread::hardware_concurrency(), cli.threads);
+    gseg::tools::say("rawlog-octomap --bench: %s, %d round(s), build %s, %u hardware thread(s) (%u usable), %u worker thread(s)\n",
+                cli.input.c_str(), cli.benchRounds, build, std::thread::hardware_concurrency(),
+                gseg::tools::usableCores(), cli.threads);
     gseg::tools::say("%-6s %-16s %10s %12s\n", "round", "run", "wall [s]", "note");
     std::vector<double> plain, plainInsert, fast;
     RunReport last;

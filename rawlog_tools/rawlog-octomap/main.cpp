@@ -85,7 +85,7 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
                                         "every position, for poses in UTM or other large coordinates (the maps span "
                                         "+-32768 voxels); or X,Y,Z", false, "", "first|X,Y,Z", cmd);
     TCLAP::ValueArg<std::string> threads("", "threads", "worker threads for segmentation and ray casting in each "
-                                         "process (default: one per core; 0: none); under mpirun/srun every rank works "
+                                         "process (default: one per core this process may use; 0: none); under mpirun/srun every rank works "
                                          "with N threads, at least one (--threads 0: one rank per core)", false, "", "N",
                                          cmd);
     TCLAP::SwitchArg rank0MapsOnly("", "rank0-maps-only", "under mpirun/srun rank 0 reads, maps and writes but works on "
@@ -95,7 +95,7 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
                                        "PREFIX_bench*", false, "", "N", cmd);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     try {
-        c.threads = std::max(1u, std::thread::hardware_concurrency());
+        c.threads = gseg::tools::usableCores();
         c.input = input.getValue(), c.prefix = prefix.getValue(), c.config = config.getValue();
         c.poses.poses = poses.getValue(), c.poses.calib = calib.getValue(), c.poses.origin = origin.getValue();
         auto number = [](TCLAP::ValueArg<std::string>& a, double& to) {
