@@ -202,6 +202,28 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
     EXPECT_EQ(entryClasses(out).size(), 2u);
 }
 
+// The KITTI defaults on the VLP-16 scan (2.27 m up) find 0.7 % ground: the run says why, once.
+TEST(RawlogGseg, AFixedHeightThatTheScanContradictsIsSaid) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    fs::create_directories(kDir);
+    const std::string out = (kDir / "vlp16_kitti.rawlog").string();
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" + out +
+                                          "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml'");
+    ASSERT_EQ(r.status, 0) << "a warning, not an error: " << r.output;
+    EXPECT_NE(r.output.find("entry 0 ('Velodyne1_SCAN'): the ground lies 2.27 m below the sensor"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("distToGround is 1.723 m"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("0.7 % ground"), std::string::npos) << "what the warning is about: " << r.output;
+    const auto right = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" +
+                                              out + "' -c '" GSEG_SOURCE_DIR "/config/vlp16.yaml'");
+    ASSERT_EQ(right.status, 0) << right.output;
+    EXPECT_EQ(right.output.find("the ground lies"), std::string::npos) << "auto: nothing to say: " << right.output;
+    const auto quiet = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -q -w -i '" + kVlp16 + "' -o '" +
+                                              out + "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml'");
+    ASSERT_EQ(quiet.status, 0) << quiet.output;
+    EXPECT_EQ(quiet.output, "") << "--quiet prints errors only";
+}
+
 TEST(RawlogGseg, SensoryFrameLayoutPassesThroughEntryForEntry) {
     if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
     fs::create_directories(kDir);

@@ -325,6 +325,32 @@ TEST(RawlogOctomap, DefaultWorkersAreTheCoresTheProcessMayUse) {
     fs::remove_all(dir);
 }
 
+// The drive's sensor is 1.8 m up: a distToGround of 2.5 is said once (scan 0), on one or two ranks.
+TEST(RawlogOctomap, AFixedHeightThatTheFirstScanContradictsIsSaid) {
+    const std::string dir = tempDir("height");
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/wrong.yaml") << "distToGround: 2.5\n";
+    std::ofstream(dir + "/right.yaml") << "distToGround: 1.8\n";
+    const std::string args = "-i " + dir + "/drive.rawlog -o " + dir;
+    const ToolRun wrong = runTool("rawlog-octomap", args + "/w -c " + dir + "/wrong.yaml", dir);
+    ASSERT_EQ(wrong.status, 0) << wrong.err;
+    EXPECT_NE(wrong.err.find("scan 0 ("), std::string::npos) << wrong.err;
+    EXPECT_NE(wrong.err.find("the ground lies 1.80 m below the sensor"), std::string::npos) << wrong.err;
+    EXPECT_EQ(wrong.err.find("the ground lies"), wrong.err.rfind("the ground lies")) << "once: " << wrong.err;
+    const ToolRun right = runTool("rawlog-octomap", args + "/r -c " + dir + "/right.yaml", dir);
+    ASSERT_EQ(right.status, 0) << right.err;
+    EXPECT_EQ(right.err.find("the ground lies"), std::string::npos) << right.err;
+    std::string whyNot;
+    if (const std::string mpirun = gseg::test::mpirun(2, whyNot); !mpirun.empty()) {
+        const ToolRun two = runTool("rawlog-octomap", args + "/w2 -c " + dir + "/wrong.yaml --threads 0 --rank0-maps-only",
+                                    dir, "", mpirun);
+        ASSERT_EQ(two.status, 0) << two.err;
+        EXPECT_NE(two.err.find("the ground lies 1.80 m below the sensor"), std::string::npos)
+            << "said by rank 0 for rank 1: " << two.err;
+    }
+    fs::remove_all(dir);
+}
+
 TEST(RawlogOctomap, ProgressShowsScansPerSecondAndTimeLeft) {
     const std::string dir = tempDir("progress");
     writeDrive(dir + "/drive.rawlog");

@@ -43,6 +43,7 @@ int run(const Cli& cli) {
     const mrpt::ScanSegmentation s = segmenter.segment(cloud, false);
     const Result& r = s.result;
     if (cfg.distToGroundAuto) say("distToGround auto: %s\n", s.height.describe().c_str());
+    if (!s.heightWarning.empty()) tools::note("gseg segment: %s: %s\n", cli.scan.c_str(), s.heightWarning.c_str());
 
     say("%s\n", scan.description.c_str());
     say("points %zu, ground %zu (%.1f %%), non-ground %zu; segmentation %.2f ms\n", cloud.size(), r.numGround,

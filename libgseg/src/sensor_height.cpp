@@ -143,6 +143,21 @@ SensorHeightEstimate estimateSensorHeight(const PointCloudView& cloud, const Sen
     return e;
 }
 
+std::string checkDistToGround(const PointCloudView& cloud, double distToGround, double tolerance,
+                              const SensorHeightOptions& options) {
+    const SensorHeightEstimate e = estimateSensorHeight(cloud, options);
+    if (!e.valid) return "";
+    const double under = e.height / std::max(0.1, e.normal.z());  // straight under the sensor
+    if (std::abs(under - distToGround) <= tolerance) return "";
+    char line[320];
+    std::snprintf(line, sizeof line,
+                  "the ground lies %.2f m below the sensor in this scan (estimated from %d columns), but "
+                  "distToGround is %.3f m, and a wrong height can cost most of the ground. Set "
+                  "distToGround to the sensor's height, or to auto (config/auto_height.yaml)",
+                  under, e.columns, distToGround);
+    return line;
+}
+
 std::string HeightDecision::describe() const {
     char buf[160];
     const char* what = source == Source::Estimated ? "estimated" : source == Source::PreviousScan ? "previous scan's" : "fallback";

@@ -68,6 +68,12 @@ public:
             return;
         }
         ++scans_;
+        if (!r.heightWarning.empty()) {  // a warning, not an error: the run goes on
+            const std::string line = "rawlog-gseg: " + name_ + "entry " + std::to_string(r.entry) + " ('" + r.label +
+                                     "'): " + r.heightWarning;
+            if (gseg::tools::progressOut()) progress_.message(line);
+            else gseg::tools::note("%s\n", line.c_str());
+        }
         const double ground = 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points));
         gseg::tools::detail("rawlog-gseg: %sentry %zu ('%s'): %zu points, %.1f %% ground%s\n", name_.c_str(), r.entry,
                             r.label.c_str(), r.points, ground,

@@ -209,6 +209,11 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
             report.presegmented += r.presegmented;
             report.reflections += r.reflections;
             if (!r.heightNote.empty()) report.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
+            if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
+                const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
+                if (gseg::tools::progressOut()) progress.message(line);
+                else gseg::tools::note("%s\n", line.c_str());
+            }
         }
         if (!quiet) progress.update(k + 1, r.fraction);
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());

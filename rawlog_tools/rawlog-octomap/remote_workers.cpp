@@ -118,6 +118,7 @@ std::string encodeResult(const ScanResult& r) {
     const PhaseTimes& t = r.times;
     out.f64(t.read).f64(t.segmentation).f64(t.transform).f64(t.rayCasting).f64(t.mapUpdate).f64(t.writing);
     out.str(r.skipped).str(r.describe).u64(r.presegmented).f64(r.fraction).u64(r.reflections).str(r.heightNote);
+    out.str(r.heightWarning);
     out.u64(std::uint64_t(r.rank));
     return out.bytes();
 }
@@ -139,6 +140,7 @@ ScanResult decodeResult(const std::string& bytes) {
     r.fraction = in.f64();
     r.reflections = std::size_t(in.u64());
     r.heightNote = in.str();
+    r.heightWarning = in.str();
     r.rank = int(in.u64());
     return r;
 }

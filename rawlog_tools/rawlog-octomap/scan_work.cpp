@@ -28,9 +28,10 @@ ScanResult ScanWorker::operator()(const ScanJob& job) {
         gseg::map::WorldScanTimes t;
         try {
             if (autoHeight_) autoHeight_->reset();  // any thread count gives the same maps
-            world = gseg::map::segmentToWorld(*job.raw, job.robotPose, segmenter_, autoHeight_.get(), &t);
+            world = gseg::map::segmentToWorld(*job.raw, job.robotPose, segmenter_, autoHeight_.get(), &t, job.index == 0);
             r.reflections = world.reflections;
             r.heightNote = world.heightNote;
+            r.heightWarning = world.heightWarning;
         } catch (const std::invalid_argument& e) {
             r.skipped = e.what();
             return r;

@@ -41,7 +41,8 @@ ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs) {
 }
 
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight, WorldScanTimes* times) {
+                         GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight, WorldScanTimes* times,
+                         bool checkHeight) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> levelled = gseg::mrpt::levelledPoints(obs);
     if (levelled.empty()) throw std::invalid_argument("observation '" + obs.sensorLabel + "' has no points");
@@ -54,6 +55,8 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
             out.heightNote = autoHeight->lastDecision().describe();
     } else {
         r = segmenter.segment(cloud, false);
+        if (checkHeight && r.numNonFinite < cloud.size())
+            out.heightWarning = checkDistToGround(cloud, segmenter.params().distToGround, segmenter.params().seedHeightTolerance);
     }
     const auto t1 = std::chrono::steady_clock::now();
 

@@ -58,6 +58,7 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     out.result = seg.result;
     out.distToGround = seg.distToGround;
     out.distToGroundEstimated = seg.distToGroundEstimated;
+    out.heightWarning = seg.heightWarning;
     out.nonFinitePoints = seg.nonFinitePoints;
 
     // The two halves, in the frame asked for.

@@ -67,6 +67,7 @@ std::vector<::mrpt::obs::CObservation::Ptr> RawlogSegmenter::process(const ::mrp
     report.nonFinite = o.nonFinitePoints;
     report.distToGround = o.distToGround;
     report.distToGroundEstimated = o.distToGroundEstimated;
+    report.heightWarning = o.heightWarning;
     ++totals_.scans;
     totals_.points += report.points;
     totals_.ground += report.ground;

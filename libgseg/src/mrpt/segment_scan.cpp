@@ -17,6 +17,10 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
     } else {
         out.result = fixed_.segment(cloud, keepCellDiagnostics);
         out.distToGround = config_.params.distToGround;
+        if (!heightChecked_ && out.result.numNonFinite < cloud.size()) {
+            heightChecked_ = true;
+            out.heightWarning = checkDistToGround(cloud, config_.params.distToGround, config_.params.seedHeightTolerance);
+        }
     }
     out.nonFinitePoints = out.result.numNonFinite;
     return out;

@@ -29,6 +29,7 @@ struct WorldScan {
     Eigen::Vector3d sensorOrigin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
     std::size_t reflections = 0;   ///< points left out: more than belowGroundMargin below the ground (Result::belowGround)
     std::string heightNote;        ///< distToGround: auto could not estimate this scan: what was used instead
+    std::string heightWarning;     ///< checkHeight: the scan contradicts the fixed distToGround (gseg::checkDistToGround())
     PointCloudView groundView() const { return PointCloudView(ground.data(), ground.size() / 3); }
     PointCloudView obstaclesView() const { return PointCloudView(obstacles.data(), obstacles.size() / 3); }
 };
@@ -48,11 +49,13 @@ struct WorldScanTimes {
 /// both classes into the world frame with `robotPose` + the observation's sensorPose. With
 /// `autoHeight` given (`distToGround: auto`), that segmenter estimates the height per scan (and
 /// never refuses one); otherwise `segmenter` is used. Points without a return and reflections below
-/// the ground (Result::belowGround) go into neither class. Throws std::invalid_argument for a
+/// the ground (Result::belowGround) go into neither class. With `checkHeight` (and a fixed
+/// height), the scan is also checked against the segmenter's distToGround (heightWarning; costs
+/// about one segmentation: the tools check their first scan). Throws std::invalid_argument for a
 /// non-LiDAR observation or an empty scan.
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
                          GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight = nullptr,
-                         WorldScanTimes* times = nullptr);
+                         WorldScanTimes* times = nullptr, bool checkHeight = false);
 
 /// Appends every point of `obs` (one class already) in the world frame to `out` (x, y, z
 /// triples) and returns the sensor's world position.

@@ -46,6 +46,9 @@ public:
         ::mrpt::obs::CObservationPointCloud::Ptr ground, obstacles;
         double distToGround = 0;  ///< [m] the sensor height used (estimated if `auto`)
         bool distToGroundEstimated = false;
+        /// A fixed distToGround that the filter's first scan contradicts (see
+        /// gseg::checkDistToGround()): "" otherwise, and on every later scan.
+        std::string heightWarning;
         std::size_t nonFinitePoints = 0;  ///< input points with a NaN or infinite coordinate
         std::size_t reflections = 0;      ///< points more than belowGroundMargin below the ground (result.belowGround)
         gseg::Result result;      ///< labels (one per input point), counters and timing of the segmentation

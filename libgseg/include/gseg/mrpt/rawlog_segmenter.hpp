@@ -38,6 +38,7 @@ struct ScanReport {
     std::size_t nonFinite = 0; ///< points with a NaN or infinite coordinate (labelled non-ground)
     double distToGround = 0;   ///< [m] sensor height used
     bool distToGroundEstimated = false;
+    std::string heightWarning; ///< the first scan contradicts a fixed distToGround (GroundFilter::Output)
     double ms = 0;             ///< segmentation time
     std::string skipped;       ///< why it could not be segmented ("" if it was)
 };

@@ -22,6 +22,9 @@ struct ScanSegmentation {
     double distToGround = 0;             ///< [m] the sensor height used
     bool distToGroundEstimated = false;  ///< `distToGround: auto` and this scan gave an estimate
     HeightDecision height;               ///< with `distToGround: auto`: what was used and why
+    /// With a fixed distToGround, on the first scan with points only: the scan's own estimate
+    /// contradicts it (gseg::checkDistToGround()); "" otherwise.
+    std::string heightWarning;
 };
 
 /// Segments scans with one configuration. One object per stream and thread.
@@ -30,7 +33,8 @@ public:
     explicit ScanSegmenter(const LoadedConfig& config);
 
     /// Labels every point of `cloud` (levelled frame, sensor at the origin). A scan without finite
-    /// points gets all labels 0, an empty one no labels. Never refuses a scan for its height.
+    /// points gets all labels 0, an empty one no labels. Never refuses a scan for its height; with
+    /// a fixed distToGround the first scan with points is checked against it (heightWarning).
     ScanSegmentation segment(const PointCloudView& cloud, bool keepCellDiagnostics = false);
 
     const LoadedConfig& config() const { return config_; }
@@ -39,6 +43,7 @@ private:
     LoadedConfig config_;
     GroundSegmenter fixed_;
     AutoHeightSegmenter auto_;
+    bool heightChecked_ = false;
 };
 
 }  // namespace gseg::mrpt
