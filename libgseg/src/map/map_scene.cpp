@@ -1,17 +1,20 @@
 #include "map_scene.hpp"
 
+#include <gseg/map/gz_output.hpp>
 #include <gseg/map/traversability_map.hpp>
-#include <gseg/mrpt/scene.hpp>
 
 #include <mrpt/opengl/COctoMapVoxels.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfLines.h>
 #include <mrpt/opengl/stock_objects.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <algorithm>
 
 namespace gseg::map::detail {
 
-std::string mapSceneBytes(const std::vector<float>& xyz, const std::vector<std::uint8_t>& labels, double resolution,
-                          const std::vector<Eigen::Vector3d>& path) {
+void writeMapScene(const std::string& file, const std::string& name, const std::vector<float>& xyz,
+                   const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path) {
     namespace gl = ::mrpt::opengl;
     auto voxels = gl::COctoMapVoxels::Create();
     voxels->setName("gseg traversability map: ground voxels green, obstacle voxels red");
@@ -23,6 +26,9 @@ std::string mapSceneBytes(const std::vector<float>& xyz, const std::vector<std::
     voxels->cullFaces(::mrpt::opengl::TCullFace::BACK);
     voxels->enableCubeTransparency(false);
     const Rgb colours[2] = {colourOf(CellClass::Obstacle), colourOf(CellClass::Traversable)};
+    const std::size_t ground = std::size_t(std::count(labels.begin(), labels.end(), std::uint8_t(1)));
+    voxels->reserveVoxels(0, ground);  // exactly: no doubling of the largest vectors of the run
+    voxels->reserveVoxels(1, labels.size() - ground);
     for (std::size_t i = 0; i < labels.size(); ++i) {
         const Rgb c = colours[labels[i]];
         voxels->push_back_Voxel(labels[i] ? 0 : 1, gl::COctoMapVoxels::TVoxel({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]},
@@ -54,7 +60,9 @@ std::string mapSceneBytes(const std::vector<float>& xyz, const std::vector<std::
     axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
     if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
     scene.insert(axes);
-    return gseg::mrpt::sceneFileBytes(scene);
+    CheckedGzOutput out(file, name);
+    ::mrpt::serialization::archiveFrom(out) << scene;
+    out.close();
 }
 
 }  // namespace gseg::map::detail

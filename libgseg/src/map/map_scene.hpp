@@ -12,10 +12,11 @@
 
 namespace gseg::map::detail {
 
-/// The bytes of the .3Dscene: voxel centres `xyz` (3 floats each) with `labels` (1 ground, 0
-/// obstacle) as coloured boxes of edge `resolution`, the path as a blue line with a box at each
-/// sensor position, axes at its start.
-std::string mapSceneBytes(const std::vector<float>& xyz, const std::vector<std::uint8_t>& labels, double resolution,
-                          const std::vector<Eigen::Vector3d>& path);
+/// Writes the .3Dscene to `file` (gzip, every write and the close checked; errors name
+/// `name`): voxel centres `xyz` (3 floats each) with `labels` (1 ground, 0 obstacle) as coloured
+/// boxes of edge `resolution`, the path as a blue line with a box at each sensor position, axes at
+/// its start. The scene is serialised straight into the compressor: no copy of it in memory.
+void writeMapScene(const std::string& file, const std::string& name, const std::vector<float>& xyz,
+                   const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path);
 
 }  // namespace gseg::map::detail

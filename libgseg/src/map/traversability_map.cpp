@@ -263,7 +263,7 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_, pictureTitle()));
     const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
     writeFileChecked(files.temporary(4), mapPlyBytes(v, res));
-    writeFileChecked(files.temporary(5), detail::mapSceneBytes(v.xyz, v.labels, res, path_));
+    detail::writeMapScene(files.temporary(5), files.paths()[5], v.xyz, v.labels, res, path_);
     files.commit();
     return files.paths();
 }
