@@ -311,6 +311,33 @@ TEST(RegionGrowing, GateMeasuresStepsAlongTheGroundPlanesSoSlopesStayConnected) 
     EXPECT_EQ(parents, (std::vector<std::int32_t>{-1, 0, 1, -2, -2, -2}));
 }
 
+TEST(RegionGrowing, FewSeedsNearTheRobotReachBeyondTheBlindZone) {
+    // A wheel of a parked car 3 m out is the only candidate in the seed disc (7.7 m) at ground
+    // level; the ground starts 9 m out, beyond the neighbour radius from the wheel.
+    std::vector<Eigen::Vector3f> c = {{3.f, 2.f, -1.6f}};
+    for (int i = 0; i < 5; ++i) c.emplace_back(9.f + 1.5f * float(i), 0.f, -1.7f);
+    c.emplace_back(10.f, 1.f, 0.f);  // a car roof, 1.7 m up: never a seed
+    gseg::ExpansionSettings s;
+    s.seed = {0, 0, -1.7f};
+    s.seedRadius = 7.7;
+    s.radius = 5;
+    s.heightGate = 0.1;
+    s.seedGate = 0.3;
+    auto acceptAll = [](std::uint32_t, const std::vector<std::uint32_t>&) { return true; };
+    EXPECT_EQ(gseg::expandRegion(c, s, acceptAll), (std::vector<std::uint8_t>{2, 0, 0, 0, 0, 0, 0}))
+        << "the seed disc alone: the wheel, and nothing within 5 m of it";
+    s.fewSeeds = 4;
+    std::vector<std::int32_t> parents;
+    EXPECT_EQ(gseg::expandRegion(c, s, acceptAll, &parents), (std::vector<std::uint8_t>{2, 2, 2, 2, 2, 2, 0}));
+    // The second disc reaches 7.7 m beyond the wheel (3.6 m out): the ground up to 11.3 m seeds.
+    EXPECT_EQ(parents[1], -1);
+    EXPECT_EQ(parents[2], -1);
+    EXPECT_GE(parents[5], 0) << "reached by the expansion, not seeded";
+    // Enough seeds in the disc: no second disc.
+    s.fewSeeds = 1;
+    EXPECT_EQ(gseg::expandRegion(c, s, acceptAll), (std::vector<std::uint8_t>{2, 0, 0, 0, 0, 0, 0}));
+}
+
 // --- sensor height (distToGround: auto) ---------------------------------------------------------
 
 TEST(SensorHeight, EstimatedFromTheLowestDenseSurface) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 using gseg::test::Lidar;
 using gseg::test::Scene;
@@ -176,6 +177,35 @@ TEST(Scenes, AWrongFixedSensorHeightIsSaid) {
     // No estimate (a few points, no floor to vote): nothing to say.
     const std::vector<float> few = {5, 0, -1.7f, 6, 1, -1.7f, 7, -1, -1.7f};
     EXPECT_EQ(gseg::checkDistToGround(gseg::PointCloudView(few.data(), 3), 1.723, 0.3), "");
+}
+
+// Sensors that do not see the ground near the robot: the seed disc (robotRadius +
+// centroidSearchRadius: 7.7 m, 10.7 m with the VLP-16's 8 m) holds no ground. A VLP-16 3 m up
+// first meets the ground 11.2 m out; a forward-looking solid-state sensor 1.73 m up 7.8 m out,
+// with only the wheels of a car beside it nearer. Both found no ground at all before the seed reached beyond the blind zone.
+TEST(Scenes, GroundBeyondTheSensorsBlindZone) {
+    struct Case {
+        const char* name;
+        Lidar lidar;
+        double height, radius, minPrecision, minRecall;
+    };
+    const Case cases[] = {{"VLP-16 at 3 m", Lidar::vlp16(), 3.0, 8.0, 0.97, 0.55},
+                          {"solid-state at 1.73 m", Lidar::solidState(), 1.73, 5.0, 0.97, 0.8},
+                          {"solid-state at 2.5 m", Lidar::solidState(), 2.5, 5.0, 0.99, 0.8}};
+    for (const Case& c : cases) {
+        Scene s;
+        s.addFlatGround(c.height);
+        s.addCar(5, 3, -c.height), s.addCar(-12, -4, -c.height), s.addCar(6, -6, -c.height);
+        s.addBox(-3, 8, -c.height, 12, 8.5, -c.height + 2.0);  // a wall on the left
+        const SimScan scan = simulate(s, c.lidar);
+        float nearestGround = 1e9f;
+        for (std::size_t i = 0; i < scan.size(); ++i)
+            if (scan.truth[i] == Truth::Ground) nearestGround = std::min(nearestGround, std::hypot(scan.xyz[3 * i], scan.xyz[3 * i + 1]));
+        EXPECT_GT(nearestGround, 2.7 + c.radius) << c.name << ": the scene must hide the ground from the seed disc";
+        const Outcome o = run(scan, c.height, c.radius);
+        EXPECT_GE(o.all.precision, c.minPrecision) << c.name;
+        EXPECT_GE(o.all.recall, c.minRecall) << c.name;
+    }
 }
 
 TEST(Scenes, Vlp16) {

@@ -230,6 +230,7 @@ private:
         es.normals = &ws.normals;
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
+        es.fewSeeds = 4;  // real scans give dozens (KITTI: 85-169); one or two may be a car's wheels
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
             const std::size_t c = ws.candidateCell[cand];
             CellState& s = ws.cells[c];

@@ -63,18 +63,35 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         return step <= s.heightGate;
     };
 
-    // Seed: the candidates near the robot within the height gate of the synthetic ground point. If
-    // there are none (the robot stands on a slope and its blind spot hides the ground at its own
-    // height), the gate widens with horizontal distance at the slope limit.
+    // Seed: the candidates near the robot within the height gate of the synthetic ground point.
+    // Where the sensor sees (almost) no ground near the robot (a forward-looking sensor's or a high
+    // mount's blind zone reaches beyond seedRadius: a VLP-16 2.5 m up first meets the ground 9.3 m
+    // out, and a wheel of a car beside it may be all that is left), a second disc reaching
+    // seedRadius beyond the nearest candidate adds its candidates under the same gate. Only if
+    // neither disc holds a candidate at the robot's ground level (the robot stands on a slope and
+    // its blind spot hides the ground at its own height) does the gate widen with horizontal
+    // distance at the slope limit, again first in the near disc.
     std::deque<std::uint32_t> queue;
-    search(s.seed, s.seedRadius, found);
+    double beyondBlindZone = -1;  // the wider disc's radius, once known
     for (const double slope : {0.0, s.seedSlope}) {
-        for (std::uint32_t j : found) {
-            const float horizontal = (centroids[j] - s.seed).head<2>().norm();
-            if (std::abs(centroids[j].z() - s.seed.z()) <= s.seedGate + slope * horizontal) {
-                state[j] = 1;
-                queue.push_back(j);
-                if (parents) (*parents)[j] = -1;
+        for (int disc = 0; disc < 2; ++disc) {
+            if (disc == 1 && (s.fewSeeds == 0 || queue.size() >= s.fewSeeds)) break;
+            if (disc == 1 && beyondBlindZone < 0) {
+                std::uint32_t nearest = 0;
+                float distanceSq = 0;
+                beyondBlindZone = tree.knnSearch(s.seed.data(), 1, &nearest, &distanceSq) == 1
+                                      ? std::sqrt(double(distanceSq)) + s.seedRadius
+                                      : s.seedRadius;
+            }
+            if (disc == 1 && beyondBlindZone <= s.seedRadius) break;
+            search(s.seed, disc == 0 ? s.seedRadius : beyondBlindZone, found);
+            for (std::uint32_t j : found) {
+                const float horizontal = (centroids[j] - s.seed).head<2>().norm();
+                if (state[j] == 0 && std::abs(centroids[j].z() - s.seed.z()) <= s.seedGate + slope * horizontal) {
+                    state[j] = 1;
+                    queue.push_back(j);
+                    if (parents) (*parents)[j] = -1;
+                }
             }
         }
         if (!queue.empty()) break;

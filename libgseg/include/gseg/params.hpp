@@ -41,7 +41,7 @@ struct Params {
     std::uint64_t ransacSeed = 42;         ///< [-] seed of the per-cell random generators (mixed with the cell index: results never depend on call order)
 
     // --- ground region expansion ------------------------------------------------------------------
-    double seedHeightTolerance = 0.3;   ///< [m] expansion starts from the candidates within robotRadius + centroidSearchRadius whose ground lies within this of -distToGround (both phases; if none does, the tolerance widens at slopeThresholdDegrees with the distance: the robot stands on a slope)
+    double seedHeightTolerance = 0.3;   ///< [m] expansion starts from the candidates within robotRadius + centroidSearchRadius whose ground lies within this of -distToGround (both phases; if fewer than 4 do, also those within robotRadius + centroidSearchRadius beyond the nearest candidate: a sensor whose blind zone hides the ground near the robot; if none does, the tolerance widens at slopeThresholdDegrees with the distance: the robot stands on a slope)
     double centroidSearchRadius = 5.0;  ///< [m] radius of the KD-tree search between ground-candidate centroids
     double heightGate = 0.1;            ///< [m] Phase II (tau): a neighbour is taken only if the step between the two ground centroids, measured along both cells' fitted ground planes (height for line and small cells), is at most this
     bool recoverNearGround = true;      ///< Phase I: points of non-ground cells that lie on the ground plane of a ground cell beside them (or one level below) go on to Phase II

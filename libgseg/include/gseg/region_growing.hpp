@@ -3,6 +3,7 @@
 /// KD-tree ground region expansion over tentative-ground cell centroids (paper step 4).
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -21,6 +22,10 @@ struct ExpansionSettings {
     /// is measured along both cells' normals (the larger of the two), so ground that slopes stays
     /// connected and a step up onto another surface does not; otherwise it is |dz|.
     const std::vector<Eigen::Vector3f>* normals = nullptr;
+    /// If fewer than this many candidates in the seed disc pass the seed gate, a second disc
+    /// reaching seedRadius beyond the nearest candidate adds those of its candidates that pass (a
+    /// sensor whose blind zone hides the ground near the robot); 0: the seed disc only.
+    std::size_t fewSeeds = 0;
     double seedSlope = 0.0;  ///< [-] if no candidate passes the seed's gate, it widens by this much per metre of horizontal distance (the robot stands on a slope)
 };
 
