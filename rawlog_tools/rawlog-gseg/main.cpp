@@ -55,8 +55,9 @@ class Reporter {
 public:
     /// `name`: the input, shown in the lines of a batch ("" for one input); the skipped scans'
     /// lines are also kept in `skipped` (for rank 0 to print those of other ranks).
-    Reporter(const std::string& name, std::vector<std::string>& skipped, gseg::Progress& progress)
-        : name_(name.empty() ? "" : name + ": "), skipped_(skipped), progress_(progress) {}
+    Reporter(const std::string& name, std::vector<std::string>& skipped, std::vector<std::string>& warnings,
+             gseg::Progress& progress)
+        : name_(name.empty() ? "" : name + ": "), skipped_(skipped), warnings_(warnings), progress_(progress) {}
 
     void operator()(const gseg::mrpt::ScanReport& r) {
         if (!r.skipped.empty()) {
@@ -68,12 +69,8 @@ public:
             return;
         }
         ++scans_;
-        if (!r.heightWarning.empty()) {  // a warning, not an error: the run goes on
-            const std::string line = "rawlog-gseg: " + name_ + "entry " + std::to_string(r.entry) + " ('" + r.label +
-                                     "'): " + r.heightWarning;
-            if (gseg::tools::progressOut()) progress_.message(line);
-            else gseg::tools::note("%s\n", line.c_str());
-        }
+        if (!r.heightWarning.empty())  // a warning, not an error: said with the input's summary
+            warnings_.push_back(name_ + "entry " + std::to_string(r.entry) + " ('" + r.label + "'): " + r.heightWarning);
         const double ground = 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points));
         gseg::tools::detail("rawlog-gseg: %sentry %zu ('%s'): %zu points, %.1f %% ground%s\n", name_.c_str(), r.entry,
                             r.label.c_str(), r.points, ground,
@@ -86,6 +83,7 @@ public:
 private:
     std::string name_;
     std::vector<std::string>& skipped_;
+    std::vector<std::string>& warnings_;
     gseg::Progress& progress_;
     std::size_t scans_ = 0;
 };
@@ -95,6 +93,7 @@ struct FileResult {
     int code = kDone;                  ///< kDone, kScansSkipped, or kBadInput (nothing written)
     std::string message;               ///< the summary, or why it failed
     std::vector<std::string> skipped;  ///< the lines naming the scans passed through unsegmented
+    std::vector<std::string> warnings; ///< remarks that are no error (a distToGround the scan contradicts)
 };
 
 /// Segments the rawlog `in` into `outPath`: what rawlog-gseg does to one input, whole. `name`: the
@@ -111,7 +110,7 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
     FileResult result;
     gseg::mrpt::RawlogWriter writer(outPath);
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name), "scans");
-    Reporter reporter(name, result.skipped, progress);
+    Reporter reporter(name, result.skipped, result.warnings, progress);
     gseg::mrpt::RawlogSegmenter segmenter(
         config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); },
         [&](const gseg::mrpt::ScanReport& r) { reporter(r); });
@@ -184,6 +183,7 @@ int report(const std::vector<std::pair<std::string, std::string>>& jobs, const s
         const std::string what = batch ? in + ": " : "";
         if (owner[i] != 0)  // errors: printed whatever the verbosity
             for (const std::string& line : results[i].skipped) std::fprintf(stderr, "rawlog-gseg: %s\n", line.c_str());
+        for (const std::string& line : results[i].warnings) gseg::tools::note("rawlog-gseg: %s\n", line.c_str());
         if (results[i].code == kBadInput) {
             const bool named = results[i].message.rfind(in, 0) == 0;  // reader errors start with the file
             std::fprintf(stderr, "%srawlog-gseg: %s%s\n", !batch && ::isatty(::fileno(stderr)) ? "\n" : "",
@@ -248,6 +248,8 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
             gseg::tools::ByteWriter out;
             out.u64(std::uint64_t(r.code)).str(r.message).u64(r.skipped.size());
             for (const std::string& line : r.skipped) out.str(line);
+            out.u64(r.warnings.size());
+            for (const std::string& line : r.warnings) out.str(line);
             done.push_back(out.bytes());
         }
         return done;
@@ -260,6 +262,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
         FileResult& r = results.emplace_back();
         r.code = int(in.u64()), r.message = in.str();
         for (std::uint64_t n = in.u64(); n > 0; --n) r.skipped.push_back(in.str());
+        for (std::uint64_t n = in.u64(); n > 0; --n) r.warnings.push_back(in.str());
     }
     return ranks.root() ? report(jobs, results, batch, owner, ranks.size()) : kDone;
 }
