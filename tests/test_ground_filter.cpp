@@ -28,7 +28,6 @@
 #include <limits>
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -637,14 +636,9 @@ TEST(RawlogGsegHostile, InterruptedRunLeavesNoTemporary) {
     const fs::path fifo = dir / "in.rawlog";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
     ::alarm(120);  // a tool that died before opening its input would leave open() below blocked
-    const std::string tool = gseg::test::tool("rawlog-gseg"), out = (dir / "out.rawlog").string();
-    const char* argv[] = {tool.c_str(), "-i", fifo.c_str(), "-o", out.c_str(), nullptr};
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT, 0644);
-    pid_t pid = 0;
-    ASSERT_EQ(::posix_spawn(&pid, tool.c_str(), &actions, nullptr, const_cast<char**>(argv), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
+    const pid_t pid = gseg::test::spawnTool("rawlog-gseg", {"-i", fifo.string(), "-o", (dir / "out.rawlog").string()},
+                                            (dir / "stderr.txt").string());
+    ASSERT_GT(pid, 0);
     const int fd = ::open(fifo.c_str(), O_WRONLY);  // returns once the tool opened its input
     ASSERT_GE(fd, 0);
     ASSERT_EQ(::write(fd, plain.data(), 300000), 300000);  // 300 kB: most of it consumed by the tool

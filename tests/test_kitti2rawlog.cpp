@@ -15,10 +15,8 @@
 
 #include <csignal>
 #include <cstdlib>
-#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
-#include <spawn.h>
 #include <sys/inotify.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -337,15 +335,9 @@ TEST(Kitti2Rawlog, InterruptedRunLeavesNoTemporary) {
     ASSERT_GE(watch, 0);
     ASSERT_GE(::inotify_add_watch(watch, dir.c_str(), IN_CREATE), 0);
     ::alarm(120);  // a tool that never made its temporary would leave read() below blocked
-    const std::string tool = gseg::test::tool("kitti2rawlog"), seq = (dir / "seq").string(),
-                      out = (dir / "out.rawlog").string();
-    const char* argv[] = {tool.c_str(), "-i", seq.c_str(), "-o", out.c_str(), "-q", nullptr};
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT, 0644);
-    pid_t pid = 0;
-    ASSERT_EQ(::posix_spawn(&pid, tool.c_str(), &actions, nullptr, const_cast<char**>(argv), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
+    const pid_t pid = gseg::test::spawnTool("kitti2rawlog", {"-i", (dir / "seq").string(), "-o", (dir / "out.rawlog").string(), "-q"},
+                                            (dir / "stderr.txt").string());
+    ASSERT_GT(pid, 0);
     alignas(inotify_event) char events[4096];
     std::string created;
     while (created.find("out.rawlog") == std::string::npos) {  // the first file made in dir

@@ -71,20 +71,17 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     // neither disc holds a candidate at the robot's ground level (the robot stands on a slope and
     // its blind spot hides the ground at its own height) does the gate widen with horizontal
     // distance at the slope limit, again first in the near disc.
+    std::vector<double> discs = {s.seedRadius};  // radii around the seed, searched in this order
+    if (s.fewSeeds > 0) {
+        std::uint32_t nearest = 0;
+        float distanceSq = 0;
+        if (tree.knnSearch(s.seed.data(), 1, &nearest, &distanceSq) == 1 && distanceSq > 0)
+            discs.push_back(std::sqrt(double(distanceSq)) + s.seedRadius);
+    }
     std::deque<std::uint32_t> queue;
-    double beyondBlindZone = -1;  // the wider disc's radius, once known
     for (const double slope : {0.0, s.seedSlope}) {
-        for (int disc = 0; disc < 2; ++disc) {
-            if (disc == 1 && (s.fewSeeds == 0 || queue.size() >= s.fewSeeds)) break;
-            if (disc == 1 && beyondBlindZone < 0) {
-                std::uint32_t nearest = 0;
-                float distanceSq = 0;
-                beyondBlindZone = tree.knnSearch(s.seed.data(), 1, &nearest, &distanceSq) == 1
-                                      ? std::sqrt(double(distanceSq)) + s.seedRadius
-                                      : s.seedRadius;
-            }
-            if (disc == 1 && beyondBlindZone <= s.seedRadius) break;
-            search(s.seed, disc == 0 ? s.seedRadius : beyondBlindZone, found);
+        for (std::size_t d = 0; d < discs.size() && (d == 0 || queue.size() < s.fewSeeds); ++d) {
+            search(s.seed, discs[d], found);
             for (std::uint32_t j : found) {
                 const float horizontal = (centroids[j] - s.seed).head<2>().norm();
                 if (state[j] == 0 && std::abs(centroids[j].z() - s.seed.z()) <= s.seedGate + slope * horizontal) {

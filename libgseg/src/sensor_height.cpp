@@ -147,7 +147,7 @@ std::string checkDistToGround(const PointCloudView& cloud, double distToGround, 
                               const SensorHeightOptions& options) {
     const SensorHeightEstimate e = estimateSensorHeight(cloud, options);
     if (!e.valid) return "";
-    const double under = e.height / std::max(0.1, e.normal.z());  // straight under the sensor
+    const double under = e.heightUnderSensor();
     if (std::abs(under - distToGround) <= tolerance) return "";
     char line[320];
     std::snprintf(line, sizeof line,

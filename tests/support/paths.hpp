@@ -3,6 +3,9 @@
 /// Where tests find the shared real data and the built tools.
 
 #include <string>
+#include <vector>
+
+#include <sys/types.h>
 
 namespace gseg::test {
 
@@ -35,5 +38,10 @@ struct CommandResult {
     std::string output;
 };
 CommandResult runCommand(const std::string& shellCommand);
+
+/// Starts the built tool `name` with `args` without waiting for it (no shell), its stderr into
+/// `stderrPath`; its pid, or -1 if it could not be started. For tests that act on a running tool
+/// (signals, pipes); the caller waits for it with waitpid().
+pid_t spawnTool(const std::string& name, const std::vector<std::string>& args, const std::string& stderrPath);
 
 }  // namespace gseg::test

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <string>
 
 namespace gseg {
@@ -36,6 +37,8 @@ struct SensorHeightEstimate {
     int inliers = 0;        ///< votes within planeTolerance of the plane
     double spread = 0;      ///< [m] median absolute distance of the supporting votes from the plane
     std::string reason;     ///< why there is no estimate (empty when valid)
+    /// [m] height of the plane straight under the sensor (along the cloud's z axis)
+    double heightUnderSensor() const { return height / std::max(0.1, normal.z()); }
 };
 
 /// The ground plane around the sensor: in each column (the sensor at the origin) the lowest dense

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -262,7 +263,7 @@ std::string cannotWriteIn(const std::string& folder) {
 void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules) {
     namespace fs = std::filesystem;
     checkOutputsAreNotInputs(inputs, outputs);
-    std::vector<std::string> writable;  // folders tried already (a run may write thousands of files into one)
+    std::set<std::string> writable;  // folders tried already (a run may write thousands of files into many)
     for (const NamedPath& out : outputs) {
         if (out.path.empty()) continue;
         const std::string what = out.argument + " " + out.path;
@@ -273,7 +274,7 @@ void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedP
         }
         fs::path folder = fs::path(out.path).parent_path();
         if (folder.empty()) folder = ".";
-        if (std::find(writable.begin(), writable.end(), folder.string()) != writable.end()) continue;
+        if (writable.count(folder.string())) continue;
         const std::string given = folder.string();
         while (rules.makeFolders && !fs::exists(folder, ec) && folder.parent_path() != folder)  // the one to make it in
             folder = folder.parent_path().empty() ? fs::path(".") : folder.parent_path();
@@ -283,7 +284,7 @@ void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedP
             throw std::invalid_argument(what + ": " + folder.string() + " is not a folder");
         if (const std::string why = cannotWriteIn(folder.string()); !why.empty())
             throw std::invalid_argument(what + ": cannot write in the folder " + folder.string() + " (" + why + ")");
-        writable.push_back(given);
+        writable.insert(given);
     }
 }
 
