@@ -4,6 +4,7 @@
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
 #include <support/child.hpp>
+#include <support/paths.hpp>
 
 #include <gtest/gtest.h>
 
@@ -13,6 +14,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -210,6 +214,178 @@ TEST(AtomicFile, InheritedIgnoredSigintStaysIgnored) {
     EXPECT_TRUE(r.exited);
     EXPECT_EQ(r.code, 3);
     EXPECT_TRUE(fs::exists(dir / "out"));
+}
+
+// --- Where outputs land: links, pipes, other writers, dead runs (#18) ---------------------------
+
+namespace {
+
+std::string bytesOf(const fs::path& p) { return gseg::test::readText(p.string()); }
+
+}  // namespace
+
+TEST(AtomicFile, ASymbolicLinkIsWrittenThroughNotReplaced) {
+    const fs::path dir = freshDir("symlink");
+    std::ofstream(dir / "target.rawlog") << "old";
+    fs::create_symlink("target.rawlog", dir / "sym.rawlog");  // relative, as `ln -s` makes them
+    gseg::io::writeFileAtomic((dir / "sym.rawlog").string(), "new", 3);
+    EXPECT_TRUE(fs::is_symlink(dir / "sym.rawlog"));
+    EXPECT_EQ(bytesOf(dir / "target.rawlog"), "new");
+    // A chain of links, and a dangling one: its destination is created, the links stay.
+    fs::create_symlink(dir / "sym.rawlog", dir / "chain");
+    gseg::io::writeFileAtomic((dir / "chain").string(), "newer", 5);
+    EXPECT_EQ(bytesOf(dir / "target.rawlog"), "newer");
+    fs::create_symlink("made-by-link", dir / "dangling");
+    gseg::io::writeFileAtomic((dir / "dangling").string(), "made", 4);
+    EXPECT_TRUE(fs::is_symlink(dir / "dangling"));
+    EXPECT_EQ(bytesOf(dir / "made-by-link"), "made");
+    // A loop is refused with its name, never written.
+    fs::create_symlink("loop-b", dir / "loop-a");
+    fs::create_symlink("loop-a", dir / "loop-b");
+    try {
+        gseg::io::writeFileAtomic((dir / "loop-a").string(), "x", 1);
+        ADD_FAILURE() << "a link loop was written";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("loop of symbolic links"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(gseg::io::checkOutputs({}, {{"-o", (dir / "loop-a").string()}}, {true, false}), std::invalid_argument);
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(AtomicFile, APipeOrTerminalIsStreamedInto) {
+    const fs::path dir = freshDir("fifo");
+    const std::string fifo = (dir / "fifo").string();
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    // An existing FIFO (or /dev/stdout) is no file to protect: no -w needed.
+    EXPECT_NO_THROW(gseg::io::checkOutputs({}, {{"-o", fifo}, {"--log", "/dev/stdout"}}, {false, false}));
+    std::string received;
+    std::thread reader([&] {
+        std::ifstream in(fifo, std::ios::binary);
+        received.assign(std::istreambuf_iterator<char>(in), {});
+    });
+    {
+        gseg::io::AtomicFile f(fifo);
+        EXPECT_TRUE(f.streamed());
+        f.write("streamed ", 9);
+        f.write([](std::ostream& out) { out << "bytes"; });
+        f.commit();
+    }
+    reader.join();
+    EXPECT_EQ(received, "streamed bytes");
+    struct stat st {};
+    ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+    // A link to a process's descriptor (what /dev/stdout is) is written into, whatever it leads to.
+    const int fds[2] = {0, 0};
+    ASSERT_EQ(::pipe(const_cast<int*>(fds)), 0);
+    fs::create_symlink("/proc/self/fd/" + std::to_string(fds[1]), dir / "stdout-link");
+    gseg::io::writeFileAtomic((dir / "stdout-link").string(), "through", 7);
+    ::close(fds[1]);
+    char buf[16] = {0};
+    EXPECT_EQ(::read(fds[0], buf, sizeof buf), 7);
+    EXPECT_STREQ(buf, "through");
+    ::close(fds[0]);
+    EXPECT_TRUE(fs::is_symlink(dir / "stdout-link"));
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(AtomicFile, ASecondWriterOfANewFileFailsInsteadOfOverwriting) {
+    const fs::path dir = freshDir("exclusive");
+    const std::string target = (dir / "same.rawlog").string();
+    gseg::io::AtomicFile first(target), second(target);  // both started before either finished
+    first.write("first", 5);
+    second.write("second", 6);
+    first.commit();
+    try {
+        second.commit();
+        ADD_FAILURE() << "the second writer replaced the first's file";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("was created by another program while this run worked"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(bytesOf(target), "first");
+    // Checked without -w, made by someone else afterwards: refused when the writer starts.
+    const std::string later = (dir / "later.csv").string();
+    gseg::io::checkOutputs({}, {{"--report", later}}, {false, false});
+    std::ofstream(later) << "another run";
+    EXPECT_THROW(gseg::io::AtomicFile{later}, std::runtime_error);
+    EXPECT_EQ(bytesOf(later), "another run");
+    // An existing file a writer was allowed to replace (-w) is replaced.
+    gseg::io::checkOutputs({}, {{"-o", target}}, {true, false});
+    gseg::io::writeFileAtomic(target, "replaced", 8);
+    EXPECT_EQ(bytesOf(target), "replaced");
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(AtomicFile, TemporariesOfDeadRunsOfThisOutputAreRemovedByTheNextRun) {
+    const fs::path dir = freshDir("stale");
+    const std::string target = (dir / "map_ground.bt").string();
+    // A temporary named as this host's run `pid` would name it.
+    auto sideFileOf = [&](const std::string& output, pid_t pid, const char* kind) {
+        std::string name = fs::path(gseg::io::sideFilePath(output, kind)).filename().string();
+        const std::string mine = "-" + std::to_string(::getpid()) + "-";
+        name.replace(name.rfind(mine), mine.size(), "-" + std::to_string(pid) + "-");
+        std::ofstream(dir / name) << "left by " << pid;
+        return name;
+    };
+    const pid_t dead = fork();
+    if (dead == 0) _exit(0);
+    ASSERT_GT(dead, 0);
+    int status = 0;
+    ::waitpid(dead, &status, 0);  // reaped: no process has this pid now
+    const std::string deadTmp = sideFileOf(target, dead, "tmp"), deadBak = sideFileOf(target, dead, "bak");
+    const std::string liveTmp = sideFileOf(target, ::getppid(), "tmp");  // a run still going: kept
+    const std::string otherTmp = sideFileOf((dir / "other.bt").string(), dead, "tmp");  // another output: kept
+    std::ofstream(dir / ".map_ground.bt.gseg-otherhost-1-0.tmp") << "another host's";  // cannot be proved dead: kept
+    gseg::io::writeFileAtomic(target, "map", 3);
+    EXPECT_FALSE(fs::exists(dir / deadTmp));
+    EXPECT_FALSE(fs::exists(dir / deadBak));
+    EXPECT_TRUE(fs::exists(dir / liveTmp));
+    EXPECT_TRUE(fs::exists(dir / otherTmp));
+    EXPECT_TRUE(fs::exists(dir / ".map_ground.bt.gseg-otherhost-1-0.tmp"));
+    EXPECT_EQ(bytesOf(target), "map");
+}
+
+TEST(AtomicFileSet, AllInPlaceOrNoneAndASignalWaitsForTheRenames) {
+    const fs::path dir = freshDir("set");
+    const std::vector<std::string> paths = {(dir / "a").string(), (dir / "b").string(), (dir / "c").string()};
+    for (const auto& p : paths) std::ofstream(p) << "old";
+    // A signal raised while the files are put in place takes effect once all are: all new.
+    const auto r = gseg::test::runInChild([&] {
+        gseg::io::installTemporaryCleanup("test");
+        gseg::io::AtomicFileSet files(paths);
+        for (std::size_t i = 0; i < files.size(); ++i) files[i].write("new", 3);
+        {
+            gseg::io::SignalDeferral hold;  // as commit() holds it, with the signal inside
+            ::raise(SIGTERM);
+            files.commit();
+        }
+        return 5;  // not reached: the held signal ends the process here
+    });
+    EXPECT_FALSE(r.exited);
+    EXPECT_EQ(r.signal, SIGTERM);
+    for (const auto& p : paths) EXPECT_EQ(bytesOf(p), "new") << p;
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp") + gseg::test::entriesContaining(dir.string(), ".bak"), "");
+    // A set with a member that cannot be put in place changes nothing.
+    {
+        gseg::io::AtomicFileSet files(paths);
+        for (std::size_t i = 0; i < files.size(); ++i) files[i].write("newer", 5);
+        fs::remove(files[1].temporaryPath());
+        EXPECT_THROW(files.commit(), std::runtime_error);
+    }
+    for (const auto& p : paths) EXPECT_EQ(bytesOf(p), "new") << p;
+    // A member whose file another writer made meanwhile: none of the set is replaced.
+    const std::vector<std::string> fresh = {(dir / "x").string(), (dir / "a").string()};
+    {
+        gseg::io::AtomicFileSet files(fresh);
+        files[0].write("set", 3);
+        files[1].write("set", 3);
+        std::ofstream(fresh[0]) << "other writer";
+        EXPECT_THROW(files.commit(), std::runtime_error);
+    }
+    EXPECT_EQ(bytesOf(fresh[0]), "other writer");
+    EXPECT_EQ(bytesOf(fresh[1]), "new");
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp") + gseg::test::entriesContaining(dir.string(), ".bak"), "");
 }
 
 // --- Outputs that are inputs ------------------------------------------------------------------------

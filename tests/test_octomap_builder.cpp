@@ -1,7 +1,7 @@
 // TraversabilityMap on a simulated drive with exact poses and exact labels: a flat road that
 // turns into a 10 % ramp, a box, a wall, and a car that leaves after the first scans.
 #include <gseg/io/ply.hpp>
-#include <gseg/map/output_files.hpp>
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/map/world_scan.hpp>
@@ -561,9 +561,9 @@ TEST(OctomapBuilder, FailedRenameLeavesThePreviousOutputsAsTheyWere) {
     const std::vector<std::string> paths = {dir + "/a", dir + "/b", dir + "/c"};
     for (const auto& p : paths) std::ofstream(p) << "previous " << p;
     {
-        gseg::map::AtomicFiles files(paths);
-        for (std::size_t i = 0; i < 3; ++i) gseg::map::writeFileChecked(files.temporary(i), "new");
-        std::filesystem::remove(files.temporary(2));  // the third rename fails
+        gseg::io::AtomicFileSet files(paths);
+        for (std::size_t i = 0; i < 3; ++i) files[i].write("new", 3);
+        std::filesystem::remove(files[2].temporaryPath());  // the third rename fails
         EXPECT_THROW(files.commit(), std::runtime_error);
     }
     for (const auto& p : paths) EXPECT_EQ(fileBytes(p), "previous " + p);

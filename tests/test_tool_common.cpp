@@ -19,6 +19,10 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <csignal>
+#include <sys/inotify.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
@@ -331,6 +335,210 @@ TEST(EveryTool, AnUnwritableOutputFolderIsRefusedBeforeAnyWork) {
         EXPECT_NE(r.output.find("cannot write in the folder /proc"), std::string::npos) << t.command << ": " << r.output;
         EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one line, no work: " << r.output;
     }
+}
+
+TEST(EveryTool, AnOutputThatIsASymbolicLinkIsWrittenThroughNotReplaced) {
+    // #18 point 1: with -w the temporary was renamed onto the link (the link gone, its target unchanged).
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "symlink");
+    int k = 0;
+    for (const ToolCase& t : toolCases()) {
+        if (t.output == "-") continue;
+        const std::string out = (dir / ("o" + std::to_string(k++))).string(), file = out + t.output;
+        const std::string target = out + "_target";
+        std::ofstream(target) << "a previous run";
+        fs::create_symlink(fs::path(target).filename(), file);
+        const auto r = runCommand(t.command + " -w " + replaceOut(t.args, out) + " 2>&1");
+        EXPECT_EQ(r.status, 0) << t.command << ": " << r.output;
+        EXPECT_TRUE(fs::is_symlink(file)) << t.command << ": the link was replaced";
+        EXPECT_NE(gseg::test::readText(target), "a previous run") << t.command << ": the link's target was not written";
+        EXPECT_GT(fs::file_size(target), 0u) << t.command;
+    }
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(EveryTool, APipeBehindALinkGetsTheOutputAndTheLinkStays) {
+    // #18 point 1: `-o /dev/stdout | cat > x` left x empty and replaced /dev/stdout with a file. The
+    // test uses a link of its own to the same place (/proc/self/fd/1), not the system's /dev/stdout.
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "stdout");
+    fs::create_symlink("/proc/self/fd/1", dir / "stdout");
+    for (const ToolCase& t : toolCases()) {
+        if (t.output != "") continue;  // the tools with one output file: rawlog-gseg, kitti2rawlog, gseg segment
+        const std::string got = (dir / "got").string();
+        const std::string code = (dir / "code").string();
+        const auto r = runCommand("(" + t.command + " -q " + replaceOut(t.args, (dir / "stdout").string()) + "; echo $? > " +
+                                  code + ") | cat > " + got);
+        EXPECT_EQ(gseg::test::readText(code), "0\n") << t.command << ": " << r.output;
+        EXPECT_GT(fs::file_size(got), 1000u) << t.command << ": nothing came through the pipe";
+        EXPECT_TRUE(fs::is_symlink(dir / "stdout")) << t.command;
+        fs::remove(got);
+    }
+    // What came through is a whole rawlog: rawlog-gseg reads it back from a pipe.
+    const auto r = runCommand("bash -c '" + gseg::test::tool("rawlog-gseg") + " -q -i " + kVlp16 + " -c " + GSEG_SOURCE_DIR +
+                              "/config/vlp16.yaml -o " + (dir / "stdout").string() + " | " + gseg::test::tool("rawlog-gseg") +
+                              " -i /dev/stdin -o " + (dir / "again.rawlog").string() + "' 2>&1");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("already split"), std::string::npos) << r.output;
+}
+
+TEST(EveryTool, AnEmptyOutputNameIsRefusedBeforeAnyWork) {
+    // #18 point 10: `-o ""` did all the work, then failed at the rename.
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    for (const ToolCase& t : toolCases()) {
+        if (t.output == "-") continue;
+        const auto r = runCommand(t.command + " " + replaceOut(t.args, "''") + " 2>&1");
+        EXPECT_EQ(r.status, 2) << t.command << ": " << r.output;
+        EXPECT_NE(r.output.find(" is empty"), std::string::npos) << t.command << ": " << r.output;
+        EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one line, no work: " << r.output;
+    }
+}
+
+TEST(EveryTool, ASignalWhileOutputsArePutInPlaceLeavesAllNewNoMix) {
+    // #18 point 4: interrupted at its third rename, rawlog-octomap left three new files, three old
+    // ones and six hidden backups. strace delivers SIGTERM right after the N-th rename.
+    if (runCommand("command -v strace").status != 0) GTEST_SKIP() << "strace is not installed (apt-get install strace)";
+    if (runCommand("strace -o /dev/null true").status != 0) GTEST_SKIP() << "strace cannot trace here (ptrace refused)";
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "renames");
+    const Fixture& f = fixture();
+    const std::string cfg = std::string(GSEG_SOURCE_DIR) + "/config/";
+    struct Case {
+        std::string command, args;
+        std::vector<std::string> files;  ///< OUT-relative
+        std::vector<std::size_t> renames;  ///< after which rename SIGTERM comes (1-based)
+    };
+    const std::vector<Case> cases = {
+        {gseg::test::tool("gseg") + " segment", "-i " + f.bin.string() + " --labels-out OUT.labels --ply-out OUT.ply --png-out OUT.png --scene-out OUT.3Dscene",
+         {".labels", ".ply", ".png", ".3Dscene"}, {2, 4}},
+        {gseg::test::tool("gseg") + " eval", "--scan " + f.bin.string() + " --labels " + f.label.string() + " --threads 1 --report OUT",
+         {"_frames.csv", "_sequences.csv", "_table.md", "_range.png"}, {3}},
+        {gseg::test::tool("rawlog-octomap"),
+         "-i " + kVlp16 + " -o OUT --poses " + f.tum.string() + " --pose-tolerance 1e12 -c " + cfg + "vlp16.yaml --threads 1",
+         {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply", "_traversability.3Dscene"},
+         {1, 2, 3, 4, 5, 6}},
+        {gseg::test::tool("kitti2rawlog"), "-i " + f.sequence.string() + " --poses " + (dir / "kitti_poses.txt").string() +
+         " -o OUT.rawlog --simplemap OUT.simplemap", {".rawlog", ".simplemap"}, {1}},
+    };
+    std::ofstream(dir / "kitti_poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
+    int k = 0;
+    for (const Case& c : cases) {
+        const std::string out = (dir / ("o" + std::to_string(k++))).string();
+        std::string all = c.args;  // OUT stands more than once
+        for (std::size_t p = all.find("OUT"); p != std::string::npos; p = all.find("OUT")) all.replace(p, 3, out);
+        for (const std::size_t n : c.renames) {
+            for (const auto& file : c.files) std::ofstream(out + file) << "old";
+            const auto r = runCommand("strace -f -o /dev/null -e trace=rename -e inject=rename:signal=SIGTERM:when=" +
+                                      std::to_string(n) + " " + c.command + " -q -w " + all + " 2>&1");
+            EXPECT_NE(r.status, 0) << c.command << " at rename " << n << ": " << r.output;
+            std::size_t fresh = 0, old = 0;
+            for (const auto& file : c.files) {
+                const std::string now = gseg::test::readText(out + file);
+                fresh += now.size() > 3;
+                old += now == "old";
+            }
+            EXPECT_TRUE(fresh == c.files.size() || old == c.files.size())
+                << c.command << ", SIGTERM at rename " << n << ": " << fresh << " new, " << old << " old: " << r.output;
+            EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp") + gseg::test::entriesContaining(dir.string(), ".bak"), "")
+                << c.command << ", SIGTERM at rename " << n;
+        }
+    }
+}
+
+/// Starts rawlog-gseg with `args` (its input a FIFO nobody writes yet: it waits there) and returns
+/// once a file whose name contains `name` (its temporary) was created in `dir`: no sleeps.
+pid_t startAndAwaitTemporary(const std::vector<std::string>& args, const fs::path& dir, const std::string& name) {
+    const int watch = ::inotify_init1(IN_CLOEXEC);
+    EXPECT_GE(watch, 0);
+    EXPECT_GE(::inotify_add_watch(watch, dir.c_str(), IN_CREATE), 0);
+    ::alarm(120);  // a tool that never made its temporary would leave read() below blocked
+    const pid_t pid = gseg::test::spawnTool("rawlog-gseg", args, (dir / "a.txt").string());
+    EXPECT_GT(pid, 0);
+    alignas(inotify_event) char events[4096];
+    std::string created;
+    while (created.find(name) == std::string::npos) {
+        const ssize_t n = ::read(watch, events, sizeof events);
+        if (n <= 0) break;
+        for (ssize_t at = 0; at < n;) {
+            const auto* e = reinterpret_cast<const inotify_event*>(events + at);
+            if (e->len) created += std::string(e->name) + " ";
+            at += ssize_t(sizeof(inotify_event) + e->len);
+        }
+    }
+    ::close(watch);
+    return pid;
+}
+
+TEST(EveryTool, TwoRunsWritingOneNewOutputWithoutOverwriteCannotBothSucceed) {
+    // #18 point 5: both passed the "exists?" check, both said "wrote same.rawlog", one result was lost.
+    // Run A makes its temporary, then waits for its input (a FIFO the test holds); run B writes the
+    // output meanwhile; then A gets its input: it must fail and leave B's file.
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "race");
+    const std::string fifo = (dir / "in.fifo").string(), same = (dir / "same.rawlog").string();
+    const std::string cfg = std::string(GSEG_SOURCE_DIR) + "/config/vlp16.yaml";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    pid_t a = -1;
+    ASSERT_NO_FATAL_FAILURE(a = startAndAwaitTemporary({"-q", "-i", fifo, "-o", same, "-c", cfg}, dir, "same.rawlog"));
+    const auto b = runCommand(gseg::test::tool("rawlog-gseg") + " -q -i " + kVlp16 + " -o " + same + " -c " + cfg + " 2>&1");
+    EXPECT_EQ(b.status, 0) << b.output;
+    const std::string written = gseg::test::readText(same);
+    ASSERT_GT(written.size(), 1000u);
+    const auto feed = runCommand("cat " + kVlp16 + " > " + fifo);
+    EXPECT_EQ(feed.status, 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(a, &status, 0), a);
+    ::alarm(0);
+    const std::string err = gseg::test::readText((dir / "a.txt").string());
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << err;
+    EXPECT_NE(err.find("was created by another program while this run worked: not replaced"), std::string::npos) << err;
+    EXPECT_TRUE(gseg::test::readText(same) == written) << "run A replaced run B's output";
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
+}
+
+TEST(EveryTool, TheTemporaryOfAKilledRunIsRemovedByTheNextRunToThatOutput) {
+    // #18 point 9: SIGKILL cannot be caught; its temporaries stayed forever.
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "killed");
+    const std::string fifo = (dir / "in.fifo").string(), out = (dir / "split.rawlog").string();
+    const std::string cfg = std::string(GSEG_SOURCE_DIR) + "/config/vlp16.yaml";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    pid_t a = -1;
+    ASSERT_NO_FATAL_FAILURE(a = startAndAwaitTemporary({"-q", "-i", fifo, "-o", out, "-c", cfg}, dir, "split.rawlog"));
+    ::kill(a, SIGKILL);
+    int status = 0;
+    ASSERT_EQ(::waitpid(a, &status, 0), a);
+    ::alarm(0);
+    ASSERT_TRUE(WIFSIGNALED(status));
+    EXPECT_NE(gseg::test::entriesContaining(dir.string(), "split.rawlog"), "") << "the killed run's temporary";
+    const auto r = runCommand(gseg::test::tool("rawlog-gseg") + " -q -i " + kVlp16 + " -o " + out + " -c " + cfg + " 2>&1");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(gseg::test::entriesContaining(dir.string(), "split.rawlog"), "split.rawlog");
+}
+
+TEST(EveryTool, TheRawlogToolsReadAPipe) {
+    // #17: `cat drive.rawlog | rawlog-octomap -i /dev/stdin` failed ("cannot open the rawlog"), while
+    // rawlog-gseg read it: the map layer had a reader of its own. One reader now, the same files.
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "pipe_in");
+    const Fixture& f = fixture();
+    const std::string args = " --poses " + f.tum.string() + " --pose-tolerance 1e12 -c " + GSEG_SOURCE_DIR +
+                             "/config/vlp16.yaml --threads 1 -q";
+    const std::string octomap = gseg::test::tool("rawlog-octomap");
+    auto r = runCommand(octomap + " -i " + kVlp16 + " -o " + (dir / "file").string() + args + " 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = runCommand("cat " + kVlp16 + " | " + octomap + " -i /dev/stdin -o " + (dir / "pipe").string() + args + " 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    for (const char* s : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
+                          "_traversability.3Dscene"}) {
+        const std::string a = gseg::test::readText((dir / "file").string() + s);
+        EXPECT_GT(a.size(), 100u) << s;
+        EXPECT_TRUE(a == gseg::test::readText((dir / "pipe").string() + s)) << s << " differs when read from a pipe";
+    }
+    r = runCommand("cat " + kVlp16 + " | " + gseg::test::tool("rawlog-gseg") + " -q -i /dev/stdin -o " +
+                   (dir / "split.rawlog").string() + " -c " + GSEG_SOURCE_DIR + "/config/vlp16.yaml 2>&1");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_GT(fs::file_size(dir / "split.rawlog"), 1000u);
 }
 
 TEST(EveryTool, TheObservations2mapWrapperRefusesAnExistingMapAndAnUnwritableFolder) {

@@ -114,6 +114,13 @@ int CommandLine::parse(int argc, char** argv) {
     args.at(0) = name_.c_str();  // the name in TCLAP's usage lines, not the path of the executable
     if (!cmd_.parse(int(args.size()), args.data())) return output_->failed_ || !output_->done_ ? kBadUsage : kDone;
     if (quiet_.getValue() && verbose_.getValue()) return usageError("give --quiet or --verbose, not both");
+    for (TCLAP::Arg* arg : cmd_.getArgList()) {  // `-o ""` is refused now, not after all the work
+        auto* text = dynamic_cast<TCLAP::ValueArg<std::string>*>(arg);
+        if (text && text->isSet() && text->getValue().empty())
+            return usageError(dynamic_cast<const TCLAP::UnlabeledValueArg<std::string>*>(arg)
+                                  ? "the " + arg->getName() + " is an empty name"
+                                  : (arg->getFlag().empty() ? "--" + arg->getName() : "-" + arg->getFlag()) + " is empty");
+    }
     setVerbosity(quiet_.getValue() ? Verbosity::Quiet : verbose_.getValue() ? Verbosity::Verbose : Verbosity::Normal);
     return -1;
 }

@@ -184,8 +184,6 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
     return results;
 }
 
-void writeText(const std::string& path, const std::string& text) { io::writeFileAtomic(path, text.data(), text.size()); }
-
 struct Cli {
     std::string root, scan, labels, config, report, predDir;
     std::vector<std::string> sequences;
@@ -283,16 +281,20 @@ int run(const Cli& cli, tools::Ranks& ranks) {
     if (!cli.report.empty()) {
         const fs::path dir = fs::path(cli.report).parent_path();
         if (!dir.empty()) fs::create_directories(dir);
-        writeText(cli.report + "_frames.csv", framesCsv(rows));
-        writeText(cli.report + "_sequences.csv", sequencesCsv(seqs));
-        writeText(cli.report + "_table.md", table);
-        plotRanges(cli.report + "_range.png", seqs);
+        // The report's files belong together: all of this run or all of the previous one.
+        std::vector<std::pair<std::string, std::string>> files = {{cli.report + "_frames.csv", framesCsv(rows)},
+                                                                  {cli.report + "_sequences.csv", sequencesCsv(seqs)},
+                                                                  {cli.report + "_table.md", table},
+                                                                  {cli.report + "_range.png", rangePlotPng(seqs)}};
+        if (cli.breakdown) files.emplace_back(cli.report + "_breakdown.csv", breakdownCsv(rows, seqs));
+        std::vector<std::string> paths;
+        for (const auto& f : files) paths.push_back(f.first);
+        io::AtomicFileSet set(paths);
+        for (std::size_t i = 0; i < files.size(); ++i) set[i].write(files[i].second.data(), files[i].second.size());
+        set.commit();
         tools::say("\nwrote %s_frames.csv, _sequences.csv, _table.md, _range.png\n", cli.report.c_str());
-        if (cli.breakdown) {
-            writeText(cli.report + "_breakdown.csv", breakdownCsv(rows, seqs));
-            tools::say("wrote %s_breakdown.csv and a picture per frame in %s/\n", cli.report.c_str(),
-                        setup.pictureDir.c_str());
-        }
+        if (cli.breakdown)
+            tools::say("wrote %s_breakdown.csv and a picture per frame in %s/\n", cli.report.c_str(), setup.pictureDir.c_str());
     }
     return 0;
 }

@@ -81,7 +81,7 @@ void drawLegend(Picture& img, const std::vector<SequenceSummary>& seqs) {
 
 }  // namespace
 
-void plotRanges(const std::string& path, const std::vector<SequenceSummary>& seqs) {
+std::string rangePlotPng(const std::vector<SequenceSummary>& seqs) {
     const double lo = lowerBound(seqs);
     const std::function<int(double)> yOf = [lo](double v) {
         return kTop + int(std::lround((100.0 - v) / (100.0 - lo) * (kH - kTop - kBottom)));
@@ -90,7 +90,7 @@ void plotRanges(const std::string& path, const std::vector<SequenceSummary>& seq
     drawAxes(img, lo, yOf);
     for (std::size_t i = 0; i < seqs.size(); ++i) drawSequence(img, seqs[i], kPalette[i % 8], yOf);
     drawLegend(img, seqs);
-    img.save(path);
+    return img.png();
 }
 
 void plotOutcomes(const std::string& path, const PointCloudView& cloud, const std::vector<PointOutcome>& outcomes,

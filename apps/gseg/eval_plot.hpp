@@ -13,9 +13,8 @@
 namespace gseg::app {
 
 /// Draws the range-limited precision (thick lines) and recall (thin lines, squares) of every
-/// sequence against the range limit 10..100 m and writes the PNG atomically (temp + rename).
-/// Throws std::runtime_error if the file cannot be written.
-void plotRanges(const std::string& path, const std::vector<SequenceSummary>& seqs);
+/// sequence against the range limit 10..100 m: the PNG's bytes.
+std::string rangePlotPng(const std::vector<SequenceSummary>& seqs);
 
 /// Top-down picture of one scored frame (sensor at the centre, x forward up, y left to the left, as
 /// `gseg segment` draws): true ground green, false ground red, missed ground blue, other points

@@ -53,12 +53,10 @@ int run(const Cli& cli) {
     printPhase("phase I ", r.phase1);
     printPhase("phase II", r.phase2);
 
-    // Every output to its temporary first; renamed only when all are complete.
-    std::vector<std::unique_ptr<io::AtomicFile>> outputs;
-    auto add = [&](const std::string& path, const std::string& bytes) {
-        if (path.empty()) return;
-        outputs.push_back(std::make_unique<io::AtomicFile>(path));
-        outputs.back()->write(bytes.data(), bytes.size());
+    // Every output to its temporary first; all put in place together when all are complete.
+    std::vector<std::pair<std::string, std::string>> outputs;  // path, bytes
+    auto add = [&](const std::string& path, std::string bytes) {
+        if (!path.empty()) outputs.emplace_back(path, std::move(bytes));
     };
     add(cli.labelsOut, std::string(r.labels.begin(), r.labels.end()));
     if (!cli.plyOut.empty()) {
@@ -75,8 +73,12 @@ int run(const Cli& cli) {
         add(cli.pngOut, mrpt::topDownPng(cloud, r.labels, ro));
     }
     if (!cli.sceneOut.empty()) add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels));
-    for (auto& out : outputs) out->commit();
-    for (const auto& out : outputs) say("wrote %s\n", out->path().c_str());
+    std::vector<std::string> paths;
+    for (const auto& o : outputs) paths.push_back(o.first);
+    io::AtomicFileSet files(paths);
+    for (std::size_t i = 0; i < outputs.size(); ++i) files[i].write(outputs[i].second.data(), outputs[i].second.size());
+    files.commit();
+    for (const auto& path : paths) say("wrote %s\n", path.c_str());
     return 0;
 }
 

@@ -26,8 +26,8 @@
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
-#include <gseg/map/gz_output.hpp>
-#include <gseg/map/output_files.hpp>
+#include <gseg/mrpt/gzip_stream.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
@@ -282,10 +282,9 @@ void run(const Cli& c) {
     std::vector<double> frameTimes;
     for (const auto& s : scans) frameTimes.push_back(times.empty() ? 0.1 * double(s.first) : times[std::size_t(s.first)]);
     const Repeater repeater(poses ? &*poses : nullptr, frameTimes);
-    gseg::map::AtomicFiles files(outputs);
+    gseg::io::AtomicFileSet files(outputs);  // the rawlog and the simple map appear together or not at all
     mrpt::maps::CSimpleMap simplemap;
-    gseg::map::CheckedGzOutput file(files.temporary(0), c.output);
-    auto out = mrpt::serialization::archiveFrom(file);
+    gseg::mrpt::RawlogWriter out(files[0]);
     gseg::Progress progress(gseg::tools::progressOut(), "kitti2rawlog", "scans");
     const std::size_t total = scans.size() * std::size_t(c.repeat);
     Eigen::Isometry3d roundStart = Eigen::Isometry3d::Identity();
@@ -294,8 +293,11 @@ void run(const Cli& c) {
         if (i == 0 && r > 0) roundStart = roundStart * repeater.round;
         const auto t = mrpt::Clock::fromDouble(c.start + frameTimes[i] + double(r) * repeater.period);
         const auto scan = makeScan(scans[i].second, t);
-        if (poses) out << *makeOdometry(roundStart * (*poses)[i], t) << *makePose(roundStart * (*poses)[i], t);
-        out << *scan;
+        if (poses) {
+            out.write(*makeOdometry(roundStart * (*poses)[i], t));
+            out.write(*makePose(roundStart * (*poses)[i], t));
+        }
+        out.write(*scan);
         if (!c.simplemap.empty()) {
             auto sf = mrpt::obs::CSensoryFrame::Create();
             sf->insert(scan);
@@ -305,12 +307,8 @@ void run(const Cli& c) {
         gseg::tools::detail("kitti2rawlog: frame %ld (%s)%s\n", scans[i].first, scans[i].second.c_str(),
                             r > 0 ? (", round " + std::to_string(r + 1)).c_str() : "");
     }
-    file.close();
-    if (!c.simplemap.empty()) {
-        gseg::map::CheckedGzOutput map(files.temporary(1), c.simplemap);
-        mrpt::serialization::archiveFrom(map) << simplemap;
-        map.close();
-    }
+    out.finish();
+    if (!c.simplemap.empty()) gseg::mrpt::writeGzipObject(files[1], simplemap);
     files.commit();
     progress.finish(total);
     gseg::tools::note("kitti2rawlog: wrote %s%s\n", c.output.c_str(), c.simplemap.empty() ? "" : (" and " + c.simplemap).c_str());

@@ -13,7 +13,7 @@
 #include <gseg/io/atomic_file.hpp>
 
 #include <gseg/map/world_scan.hpp>
-#include <gseg/map/output_files.hpp>
+#include <gseg/io/atomic_file.hpp>
 
 #include <octomap/OcTree.h>
 

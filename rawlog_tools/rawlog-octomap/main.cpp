@@ -15,7 +15,7 @@
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/ordered_pipeline.hpp>
-#include <gseg/map/output_files.hpp>
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 

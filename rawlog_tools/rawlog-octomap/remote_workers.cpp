@@ -2,7 +2,7 @@
 
 #include "common/bytes.hpp"
 
-#include <gseg/map/output_files.hpp>
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
 
 #include <mrpt/io/CStream.h>

@@ -14,7 +14,7 @@
 //     (absolute 2D odometry), CActionRobotMovement2D/3D (increments, integrated from the origin).
 
 #include <gseg/map/poses.hpp>
-#include <gseg/map/rawlog_reader.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
 
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
@@ -66,7 +66,7 @@ public:
 
 private:
     PoseConfig config_;
-    gseg::map::RawlogReader reader_;
+    gseg::mrpt::RawlogReader reader_;
     std::vector<gseg::map::StampedPose> tum_;
     std::vector<Eigen::Isometry3d> kitti_;
     std::optional<mrpt::poses::CPose3D> rawlogPose_;  ///< current pose from the rawlog

@@ -1,145 +1,126 @@
 #include <gseg/io/atomic_file.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
-#include <csignal>
+#include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <map>
-#include <mutex>
-#include <set>
-#include <stdexcept>
+#include <exception>
 #include <fcntl.h>
+#include <stdexcept>
+#include <streambuf>
 #include <sys/stat.h>
 #include <unistd.h>
 
 namespace gseg::io {
 namespace {
 
-// --- The registry of temporaries, read by the signal handler ------------------------------------
-// Fixed storage only: the handler may not allocate. A slot is 0 (free), 1 (being filled) or
-// 2 (holds a path to remove).
-constexpr int kSlots = 64;
-constexpr std::size_t kPathBytes = 4096;
-struct Slot {
-    std::atomic<int> state{0};
-    char path[kPathBytes];
-};
-Slot g_slots[kSlots];
+std::string reason(int err) { return std::strerror(err); }
 
-int registerTemporary(const std::string& path) {
-    if (path.size() >= kPathBytes) throw std::runtime_error(path + ": path too long for a temporary file");
-    for (int i = 0; i < kSlots; ++i) {
-        int expected = 0;
-        if (g_slots[i].state.compare_exchange_strong(expected, 1)) {
-            std::memcpy(g_slots[i].path, path.c_str(), path.size() + 1);
-            g_slots[i].state.store(2);
-            return i;
+// Puts `temp` at `file` unless `file` exists (atomically where the file system can). Returns 0 or
+// the errno (EEXIST: someone else made `file`).
+int placeExclusively(const std::string& temp, const std::string& file) {
+    if (::renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, file.c_str(), RENAME_NOREPLACE) == 0) return 0;
+    if (errno != EINVAL && errno != ENOSYS && errno != EOPNOTSUPP) return errno;
+    // No RENAME_NOREPLACE here (some network and FUSE file systems): a hard link fails if `file` exists.
+    if (::link(temp.c_str(), file.c_str()) == 0) {
+        ::unlink(temp.c_str());
+        return 0;
+    }
+    if (errno == EEXIST) return EEXIST;
+    struct stat st {};  // no hard links either: check, then rename (a race stays possible only here)
+    if (::lstat(file.c_str(), &st) == 0) return EEXIST;
+    return std::rename(temp.c_str(), file.c_str()) == 0 ? 0 : errno;
+}
+
+// A std::streambuf over an AtomicFile: what an ostream writer (OctoMap, iostreams) writes goes to
+// the file in 64 KiB blocks; the file's error is kept and thrown again after the writer is done.
+class FileBuf : public std::streambuf {
+public:
+    explicit FileBuf(AtomicFile& file) : file_(file) { setp(buf_, buf_ + sizeof buf_); }
+    bool drain() {
+        if (error_) return false;
+        try {
+            file_.write(pbase(), std::size_t(pptr() - pbase()));
+        } catch (...) {
+            error_ = std::current_exception();
+            return false;
         }
+        setp(buf_, buf_ + sizeof buf_);
+        return true;
     }
-    throw std::runtime_error(path + ": more than 64 temporary outputs open at once");
-}
-
-void unregisterTemporary(int slot) {
-    if (slot >= 0) g_slots[slot].state.store(0);
-}
-
-// --- What the process is doing, and who it is (for the handler's message) -----------------------
-char g_tool[64] = "gseg";
-char g_activity[2][256] = {{0}, {0}};
-std::atomic<int> g_activityIndex{0};
-std::mutex g_activityMutex;
-
-void put(const char* s) {
-    const std::size_t n = std::strlen(s);
-    ssize_t ignored = ::write(STDERR_FILENO, s, n);
-    (void)ignored;
-}
-
-const char* signalName(int sig) {
-    switch (sig) {
-        case SIGINT: return "SIGINT";
-        case SIGTERM: return "SIGTERM";
-        case SIGHUP: return "SIGHUP";
-        case SIGQUIT: return "SIGQUIT";
-        case SIGPIPE: return "SIGPIPE";
-        case SIGSEGV: return "SIGSEGV";
-        case SIGBUS: return "SIGBUS";
-        case SIGFPE: return "SIGFPE";
-        case SIGILL: return "SIGILL";
-        case SIGABRT: return "SIGABRT";
-        default: return "a signal";
+    void rethrow() const {
+        if (error_) std::rethrow_exception(error_);
     }
-}
 
-const int kTerminationSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE};
-const int kCrashSignals[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
-
-extern "C" void cleanupHandler(int sig) {
-    const int savedErrno = errno;
-    int removed = 0;
-    for (Slot& s : g_slots)
-        if (s.state.load() == 2 && ::unlink(s.path) == 0) ++removed;
-    bool crash = false;
-    for (int c : kCrashSignals) crash = crash || c == sig;
-    put("\n");
-    put(g_tool);
-    put(crash ? ": crashed (" : ": interrupted (");
-    put(signalName(sig));
-    put(")");
-    const char* activity = g_activity[g_activityIndex.load()];
-    if (activity[0]) {
-        put(" while ");
-        put(activity);
+protected:
+    int_type overflow(int_type c) override {
+        if (!drain()) return traits_type::eof();
+        if (!traits_type::eq_int_type(c, traits_type::eof())) sputc(traits_type::to_char_type(c));
+        return traits_type::not_eof(c);
     }
-    put(removed ? "; temporary outputs removed\n" : "\n");
-    errno = savedErrno;
-    // SA_RESETHAND restored the default action; the signal is blocked until this handler returns,
-    // then ends the process (a crash re-executes the faulting instruction and ends it as well).
-    ::raise(sig);
-}
+    int sync() override { return drain() ? 0 : -1; }
 
-std::once_flag g_installed;
+private:
+    AtomicFile& file_;
+    char buf_[1 << 16];
+    std::exception_ptr error_;
+};
 
 }  // namespace
 
-AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
-    const std::string base = path_ + ".tmp" + std::to_string(::getpid());
+namespace {
+
+OutputTarget targetOf(const std::string& path) {
+    try {
+        return resolveOutput(path);
+    } catch (const std::invalid_argument& e) {  // checked before any work by the tools; here a failure to write
+        throw std::runtime_error(e.what());
+    }
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(std::string path) : target_(targetOf(path)) {
+    if (target_.stream) {  // a pipe, terminal or device: the bytes go there as they come
+        temp_ = target_.given;
+        fd_ = ::open(temp_.c_str(), O_WRONLY | O_CLOEXEC);
+        if (fd_ < 0) throw std::runtime_error(target_.given + ": cannot open for writing (" + reason(errno) + ")");
+        exclusive_ = false;
+        return;
+    }
+    const bool isNew = mustBeNew(target_.given);
+    if (isNew && target_.exists)
+        throw std::runtime_error(target_.given + " appeared after this run checked its outputs (another run writing it?): "
+                                 "not replaced");
+    exclusive_ = isNew || !target_.exists;
+    removeStaleTemporaries(target_.file);
     for (int attempt = 0; fd_ < 0; ++attempt) {
-        temp_ = attempt == 0 ? base : base + "." + std::to_string(attempt);
-        slot_ = registerTemporary(temp_);
+        temp_ = sideFilePath(target_.file, "tmp");
+        registered_ = std::make_unique<TemporaryRegistration>(temp_);
         fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd_ >= 0) break;
         const int err = errno;
-        unregisterTemporary(slot_);
-        slot_ = -1;
-        if (err != EEXIST || attempt > 100)
-            throw std::runtime_error(path_ + ": cannot create (" + std::strerror(err) + ")");
+        registered_.reset();
+        if (err != EEXIST || attempt > 100) throw std::runtime_error(target_.given + ": cannot create (" + reason(err) + ")");
     }
 }
 
 AtomicFile::~AtomicFile() { discard(); }
 
-TemporaryRegistration::TemporaryRegistration(const std::string& path) : slot_(registerTemporary(path)) {}
-
-TemporaryRegistration::~TemporaryRegistration() { unregisterTemporary(slot_); }
-
 void AtomicFile::discard() noexcept {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
-    if (slot_ >= 0) ::unlink(temp_.c_str());
-    unregisterTemporary(slot_);
-    slot_ = -1;
+    if (registered_ && !done_) ::unlink(temp_.c_str());
+    registered_.reset();
 }
 
 void AtomicFile::fail(const std::string& what, int err) {
     discard();
-    throw std::runtime_error(path_ + ": " + what + " (" + std::strerror(err) + ")");
+    throw std::runtime_error(target_.given + ": " + what + " (" + reason(err) + ")");
 }
 
 void AtomicFile::write(const void* data, std::size_t size) {
-    if (fd_ < 0) throw std::logic_error(path_ + ": write after commit or failure");
+    if (fd_ < 0) throw std::logic_error(target_.given + ": write after commit or failure");
     const char* p = static_cast<const char*>(data);
     while (size > 0) {
         const ssize_t n = ::write(fd_, p, size);
@@ -149,143 +130,101 @@ void AtomicFile::write(const void* data, std::size_t size) {
     }
 }
 
-void AtomicFile::commit() {
-    if (fd_ < 0) throw std::logic_error(path_ + ": commit after commit or failure");
+void AtomicFile::write(const std::function<void(std::ostream&)>& fill) {
+    FileBuf buf(*this);
+    std::ostream out(&buf);
+    fill(out);
+    out.flush();
+    buf.rethrow();
+    if (!out) fail("the writer failed", EIO);
+}
+
+void AtomicFile::close() {
+    if (fd_ < 0) throw std::logic_error(target_.given + ": commit after commit or failure");
     const int fd = fd_;
     fd_ = -1;
     if (::close(fd) != 0) fail("closing the written file failed", errno);
-    if (std::rename(temp_.c_str(), path_.c_str()) != 0)
-        fail("cannot rename the temporary file " + temp_ + " into place", errno);
-    unregisterTemporary(slot_);
-    slot_ = -1;
+}
+
+void commitTogether(const std::vector<AtomicFile*>& files) {
+    for (AtomicFile* f : files) f->close();  // every write checked before anything is replaced
+    SignalDeferral hold;                     // a termination signal waits until all are in place or none
+    std::vector<AtomicFile*> placed;
+    std::vector<std::string> backups(files.size());
+    auto rollBack = [&] {
+        for (std::size_t i = 0; i < files.size(); ++i) {
+            AtomicFile* f = files[i];
+            const bool wasPlaced = std::find(placed.begin(), placed.end(), f) != placed.end();
+            if (wasPlaced && !backups[i].empty()) std::rename(backups[i].c_str(), f->target_.file.c_str());
+            else if (wasPlaced) ::unlink(f->target_.file.c_str());
+            else if (!backups[i].empty()) ::unlink(backups[i].c_str());
+            if (!f->target_.stream) ::unlink(f->temp_.c_str());
+            f->registered_.reset();
+        }
+    };
+    // New files first: they fail if another run made them meanwhile, and nothing was replaced yet.
+    for (int pass = 0; pass < 2; ++pass) {
+        for (std::size_t i = 0; i < files.size(); ++i) {
+            AtomicFile* f = files[i];
+            if (f->target_.stream || f->exclusive_ != (pass == 0)) continue;
+            const std::string& file = f->target_.file;
+            int err = 0;
+            if (f->exclusive_) {
+                err = placeExclusively(f->temp_, file);
+            } else {
+                const std::string backup = sideFilePath(file, "bak");  // the previous version, until all are in place
+                if (::link(file.c_str(), backup.c_str()) == 0) backups[i] = backup;
+                else if (errno != ENOENT && errno != EPERM && errno != EOPNOTSUPP) err = errno;
+                if (!err && std::rename(f->temp_.c_str(), file.c_str()) != 0) err = errno;
+            }
+            if (err) {
+                rollBack();
+                const std::string others = files.size() > 1 ? "; none of the " + std::to_string(files.size()) + " files changed"
+                                                            : "; nothing changed";
+                if (err == EEXIST)
+                    throw std::runtime_error(f->target_.given + " was created by another program while this run worked: "
+                                             "not replaced" + others);
+                throw std::runtime_error(f->target_.given + ": cannot put the written file in place (" + reason(err) + ")" +
+                                         others);
+            }
+            placed.push_back(f);
+        }
+    }
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        if (!backups[i].empty()) ::unlink(backups[i].c_str());
+        files[i]->done_ = true;
+        files[i]->registered_.reset();
+    }
+}
+
+void AtomicFile::commit() {
+    if (inSet_) throw std::logic_error(target_.given + ": a member of an AtomicFileSet is committed by the set");
+    commitTogether({this});
+}
+
+AtomicFileSet::AtomicFileSet(const std::vector<std::string>& paths) {
+    for (const std::string& p : paths) {
+        files_.push_back(std::make_unique<AtomicFile>(p));
+        files_.back()->inSet_ = true;
+    }
+}
+
+std::vector<std::string> AtomicFileSet::paths() const {
+    std::vector<std::string> out;
+    for (const auto& f : files_) out.push_back(f->path());
+    return out;
+}
+
+void AtomicFileSet::commit() {
+    std::vector<AtomicFile*> files;
+    for (const auto& f : files_) files.push_back(f.get());
+    commitTogether(files);
 }
 
 void writeFileAtomic(const std::string& path, const void* bytes, std::size_t size) {
     AtomicFile file(path);
     file.write(bytes, size);
     file.commit();
-}
-
-void installTemporaryCleanup(const std::string& toolName) {
-    std::call_once(g_installed, [&] {
-        std::strncpy(g_tool, toolName.c_str(), sizeof g_tool - 1);
-        // A separate stack, so that a stack overflow still gets its temporaries removed.
-        static char altStack[64 * 1024];
-        stack_t ss{};
-        ss.ss_sp = altStack;
-        ss.ss_size = sizeof altStack;
-        ::sigaltstack(&ss, nullptr);
-        struct sigaction sa {};
-        sa.sa_handler = cleanupHandler;
-        sigemptyset(&sa.sa_mask);
-        sa.sa_flags = SA_RESETHAND | SA_ONSTACK;
-        for (int sig : kTerminationSignals) {
-            struct sigaction old {};
-            ::sigaction(sig, nullptr, &old);
-            if (old.sa_handler != SIG_IGN) ::sigaction(sig, &sa, nullptr);
-        }
-        for (int sig : kCrashSignals) ::sigaction(sig, &sa, nullptr);
-        ::signal(SIGXFSZ, SIG_IGN);
-    });
-}
-
-void setActivity(const std::string& activity) {
-    std::lock_guard<std::mutex> lock(g_activityMutex);
-    const int next = 1 - g_activityIndex.load();
-    const std::size_t n = std::min(activity.size(), sizeof g_activity[0] - 1);
-    std::memcpy(g_activity[next], activity.data(), n);
-    g_activity[next][n] = '\0';
-    g_activityIndex.store(next);
-}
-
-std::vector<std::string> registeredTemporaries() {
-    std::vector<std::string> out;
-    for (const Slot& s : g_slots)
-        if (s.state.load() == 2) out.emplace_back(s.path);
-    return out;
-}
-
-void checkOutputsAreNotInputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
-    // Each path is looked at once (a run may name thousands of inputs and outputs).
-    namespace fs = std::filesystem;
-    using FileId = std::pair<dev_t, ino_t>;
-    auto identity = [](const std::string& p, FileId& id) {
-        struct stat st {};
-        if (::stat(p.c_str(), &st) != 0) return false;
-        id = {st.st_dev, st.st_ino};
-        return true;
-    };
-    std::map<std::string, fs::path> folders;  // canonical form of each output folder, found once
-    auto normal = [&](const std::string& p) {
-        const fs::path path(p), folder = path.parent_path();
-        auto known = folders.find(folder.string());
-        if (known == folders.end()) {
-            std::error_code ec;
-            const fs::path c = fs::weakly_canonical(fs::absolute(folder.empty() ? fs::path(".") : folder, ec), ec);
-            known = folders.emplace(folder.string(), ec ? folder.lexically_normal() : c).first;
-        }
-        return (known->second / path.filename()).lexically_normal().string();
-    };
-    std::map<FileId, const NamedPath*> inputIds, outputIds;
-    for (const NamedPath& in : inputs)
-        if (FileId id; !in.path.empty() && identity(in.path, id)) inputIds.emplace(id, &in);
-    std::map<std::string, const NamedPath*> outputNames;
-    auto twice = [](const NamedPath& out, const NamedPath& earlier) {
-        return std::invalid_argument(out.argument + " and " + earlier.argument + " name the same file " + out.path);
-    };
-    for (const NamedPath& out : outputs) {
-        if (out.path.empty()) continue;
-        if (FileId id; identity(out.path, id)) {  // an existing file: by device and inode (links too)
-            if (const auto in = inputIds.find(id); in != inputIds.end())
-                throw std::invalid_argument(out.argument + " " + out.path + " is the " + in->second->argument + " " +
-                                            in->second->path + " (the same file): refusing to overwrite an input");
-            if (const auto seen = outputIds.find(id); seen != outputIds.end()) throw twice(out, *seen->second);
-            outputIds.emplace(id, &out);
-        }
-        if (const auto [seen, added] = outputNames.emplace(normal(out.path), &out); !added) throw twice(out, *seen->second);
-    }
-}
-
-namespace {
-
-/// Whether `folder` accepts a new file: one is made and removed. "" if so, else why not.
-std::string cannotWriteIn(const std::string& folder) {
-    const std::string probe = (std::filesystem::path(folder) / (".gseg-probe-" + std::to_string(::getpid()))).string();
-    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
-    if (fd < 0) return std::strerror(errno);
-    ::close(fd);
-    ::unlink(probe.c_str());
-    return "";
-}
-
-}  // namespace
-
-void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules) {
-    namespace fs = std::filesystem;
-    checkOutputsAreNotInputs(inputs, outputs);
-    std::set<std::string> writable;  // folders tried already (a run may write thousands of files into many)
-    for (const NamedPath& out : outputs) {
-        if (out.path.empty()) continue;
-        const std::string what = out.argument + " " + out.path;
-        std::error_code ec;
-        if (fs::exists(fs::symlink_status(out.path, ec))) {
-            if (fs::is_directory(out.path, ec)) throw std::invalid_argument(what + " is a folder, not a file");
-            if (!rules.overwrite) throw std::invalid_argument(what + " exists: give -w (--overwrite) to replace it");
-        }
-        fs::path folder = fs::path(out.path).parent_path();
-        if (folder.empty()) folder = ".";
-        if (writable.count(folder.string())) continue;
-        const std::string given = folder.string();
-        while (rules.makeFolders && !fs::exists(folder, ec) && folder.parent_path() != folder)  // the one to make it in
-            folder = folder.parent_path().empty() ? fs::path(".") : folder.parent_path();
-        if (!fs::exists(folder, ec))
-            throw std::invalid_argument(what + ": the folder " + folder.string() + " does not exist");
-        if (!fs::is_directory(folder, ec))
-            throw std::invalid_argument(what + ": " + folder.string() + " is not a folder");
-        if (const std::string why = cannotWriteIn(folder.string()); !why.empty())
-            throw std::invalid_argument(what + ": cannot write in the folder " + folder.string() + " (" + why + ")");
-        writable.insert(given);
-    }
 }
 
 }  // namespace gseg::io

@@ -1,6 +1,6 @@
 #include "map_scene.hpp"
 
-#include <gseg/map/gz_output.hpp>
+#include <gseg/mrpt/gzip_stream.hpp>
 #include <gseg/map/traversability_map.hpp>
 
 #include <mrpt/opengl/COctoMapVoxels.h>
@@ -13,7 +13,7 @@
 
 namespace gseg::map::detail {
 
-void writeMapScene(const std::string& file, const std::string& name, const std::vector<float>& xyz,
+void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
                    const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path) {
     namespace gl = ::mrpt::opengl;
     auto voxels = gl::COctoMapVoxels::Create();
@@ -60,9 +60,7 @@ void writeMapScene(const std::string& file, const std::string& name, const std::
     axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
     if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
     scene.insert(axes);
-    CheckedGzOutput out(file, name);
-    ::mrpt::serialization::archiveFrom(out) << scene;
-    out.close();
+    gseg::mrpt::writeGzipObject(file, scene);
 }
 
 }  // namespace gseg::map::detail

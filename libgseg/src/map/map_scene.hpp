@@ -10,13 +10,16 @@
 #include <string>
 #include <vector>
 
+namespace gseg::io {
+class AtomicFile;
+}
+
 namespace gseg::map::detail {
 
-/// Writes the .3Dscene to `file` (gzip, every write and the close checked; errors name
-/// `name`): voxel centres `xyz` (3 floats each) with `labels` (1 ground, 0 obstacle) as coloured
+/// Writes the .3Dscene into `file` (gzip; not committed here): voxel centres `xyz` (3 floats each) with `labels` (1 ground, 0 obstacle) as coloured
 /// boxes of edge `resolution`, the path as a blue line with a box at each sensor position, axes at
 /// its start. The scene is serialised straight into the compressor: no copy of it in memory.
-void writeMapScene(const std::string& file, const std::string& name, const std::vector<float>& xyz,
+void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
                    const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path);
 
 }  // namespace gseg::map::detail

@@ -1,7 +1,7 @@
 #include <gseg/map/traversability_map.hpp>
 
 #include <gseg/io/ply.hpp>
-#include <gseg/map/output_files.hpp>
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/mrpt/scene.hpp>
 
@@ -250,20 +250,22 @@ std::string TraversabilityMap::pictureTitle() const {
 std::vector<std::string> TraversabilityMap::write(const std::string& prefix) const {
     if (empty()) throw std::logic_error("TraversabilityMap::write: no scan was inserted");
     // One file at a time, straight to its temporary: the peak memory is the map plus one file.
-    AtomicFiles files(outputPaths(prefix));
+    gseg::io::AtomicFileSet files(outputPaths(prefix));
     const double res = configured_->getResolution();
-    writeFileChecked(files.temporary(0), [&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
-    writeFileChecked(files.temporary(1), [&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
-    writeFileChecked(files.temporary(2), [&](std::ostream& out) {
+    files[0].write([&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
+    files[1].write([&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
+    files[2].write([&](std::ostream& out) {
         const octomap::ColorOcTree defaults(res);  // colouredTree() leaves the hit probability as it is
         const Rgb g = colourOf(CellClass::Traversable), o = colourOf(CellClass::Obstacle);
         const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
         voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
     });
-    writeFileChecked(files.temporary(3), encodeTopDownPng(topDown(), path_, pictureTitle()));
+    const std::string png = encodeTopDownPng(topDown(), path_, pictureTitle());
+    files[3].write(png.data(), png.size());
     const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
-    writeFileChecked(files.temporary(4), mapPlyBytes(v, res));
-    detail::writeMapScene(files.temporary(5), files.paths()[5], v.xyz, v.labels, res, path_);
+    const std::string ply = mapPlyBytes(v, res);
+    files[4].write(ply.data(), ply.size());
+    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_);
     files.commit();
     return files.paths();
 }

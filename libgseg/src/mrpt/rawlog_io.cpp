@@ -1,5 +1,6 @@
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
+#include <gseg/mrpt/gzip_stream.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 
 #include <mrpt/io/CStream.h>
@@ -92,24 +93,6 @@ private:
 
 }  // namespace
 
-void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, const RawlogVisitor& visit) {
-    ExactReads exact(stream);
-    auto archive = ::mrpt::serialization::archiveFrom(exact);
-    for (std::size_t index = 0;; ++index) {
-        ::mrpt::serialization::CSerializable::Ptr obj;
-        gseg::io::setActivity("reading entry " + std::to_string(index) + " of " + name);
-        try {
-            archive >> obj;
-        } catch (const ::mrpt::serialization::CExceptionEOF&) {
-            return;  // clean end of the file
-        } catch (const std::exception& e) {
-            throw std::runtime_error(rawlogReadError(name, index, e));
-        }
-        if (!obj) throw std::runtime_error(name + ": entry " + std::to_string(index) + " is an empty object");
-        if (!visit(index, obj)) return;
-    }
-}
-
 namespace {
 
 // An MRPT input stream over zlib's gzread: gzip or plain files, and pipes (MRPT's
@@ -119,7 +102,11 @@ public:
     explicit GzipInputStream(const std::string& path) : path_(path), file_(gzopen(path.c_str(), "rb")) {
         if (!file_) throw std::runtime_error(path + ": cannot open the rawlog (" + std::strerror(errno) + ")");
         gzbuffer(file_, 1 << 17);
+        struct stat st {};
+        if (::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode)) size_ = double(st.st_size);
     }
+    /// Compressed bytes read so far over the file's size; 0 for a pipe.
+    double fraction() const { return size_ > 0 ? std::min(1.0, double(gzoffset(file_)) / size_) : 0.0; }
     ~GzipInputStream() override { gzclose_r(file_); }
 
     size_t Read(void* buffer, size_t count) override {
@@ -147,80 +134,92 @@ private:
     std::string path_;
     gzFile file_;
     uint64_t position_ = 0;
+    double size_ = 0;
 };
+
+}  // namespace
+
+struct RawlogReader::Impl {
+    std::unique_ptr<GzipInputStream> file;  // when reading a path
+    std::unique_ptr<ExactReads> exact;
+    std::unique_ptr<::mrpt::serialization::CArchive> archive;
+};
+
+namespace {
+
+std::unique_ptr<GzipInputStream> openRawlog(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) throw std::runtime_error(path + ": is a folder, not a rawlog");
+    return std::make_unique<GzipInputStream>(path);
+}
+
+}  // namespace
+
+RawlogReader::RawlogReader(const std::string& path) : impl_(std::make_unique<Impl>()), name_(path) {
+    impl_->file = openRawlog(path);
+    impl_->exact = std::make_unique<ExactReads>(*impl_->file);
+    impl_->archive = std::make_unique<::mrpt::serialization::CArchiveStreamBase<ExactReads>>(*impl_->exact);
+}
+
+RawlogReader::RawlogReader(::mrpt::io::CStream& stream, std::string name) : impl_(std::make_unique<Impl>()), name_(std::move(name)) {
+    impl_->exact = std::make_unique<ExactReads>(stream);
+    impl_->archive = std::make_unique<::mrpt::serialization::CArchiveStreamBase<ExactReads>>(*impl_->exact);
+}
+
+RawlogReader::~RawlogReader() = default;
+
+std::shared_ptr<::mrpt::serialization::CSerializable> RawlogReader::next() {
+    ::mrpt::serialization::CSerializable::Ptr obj;
+    gseg::io::setActivity("reading entry " + std::to_string(index_) + " of " + name_);
+    try {
+        *impl_->archive >> obj;
+    } catch (const ::mrpt::serialization::CExceptionEOF&) {
+        return nullptr;  // clean end of the file
+    } catch (const std::exception& e) {
+        throw std::runtime_error(rawlogReadError(name_, index_, e));
+    }
+    if (!obj) throw std::runtime_error(name_ + ": entry " + std::to_string(index_) + " is an empty object");
+    ++index_;
+    return obj;
+}
+
+double RawlogReader::fraction() const { return impl_->file ? impl_->file->fraction() : 0.0; }
+
+namespace {
+
+void visitAll(RawlogReader& reader, const RawlogVisitor& visit) {
+    while (auto obj = reader.next())
+        if (!visit(reader.index(), obj)) return;
+}
 
 }  // namespace
 
 void forEachRawlogEntry(const std::string& path, const RawlogVisitor& visit) {
-    struct stat st {};
-    if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) throw std::runtime_error(path + ": is a folder, not a rawlog");
-    GzipInputStream file(path);
-    forEachRawlogEntry(file, path, visit);
+    RawlogReader reader(path);
+    visitAll(reader, visit);
 }
 
-namespace {
-
-// An MRPT output stream that gzips into an AtomicFile.
-class GzipAtomicStream : public ::mrpt::io::CStream {
-public:
-    explicit GzipAtomicStream(const std::string& path) : file_(path) {
-        // windowBits 15 + 16: gzip wrapper, which MRPT's readers detect; level 1 as MRPT writes.
-        if (deflateInit2(&z_, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-            throw std::runtime_error(path + ": cannot start the gzip compressor");
-    }
-    ~GzipAtomicStream() override { deflateEnd(&z_); }
-
-    size_t Read(void*, size_t) override { throw std::logic_error("GzipAtomicStream is write-only"); }
-    size_t Write(const void* buffer, size_t count) override {
-        const auto* p = static_cast<const Bytef*>(buffer);
-        for (size_t left = count; left > 0;) {
-            const uInt chunk = uInt(std::min<size_t>(left, 1u << 30));
-            pump(p, chunk, Z_NO_FLUSH);
-            p += chunk, left -= chunk;
-        }
-        position_ += count;
-        return count;
-    }
-    uint64_t Seek(int64_t, TSeekOrigin) override { throw std::logic_error("GzipAtomicStream cannot seek"); }
-    uint64_t getTotalBytesCount() const override { return position_; }
-    uint64_t getPosition() const override { return position_; }
-    std::string getStreamDescription() const override { return "gzip rawlog " + file_.path(); }
-
-    void commit() {
-        pump(nullptr, 0, Z_FINISH);
-        file_.commit();
-    }
-
-private:
-    void pump(const Bytef* data, uInt size, int flush) {
-        z_.next_in = const_cast<Bytef*>(data);
-        z_.avail_in = size;
-        for (;;) {
-            Bytef out[1 << 16];
-            z_.next_out = out;
-            z_.avail_out = sizeof out;
-            const int r = deflate(&z_, flush);
-            if (r == Z_STREAM_ERROR) throw std::runtime_error(file_.path() + ": gzip compression failed");
-            file_.write(out, sizeof out - z_.avail_out);
-            if (flush == Z_FINISH ? r == Z_STREAM_END : z_.avail_out != 0) break;
-        }
-    }
-
-    gseg::io::AtomicFile file_;
-    z_stream z_{};
-    uint64_t position_ = 0;
-};
-
-}  // namespace
+void forEachRawlogEntry(::mrpt::io::CStream& stream, const std::string& name, const RawlogVisitor& visit) {
+    RawlogReader reader(stream, name);
+    visitAll(reader, visit);
+}
 
 struct RawlogWriter::Impl {
-    explicit Impl(const std::string& path) : stream(path), archive(::mrpt::serialization::archiveFrom(stream)) {}
-    GzipAtomicStream stream;
-    ::mrpt::serialization::CArchiveStreamBase<GzipAtomicStream> archive;
+    explicit Impl(gseg::io::AtomicFile& f) : stream(f), archive(::mrpt::serialization::archiveFrom(stream)) {}
+    std::unique_ptr<gseg::io::AtomicFile> own;  // the writer's own file, or none (a member of a set)
+    GzipOutputStream stream;
+    ::mrpt::serialization::CArchiveStreamBase<GzipOutputStream> archive;
     std::size_t entries = 0;
 };
 
-RawlogWriter::RawlogWriter(const std::string& path) : impl_(std::make_unique<Impl>(path)) {}
+RawlogWriter::RawlogWriter(const std::string& path) {
+    auto file = std::make_unique<gseg::io::AtomicFile>(path);
+    impl_ = std::make_unique<Impl>(*file);
+    impl_->own = std::move(file);
+}
+
+RawlogWriter::RawlogWriter(gseg::io::AtomicFile& file) : impl_(std::make_unique<Impl>(file)) {}
+
 RawlogWriter::~RawlogWriter() = default;
 
 void RawlogWriter::write(const ::mrpt::serialization::CSerializable& object) {
@@ -232,7 +231,13 @@ void RawlogWriter::write(const ::mrpt::serialization::CSerializable& object) {
     ++impl_->entries;
 }
 
-void RawlogWriter::commit() { impl_->stream.commit(); }
+void RawlogWriter::finish() { impl_->stream.finish(); }
+
+void RawlogWriter::commit() {
+    if (!impl_->own) throw std::logic_error("RawlogWriter::commit: the file belongs to a set; finish() and commit the set");
+    finish();
+    impl_->own->commit();
+}
 
 std::size_t RawlogWriter::entries() const { return impl_->entries; }
 

@@ -1,3 +1,4 @@
+#include <gseg/mrpt/gzip_stream.hpp>
 #include <gseg/mrpt/render.hpp>
 #include <gseg/mrpt/scene.hpp>
 
@@ -7,51 +8,17 @@
 #include <mrpt/opengl/stock_objects.h>
 #include <mrpt/serialization/CArchive.h>
 
-#include <zlib.h>
-
 #include <cmath>
 #include <stdexcept>
 
 namespace gseg::mrpt {
-namespace {
-
-/// gzip of `data` (header without a time stamp: the same input gives the same bytes).
-std::string gzip(const void* data, std::size_t size) {
-    z_stream z{};
-    if (deflateInit2(&z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-        throw std::runtime_error("gzip: zlib initialisation failed");
-    std::string out(deflateBound(&z, uLong(size)), '\0');
-    z.next_in = static_cast<Bytef*>(const_cast<void*>(data));
-    z.avail_in = uInt(size);
-    z.next_out = reinterpret_cast<Bytef*>(out.data());
-    z.avail_out = uInt(out.size());
-    const int rc = deflate(&z, Z_FINISH);
-    out.resize(out.size() - z.avail_out);
-    deflateEnd(&z);
-    if (rc != Z_STREAM_END) throw std::runtime_error("gzip: zlib compression failed");
-    return out;
-}
-
-/// An MRPT output stream into a string (CMemoryStream grows 4 KB at a time: slow for large maps).
-class StringOutput : public ::mrpt::io::CStream {
-public:
-    std::string bytes;
-    size_t Write(const void* buffer, size_t count) override {
-        bytes.append(static_cast<const char*>(buffer), count);
-        return count;
-    }
-    size_t Read(void*, size_t) override { throw std::logic_error("StringOutput: write-only"); }
-    uint64_t Seek(int64_t, CStream::TSeekOrigin) override { throw std::logic_error("StringOutput: not seekable"); }
-    uint64_t getTotalBytesCount() const override { return bytes.size(); }
-    uint64_t getPosition() const override { return bytes.size(); }
-};
-
-}  // namespace
 
 std::string sceneFileBytes(const ::mrpt::opengl::COpenGLScene& scene) {
-    StringOutput buffer;
-    ::mrpt::serialization::archiveFrom(buffer) << scene;
-    return gzip(buffer.bytes.data(), buffer.bytes.size());
+    std::string bytes;
+    GzipOutputStream gz([&bytes](const void* d, std::size_t n) { bytes.append(static_cast<const char*>(d), n); }, "scene");
+    ::mrpt::serialization::archiveFrom(gz) << scene;
+    gz.finish();
+    return bytes;
 }
 
 std::string scanSceneBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels) {

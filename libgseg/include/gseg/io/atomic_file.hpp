@@ -1,111 +1,97 @@
 #pragma once
 /// \file atomic_file.hpp
-/// Outputs written completely or not at all. AtomicFile writes to a temporary file beside its
-/// target (`<target>.tmp<pid>`), checks every write and the close, and renames the temporary over
-/// the target only on commit(). Temporaries sit in a registry that a signal handler can read:
-/// after installTemporaryCleanup(), an interrupted run (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE)
-/// or a crash (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT) removes them before the process ends.
+/// Outputs written completely or not at all: the one output mechanism of gseg. An AtomicFile
+/// writes to a temporary beside the file it names (sideFilePath(), through symbolic links),
+/// checks every write and the close, and puts it in place only on commit(); an AtomicFileSet
+/// commits several together, all new or all old, also under signals (SignalDeferral). A file
+/// that did not exist when its writer started (or that checkOutputs() was told is new) is created
+/// exclusively: a second run writing it meanwhile fails instead of being overwritten. A pipe,
+/// terminal or device is written into as the bytes come (resolveOutput()).
+
+#include <gseg/io/output_checks.hpp>
+#include <gseg/io/temporary_cleanup.hpp>
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
 namespace gseg::io {
 
-/// One output file, written through a temporary file and renamed into place by commit().
-/// Not copyable; one object per output; usable from any thread (one thread per object).
+class AtomicFileSet;
+
+/// One output file. Not copyable; usable from any thread (one thread per object).
 class AtomicFile {
 public:
-    /// Creates the temporary beside `path`. Throws std::runtime_error naming `path` if it cannot.
+    /// Creates the temporary (or opens the stream); removes stale temporaries of `path` first.
+    /// Throws std::runtime_error naming `path` if it cannot (also where `path` is no place for a
+    /// file: see resolveOutput()).
     explicit AtomicFile(std::string path);
-    /// Removes the temporary unless commit() succeeded.
+    /// Removes the temporary unless committed.
     ~AtomicFile();
     AtomicFile(const AtomicFile&) = delete;
     AtomicFile& operator=(const AtomicFile&) = delete;
 
-    /// Appends `size` bytes. Throws std::runtime_error naming the target and the reason (e.g. "No
+    /// Appends `size` bytes. Throws std::runtime_error naming the output and the reason (e.g. "No
     /// space left on device") if they cannot all be written; the temporary is then removed.
     void write(const void* data, std::size_t size);
+    /// Appends what `fill` writes into a std::ostream (no copy in memory); errors as write().
+    void write(const std::function<void(std::ostream&)>& fill);
 
-    /// Closes the temporary (checked: a failed close loses data on some file systems) and renames
-    /// it over the target. Throws std::runtime_error and removes the temporary on failure.
+    /// Closes the temporary (checked) and puts it in place. Throws std::runtime_error on failure
+    /// (nothing changed at `path`). For a member of an AtomicFileSet, the set commits.
     void commit();
 
     /// Removes the temporary now (also done by the destructor).
     void discard() noexcept;
 
-    const std::string& path() const { return path_; }
+    const std::string& path() const { return target_.given; }
+    /// Where the bytes go now: the temporary, or the stream.
     const std::string& temporaryPath() const { return temp_; }
     std::uint64_t bytesWritten() const { return written_; }
+    bool streamed() const { return target_.stream; }
 
 private:
+    friend class AtomicFileSet;
+    friend void commitTogether(const std::vector<AtomicFile*>& files);
     [[noreturn]] void fail(const std::string& what, int err);
+    void close();  ///< the checked close before the rename
 
-    std::string path_, temp_;
+    OutputTarget target_;
+    bool exclusive_ = true;  ///< create `target_.file`, never replace it
+    bool inSet_ = false;
+    std::string temp_;
     int fd_ = -1;
-    int slot_ = -1;  // registry slot of the temporary
+    std::unique_ptr<TemporaryRegistration> registered_;
     std::uint64_t written_ = 0;
+    bool done_ = false;
 };
 
-/// A temporary file that another writer creates by path (not an AtomicFile), registered for the
-/// same cleanup on signals and crashes as AtomicFile's: the handler removes it. Destruction only
-/// unregisters the path; the file itself is the writer's business.
-class TemporaryRegistration {
+/// Outputs that belong together (a map's files, a report's tables): written one by one into
+/// their temporaries, then all put in place by commit(), or none. Not copyable.
+class AtomicFileSet {
 public:
-    /// Throws std::runtime_error if the path is too long or too many temporaries are registered.
-    explicit TemporaryRegistration(const std::string& path);
-    ~TemporaryRegistration();
-    TemporaryRegistration(TemporaryRegistration&& other) noexcept : slot_(other.slot_) { other.slot_ = -1; }
-    TemporaryRegistration(const TemporaryRegistration&) = delete;
-    TemporaryRegistration& operator=(const TemporaryRegistration&) = delete;
-    TemporaryRegistration& operator=(TemporaryRegistration&&) = delete;
+    /// One AtomicFile per path (empty paths are not allowed). Throws as AtomicFile.
+    explicit AtomicFileSet(const std::vector<std::string>& paths);
+    AtomicFile& operator[](std::size_t i) { return *files_[i]; }
+    std::size_t size() const { return files_.size(); }
+    std::vector<std::string> paths() const;
+
+    /// Closes every temporary (checked) and puts all in place. If any step fails, every file the
+    /// set had put in place gets its previous version back (or is removed where there was none),
+    /// and std::runtime_error names the file and the reason. A termination signal during the
+    /// renames waits until they are done (SignalDeferral).
+    void commit();
 
 private:
-    int slot_ = -1;
+    std::vector<std::unique_ptr<AtomicFile>> files_;
 };
 
 /// Writes `bytes` to `path` through an AtomicFile. Throws std::runtime_error on failure (and
 /// leaves neither a partial file nor a temporary).
 void writeFileAtomic(const std::string& path, const void* bytes, std::size_t size);
-
-/// Installs the signal handlers that remove registered temporaries (idempotent). A termination
-/// signal that the process inherited as ignored (e.g. SIGINT of a background job) stays ignored.
-/// SIGXFSZ is ignored, so that a file-size limit makes the write fail (and be reported) instead of
-/// killing the process. After the cleanup the handler prints one line to stderr, `<tool>:
-/// interrupted (SIGTERM) while <activity>; temporary outputs removed` or `<tool>: crashed
-/// (SIGSEGV) ...`, and lets the signal's default action end the process.
-void installTemporaryCleanup(const std::string& toolName);
-
-/// What the process is doing, for that line (e.g. "reading entry 12 of drive.rawlog"); kept in a
-/// fixed buffer (at most 255 bytes), thread-safe.
-void setActivity(const std::string& activity);
-
-/// Temporaries currently registered (for tests and diagnostics).
-std::vector<std::string> registeredTemporaries();
-
-/// A path given on a command line, with the name of its argument for messages.
-struct NamedPath {
-    std::string argument;  ///< e.g. "--labels-out" or "input"
-    std::string path;
-};
-
-/// Throws std::invalid_argument if an output is the same file as an input (same device and
-/// inode: hard links and symbolic links count) or two outputs name the same file. Empty paths are
-/// ignored. Call it before anything is written.
-void checkOutputsAreNotInputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
-
-/// What checkOutputs() allows.
-struct OutputRules {
-    bool overwrite = false;    ///< an existing output may be replaced (the tools' -w / --overwrite)
-    bool makeFolders = false;  ///< a missing folder is fine if it can be made (the tool makes it)
-};
-
-/// Checks before any work that every output can be written, and throws std::invalid_argument
-/// (bad usage) naming the argument and the path otherwise: checkOutputsAreNotInputs(); an output
-/// that exists is refused unless `rules.overwrite`, one that is a folder always; its folder must
-/// exist (or with `rules.makeFolders` its nearest existing parent) and accept a new file (tried:
-/// permissions, read-only file systems and root all count). Empty paths are ignored.
-void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules);
 
 }  // namespace gseg::io
