@@ -255,7 +255,7 @@ TEST(RawlogGseg, CorruptInputNamesTheEntryAndLeavesNoOutput) {
     EXPECT_NE(r.output.find("garbage.rawlog: not an MRPT rawlog"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out));
     for (const auto& e : fs::directory_iterator(kDir))
-        EXPECT_EQ(e.path().string().find("never.rawlog.tmp"), std::string::npos) << "temporary left behind";
+        EXPECT_EQ(e.path().string().find("never.rawlog.gseg-"), std::string::npos) << "temporary left behind";
 }
 
 TEST(GroundFilter, VelodyneScanWithPointsButNoPacketsAtATilt) {
@@ -642,7 +642,7 @@ TEST(RawlogGsegHostile, InterruptedRunLeavesNoTemporary) {
     const int fd = ::open(fifo.c_str(), O_WRONLY);  // returns once the tool opened its input
     ASSERT_GE(fd, 0);
     ASSERT_EQ(::write(fd, plain.data(), 300000), 300000);  // 300 kB: most of it consumed by the tool
-    EXPECT_NE(gseg::test::entriesContaining(dir.string(), "out.rawlog.tmp"), "");  // mid-run: the temporary exists
+    EXPECT_NE(gseg::test::entriesContaining(dir.string(), ".out.rawlog.gseg-"), "");  // mid-run: the temporary exists
     ::kill(pid, SIGTERM);
     int status = 0;
     ASSERT_EQ(::waitpid(pid, &status, 0), pid);

@@ -192,6 +192,7 @@ void commitTogether(const std::vector<AtomicFile*>& files) {
     }
     for (std::size_t i = 0; i < files.size(); ++i) {
         if (!backups[i].empty()) ::unlink(backups[i].c_str());
+        writtenByThisProcess(files[i]->target_.given);
         files[i]->done_ = true;
         files[i]->registered_.reset();
     }

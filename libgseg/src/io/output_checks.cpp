@@ -97,6 +97,11 @@ bool mustBeNew(const std::string& path) {
     return g_new.count(key(path)) > 0;
 }
 
+void writtenByThisProcess(const std::string& path) {
+    std::lock_guard<std::mutex> lock(g_newMutex);
+    g_new.erase(key(path));
+}
+
 void checkOutputsAreNotInputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
     // Each path is looked at once (a run may name thousands of inputs and outputs).
     using FileId = std::pair<dev_t, ino_t>;

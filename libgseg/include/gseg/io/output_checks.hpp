@@ -49,7 +49,11 @@ struct OutputRules {
 /// one existing later (another run made it meanwhile) fails instead of replacing it.
 void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules);
 
-/// Whether checkOutputs() was told that `path` must be a new file (no -w).
+/// Whether checkOutputs() was told that `path` must be a new file (no -w), and this process has
+/// not written it since.
 bool mustBeNew(const std::string& path);
+
+/// This process has written `path` (AtomicFile calls it): it may replace its own file later.
+void writtenByThisProcess(const std::string& path);
 
 }  // namespace gseg::io
