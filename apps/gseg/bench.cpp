@@ -80,10 +80,11 @@ std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::
             tools::say("%s: %zu non-finite point(s) left out (labelled non-ground, not segmented)\n", in.name.c_str(),
                         nonFinite);
         if (cfg.distToGroundAuto) {
-            AutoHeightSegmenter height(cfg.params);
-            height.segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16), false);
-            in.params.distToGround = height.lastDecision().height;
-            tools::say("%s: distToGround auto %s\n", in.name.c_str(), height.lastDecision().describe().c_str());
+            const HeightDecision height = ::gseg::mrpt::ScanSegmenter(cfg)
+                                              .segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16))
+                                              .height;
+            in.params.distToGround = height.height;
+            tools::say("%s: distToGround auto %s\n", in.name.c_str(), height.describe().c_str());
         }
         inputs.push_back(std::move(in));
     }

@@ -10,7 +10,7 @@
 #include <gseg/metrics.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/mrpt/config.hpp>
-#include <gseg/sensor_height.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -65,21 +65,18 @@ std::vector<Frame> findFrames(const fs::path& root, const std::vector<std::strin
     return frames;
 }
 
-/// A worker's segmenter: the fixed-height one, or with `distToGround: auto` the estimating one
-/// (frames are independent: each worker's frames get their own estimate, falling back to the
-/// configured height where a frame gives none).
+/// A worker's segmenter: the one height policy (gseg::mrpt::ScanSegmenter; with `distToGround:
+/// auto` each frame gets its own estimate, or the configured height where it gives none, so any
+/// thread count agrees). `note` says when the fallback was used.
 struct FrameSegmenter {
-    explicit FrameSegmenter(const Setup& setup) : fixed(setup.params), automatic(setup.params), useAuto(setup.autoHeight) {}
+    explicit FrameSegmenter(const Setup& setup) : seg(::gseg::mrpt::LoadedConfig{setup.params, setup.autoHeight}) {}
     Result segment(const PointCloudView& cloud, std::string& note) {
-        if (!useAuto) return fixed.segment(cloud, false);
-        automatic.reset();  // frames of a tree are independent: no history (and any thread count agrees)
-        Result r = automatic.segment(cloud, false);
-        if (automatic.lastDecision().source != HeightDecision::Source::Estimated) note = automatic.lastDecision().describe();
-        return r;
+        if (cloud.empty()) throw std::invalid_argument("gseg: the point cloud is empty");
+        ::gseg::mrpt::ScanSegmentation s = seg.segment(cloud, false, ::gseg::mrpt::HeightCheck::Never);
+        if (s.heightFallback()) note = s.height.describe();
+        return std::move(s.result);
     }
-    GroundSegmenter fixed;
-    AutoHeightSegmenter automatic;
-    bool useAuto;
+    ::gseg::mrpt::ScanSegmenter seg;
 };
 
 /// `warmUp`: segment once untimed first (a worker's first frame), so ms is a warm call's time.

@@ -14,7 +14,6 @@
 #include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
-#include <gseg/map/ordered_pipeline.hpp>
 #include <gseg/map/output_files.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
@@ -179,54 +178,45 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
                            outputs, {cli.overwrite, false});
     const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
     ScanStream stream(cli.poses);
+    gseg::map::MapBuilder builder(cfg, cli.options);
 
-    gseg::map::TraversabilityMap map(cli.options);
-    std::vector<ScanWorker> workers;  // one per thread: each has its own segmenter
-    for (unsigned i = 0; i < std::max(1u, cli.threads); ++i) workers.emplace_back(cfg, cli.options);
     // Under mpirun/srun rank 0 works too, with at least one thread like every other rank (with
     // --threads 0 one rank per core is the usual MPI layout): otherwise it would only read and map.
-    const unsigned remoteWorkers = remote ? remote->count() : 0;
-    const unsigned local = remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
+    gseg::map::BuildOptions how;
+    how.remoteWorkers = remote ? remote->count() : 0;
+    how.threads = how.remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
+    if (remote) how.remoteWork = [remote](unsigned slot, const ScanJob& job) { return (*remote)(slot, job); };
+    how.ranks = std::size_t(remote ? remote->processes() : 1);
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
-    RunReport report;
-    report.workers = local + remoteWorkers;
-    report.scansByProcess.assign(std::size_t(remote ? remote->processes() : 1), 0);
-    auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the other ranks' (if any)
-        return w < local || remoteWorkers == 0 ? workers[w](job) : (*remote)(w - local, job);
-    };
-    auto consume = [&](std::size_t k, ScanResult& r) {
-        report.times += r.times;
-        ++report.scansByProcess.at(std::size_t(r.rank));
+    how.onScan = [&](std::size_t k, const ScanResult& r) {
         if (!r.skipped.empty()) {
-            report.skipped.push_back(r.describe + ": " + r.skipped);
-            if (!quiet) progress.message("rawlog-octomap: skipped " + report.skipped.back());
+            const std::string& skipped = builder.tally().skipped.back();
+            if (!quiet) progress.message("rawlog-octomap: skipped " + skipped);
             if (!quiet && !gseg::tools::progressOut())  // --quiet: a skipped scan is still an error
-                std::fprintf(stderr, "rawlog-octomap: skipped %s\n", report.skipped.back().c_str());
-        } else {
-            const auto t0 = std::chrono::steady_clock::now();
-            map.apply(r.update);
-            report.times.mapUpdate += secondsSince(t0);
-            report.presegmented += r.presegmented;
-            report.reflections += r.reflections;
-            if (!r.heightNote.empty()) report.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
-            if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
-                const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
-                if (gseg::tools::progressOut()) progress.message(line);
-                else gseg::tools::note("%s\n", line.c_str());
-            }
+                std::fprintf(stderr, "rawlog-octomap: skipped %s\n", skipped.c_str());
+        } else if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
+            const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
+            if (gseg::tools::progressOut()) progress.message(line);
+            else gseg::tools::note("%s\n", line.c_str());
         }
         if (!quiet) progress.update(k + 1, r.fraction);
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
-    gseg::map::runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
-                                               {report.workers, 2 * std::size_t(std::max(1u, report.workers)) + 2});
-    const std::size_t total = map.path().size() + report.skipped.size();
+    builder.run(stream, how);
+    const gseg::map::TraversabilityMap& map = builder.map();
+    const gseg::map::BuildTally& tally = builder.tally();
+    const std::size_t total = map.path().size() + tally.skipped.size();
     if (!quiet) progress.finish(total);
     if (total == 0)
         throw std::runtime_error(cli.input + ": no 3D LiDAR scan in the rawlog (CObservationPointCloud, "
                                              "CObservationVelodyneScan, CObservation3DRangeScan)");
     if (map.empty()) throw std::runtime_error(cli.input + ": none of the " + std::to_string(total) + " scans could be used");
-    report.times.read = stream.readSeconds();
+    RunReport report;
+    report.workers = how.threads + how.remoteWorkers;
+    report.times = tally.times;
+    report.presegmented = tally.presegmented, report.reflections = tally.reflections;
+    report.heightFallbacks = tally.heightFallbacks, report.skipped = tally.skipped;
+    report.scansByProcess = tally.scansByRank;
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();
     report.poseSource = stream.poseSource();
