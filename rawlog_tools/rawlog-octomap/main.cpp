@@ -3,7 +3,7 @@
 // One pass over the rawlog, streamed: the reader assembles each scan with its pose (see
 // scan_stream.hpp), worker threads segment it (or take the `_ground` / `_obstacles` pair written
 // by rawlog-gseg as it is), put it into the world frame and ray-cast it into a ScanUpdate, and one
-// thread applies the updates to the maps strictly in scan order (gseg::map::runOrdered), so the
+// thread applies the updates to the maps strictly in scan order (gseg::runOrdered, in gseg::map::MapBuilder), so the
 // maps do not depend on the number of threads. At most a few scans are in memory at a time.
 // Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline
 // (remote_workers.hpp): the maps are the same bytes as one process's.
@@ -61,8 +61,8 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         "Traversability OctoMaps (ground / obstacles) from a rawlog of 3D LiDAR scans: writes PREFIX_ground.bt, "
         "PREFIX_obstacles.bt, PREFIX_traversability.ot and PREFIX_traversability.png (refused if one exists, unless "
         "-w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
-        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input or scans "
-        "skipped (named), 2 bad usage.",
+        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
+        "usage, 3 maps written but scans skipped (named).",
         true, printing);
     TCLAP::CmdLine& cmd = line.cmd();
     TCLAP::ValueArg<std::string> input("i", "input", "input rawlog (plain or gzip)", true, "", "IN.rawlog", cmd);
@@ -241,7 +241,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     if (const int code = parseCli(argc, argv, ranks.root(), cli); code >= 0) return code;
     if (cli.benchRounds > 0 && ranks.size() > 1) {
         std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
-        return 2;
+        return gseg::tools::kBadUsage;
     }
     if (!ranks.root()) {
         serveScans(ranks, cli);
@@ -261,15 +261,15 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         printReport(r, cli.options.resolution);
         if (!r.skipped.empty()) {
             std::cerr << "rawlog-octomap: " << r.skipped.size() << " scan(s) skipped, first: " << r.skipped[0] << "\n";
-            return 1;
+            return gseg::tools::kPartlyDone;
         }
-        return 0;
+        return gseg::tools::kDone;
     } catch (const std::invalid_argument& e) {
         std::cerr << "rawlog-octomap: " << e.what() << "\n";
-        return 2;
+        return gseg::tools::kBadUsage;
     } catch (const std::exception& e) {
         std::cerr << "rawlog-octomap: " << gseg::mrpt::errorReason(e) << "\n";
-        return 1;
+        return gseg::tools::kBadInput;
     }
 }
 

@@ -1,6 +1,6 @@
 #include <gseg/map/map_builder.hpp>
 
-#include <gseg/map/ordered_pipeline.hpp>
+#include <gseg/ordered_pipeline.hpp>
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 

@@ -30,11 +30,6 @@ CPose3D toPose(const Eigen::Isometry3d& p) {
     return CPose3D(m);
 }
 
-std::string baseLabel(const std::string& label, ScanPart part) {
-    const std::size_t cut = part == ScanPart::Ground ? 7 : part == ScanPart::Obstacles ? 10 : 0;
-    return label.substr(0, label.size() - cut);
-}
-
 /// "X,Y,Z" in metres.
 Eigen::Vector3d parseOrigin(const std::string& text) {
     Eigen::Vector3d v;
@@ -120,7 +115,7 @@ void ScanStream::observation(std::size_t entry, const ::mrpt::obs::CObservation:
     const ScanPart part = gseg::map::scanPartOf(*obs);
     if (part == ScanPart::Raw && !gseg::mrpt::isLidarObservation(*obs)) return;
     const double t = ::mrpt::Clock::toDouble(obs->timestamp);
-    const std::string label = baseLabel(obs->sensorLabel, part);
+    const std::string label = gseg::mrpt::baseLabelOf(obs->sensorLabel);
     auto slotOf = [part](ScanJob& j) -> ::mrpt::obs::CObservation::Ptr& {
         return part == ScanPart::Raw ? j.raw : part == ScanPart::Ground ? j.ground : j.obstacles;
     };

@@ -12,10 +12,6 @@
 namespace gseg::map {
 namespace {
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 Eigen::Vector3d originOf(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose) {
     ::mrpt::poses::CPose3D sensorPose;
     obs.getSensorPose(sensorPose);
@@ -33,9 +29,7 @@ void pushWorld(const ::mrpt::poses::CPose3D& pose, const float* p, std::vector<f
 }  // namespace
 
 ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs) {
-    if (endsWith(obs.sensorLabel, "_ground")) return ScanPart::Ground;
-    if (endsWith(obs.sensorLabel, "_obstacles")) return ScanPart::Obstacles;
-    return ScanPart::Raw;
+    return gseg::mrpt::scanPartOfLabel(obs.sensorLabel);
 }
 
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,

@@ -9,8 +9,8 @@
 /// takes its `_ground` / `_obstacles` pair as it is, moves it into the world frame
 /// (world_scan.hpp) and ray-casts it into a ScanUpdate (scan_update.hpp), independent of the map
 /// and of every other scan (a ScanResult, a plain value that can travel between processes); the
-/// MapBuilder applies the results to the TraversabilityMap strictly in scan order (runOrdered(),
-/// ordered_pipeline.hpp). So the maps do not depend on the number of threads or processes.
+/// MapBuilder applies the results to the TraversabilityMap strictly in scan order (gseg::runOrdered(),
+/// gseg/ordered_pipeline.hpp). So the maps do not depend on the number of threads or processes.
 
 #include <gseg/map/scan_stream.hpp>
 #include <gseg/map/scan_update.hpp>

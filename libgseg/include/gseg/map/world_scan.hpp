@@ -4,6 +4,7 @@
 /// with the sensor's world position as ray origin. The scan's mounting (`sensorPose`) is applied
 /// to the points and to the origin (MRPT 2.5.8's COctoMap applies it to the origin only).
 
+#include <gseg/mrpt/scan_parts.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/point_cloud.hpp>
 
@@ -34,8 +35,8 @@ struct WorldScan {
 };
 
 /// What an observation written by `rawlog-gseg` holds: its sensor label ends in `_ground` or
-/// `_obstacles`. Anything else is Raw (to be segmented).
-enum class ScanPart { Raw, Ground, Obstacles };
+/// `_obstacles` (gseg/mrpt/scan_parts.hpp). Anything else is Raw (to be segmented).
+using gseg::mrpt::ScanPart;
 ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs);
 
 /// Where segmentToWorld() spent its time [s].
