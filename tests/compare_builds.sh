@@ -103,38 +103,27 @@ for entry in "${drives[@]}"; do
     run_both "kitti2rawlog_$name" kitti2rawlog -q -i "$dir" -o "rawlogs/$name.rawlog" --simplemap "rawlogs/$name.simplemap"
 done
 
-# 4. rawlog-gseg: every mrpt-common rawlog (auto height) and every drive (fixed and auto).
+# 4. rawlog-gseg and rawlog-octomap (the six map files): every mrpt-common rawlog (auto height;
+# maps with one identity pose), and every drive (fixed and auto height, the pre-segmented rawlog,
+# one worker thread).
 for f in "$datasets"/*.rawlog; do
     [ -f "$f" ] || continue
     name=$(basename "$f" .rawlog | tr -c 'A-Za-z0-9_.\n-' '_')
     run_both "rawlog-gseg_$name" rawlog-gseg -q -i "$f" -o "split/$name.rawlog" -c "$cfg/vlp16.yaml"
-done
-for entry in "${drives[@]}"; do
-    name=${entry%%:*}
-    run_both "rawlog-gseg_$name" rawlog-gseg -q -i "rawlogs/$name.rawlog" -o "split/$name.rawlog" -c "$cfg/kitti_hdl64.yaml"
-    run_both "rawlog-gseg_auto_$name" rawlog-gseg -q -i "rawlogs/$name.rawlog" -o "split/${name}_auto.rawlog" \
-        -c "$cfg/auto_height.yaml"
-done
-
-# 5. rawlog-octomap: the six map files of each drive (raw, auto height, pre-segmented input), of
-# the VLP-16 scan (one identity pose) and of every mrpt-common rawlog it takes.
-for entry in "${drives[@]}"; do
-    name=${entry%%:*}
-    run_both "rawlog-octomap_$name" rawlog-octomap -q -i "rawlogs/$name.rawlog" -o "maps/$name" -c "$cfg/kitti_hdl64.yaml"
-    run_both "rawlog-octomap_auto_$name" rawlog-octomap -q -i "rawlogs/$name.rawlog" -o "maps/${name}_auto" \
-        -c "$cfg/auto_height.yaml"
-    run_both "rawlog-octomap_split_$name" rawlog-octomap -q -i "split/$name.rawlog" -o "maps/${name}_split"
-    run_both "rawlog-octomap_1thread_$name" rawlog-octomap -q -i "rawlogs/$name.rawlog" -o "maps/${name}_1thread" \
-        --threads 1
-done
-for f in "$datasets"/*.rawlog; do
-    [ -f "$f" ] || continue
-    name=$(basename "$f" .rawlog | tr -c 'A-Za-z0-9_.\n-' '_')
     run_both "rawlog-octomap_$name" rawlog-octomap -q -i "$f" -o "maps/$name" -c "$cfg/vlp16.yaml" \
         --poses stationary.tum --pose-tolerance 1e12
 done
+for entry in "${drives[@]}"; do
+    name=${entry%%:*} in=rawlogs/${entry%%:*}.rawlog
+    run_both "rawlog-gseg_$name" rawlog-gseg -q -i "$in" -o "split/$name.rawlog" -c "$cfg/kitti_hdl64.yaml"
+    run_both "rawlog-gseg_auto_$name" rawlog-gseg -q -i "$in" -o "split/${name}_auto.rawlog" -c "$cfg/auto_height.yaml"
+    run_both "rawlog-octomap_$name" rawlog-octomap -q -i "$in" -o "maps/$name" -c "$cfg/kitti_hdl64.yaml"
+    run_both "rawlog-octomap_auto_$name" rawlog-octomap -q -i "$in" -o "maps/${name}_auto" -c "$cfg/auto_height.yaml"
+    run_both "rawlog-octomap_split_$name" rawlog-octomap -q -i "split/$name.rawlog" -o "maps/${name}_split"
+    run_both "rawlog-octomap_1thread_$name" rawlog-octomap -q -i "$in" -o "maps/${name}_1thread" --threads 1
+done
 
-# 6. gseg-observations2map (needs observations2map of mrpt-apps).
+# 5. gseg-observations2map (needs observations2map of mrpt-apps).
 if command -v observations2map >/dev/null; then
     for entry in "${drives[@]}"; do
         name=${entry%%:*}

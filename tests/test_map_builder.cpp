@@ -5,14 +5,9 @@
 #include <gseg/map/map_builder.hpp>
 
 #include <support/child.hpp>
-#include <support/lidar_sim.hpp>
+#include <support/sim_drive.hpp>
 
 #include <gtest/gtest.h>
-#include <mrpt/io/CFileGZOutputStream.h>
-#include <mrpt/maps/CSimplePointsMap.h>
-#include <mrpt/obs/CObservationPointCloud.h>
-#include <mrpt/obs/CObservationRobotPose.h>
-#include <mrpt/serialization/CArchive.h>
 #include <octomap/OcTree.h>
 
 #include <filesystem>
@@ -29,59 +24,23 @@ using gseg::map::ScanJob;
 using gseg::map::ScanResult;
 using gseg::map::ScanStream;
 using gseg::map::ScanWorker;
-using gseg::test::Truth;
 
 constexpr int kScans = 6;
-constexpr double kRoadZ = 0.1;
-const mrpt::poses::CPose3D kMount(0.5, 0.0, 1.8, 0, 0, 0);  // sensor 1.8 m above the vehicle origin
 
-mrpt::poses::CPose3D vehiclePose(int k) { return mrpt::poses::CPose3D(3.0 * k, 0, kRoadZ, 0, 0, 0); }
-
+/// Options of a drive of kScans scans (tests/support/sim_drive.hpp).
 struct Drive {
     bool pairs = false;     ///< each scan also as its LIDAR_ground / LIDAR_obstacles pair (rawlog-gseg without --replace)
     int tinyScan = -1;      ///< this scan sees only the floor within 1.2 m: no height estimate
     int emptyScan = -1;     ///< this scan has no points
 };
 
-/// A road with a box and a wall; a CObservationRobotPose before each scan, as kitti2rawlog writes.
 std::string writeDrive(const std::string& name, const Drive& d = {}) {
     const std::string path = (gseg::test::freshDir("map_builder", name) / "drive.rawlog").string();
-    mrpt::io::CFileGZOutputStream f(path);
-    auto out = mrpt::serialization::archiveFrom(f);
-    gseg::test::Lidar lidar;
-    lidar.beams = 24, lidar.minElevationDeg = -25, lidar.maxElevationDeg = 5, lidar.azimuthStepDeg = 1.0, lidar.maxRange = 30;
-    for (int k = 0; k < kScans; ++k) {
-        const auto sensor = vehiclePose(k) + kMount;
-        gseg::test::Scene s;
-        s.addFlatGround(sensor.z() - kRoadZ);
-        s.addBox(10 - sensor.x(), -4 - sensor.y(), kRoadZ - sensor.z(), 11 - sensor.x(), -3 - sensor.y(), kRoadZ + 1.5 - sensor.z());
-        s.addBox(0 - sensor.x(), -8.2 - sensor.y(), kRoadZ - sensor.z(), 40 - sensor.x(), -8 - sensor.y(), kRoadZ + 3 - sensor.z());
-        const auto scan = gseg::test::simulate(s, lidar);
-        const auto t = mrpt::Clock::fromDouble(100.0 + 0.1 * k);
-        mrpt::obs::CObservationRobotPose p;
-        p.pose.mean = vehiclePose(k);
-        p.timestamp = t;
-        out << p;
-        auto write = [&](const std::string& label, int want) {  // -1 all, 1 ground, 0 obstacles
-            auto pc = mrpt::maps::CSimplePointsMap::Create();
-            for (std::size_t i = 0; i < scan.size() && k != d.emptyScan; ++i) {
-                const float x = scan.xyz[3 * i], y = scan.xyz[3 * i + 1], z = scan.xyz[3 * i + 2];
-                if (k == d.tinyScan && x * x + y * y > 1.2f * 1.2f) continue;
-                if (want < 0 || (scan.truth[i] == Truth::Ground) == (want == 1)) pc->insertPoint(x, y, z);
-            }
-            if (k == d.tinyScan)  // a floor disc under the sensor only
-                for (int i = -4; i <= 4; ++i)
-                    for (int j = -4; j <= 4; ++j) pc->insertPoint(0.12f * i, 0.12f * j, float(kRoadZ - sensor.z()));
-            mrpt::obs::CObservationPointCloud obs;
-            obs.pointcloud = pc;
-            obs.sensorPose = kMount;
-            obs.sensorLabel = label;
-            obs.timestamp = t;
-            out << obs;
-        };
-        write("LIDAR", -1);
-        if (d.pairs) write("LIDAR_ground", 1), write("LIDAR_obstacles", 0);
-    }
+    gseg::test::Drive sim;
+    sim.layout = d.pairs ? gseg::test::Drive::RawAndPair : gseg::test::Drive::Raw;
+    sim.tinyScan = d.tinyScan, sim.emptyScan = d.emptyScan;
+    sim.scans = kScans, sim.azimuthStepDeg = 1.0;  // small scans: quick
+    gseg::test::writeDrive(path, sim);
     return path;
 }
 
