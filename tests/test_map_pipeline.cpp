@@ -1,6 +1,6 @@
 // The map pipeline's structure (runOrdered: parallel per-scan work, results consumed in order,
 // bounded memory, deterministic errors). The progress lines of every tool: test_tool_common.cpp.
-#include <gseg/map/ordered_pipeline.hpp>
+#include <gseg/ordered_pipeline.hpp>
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 
 namespace {
 
-using gseg::map::PipelineOptions;
-using gseg::map::runOrdered;
+using gseg::PipelineOptions;
+using gseg::runOrdered;
 
 /// Deterministic, uneven work: later items are not always slower.
 std::uint64_t busyWork(int item) {

@@ -596,9 +596,9 @@ TEST(OctomapBuilder, ReflectionsBelowTheRoadBecomeNeitherGroundNorObstacles) {
     mrpt::obs::CObservationPointCloud obs;
     obs.pointcloud = pc;
     obs.sensorLabel = "LIDAR";
-    gseg::Params p;
-    p.distToGround = n.sensorHeight;
-    gseg::GroundSegmenter seg(p);
+    gseg::mrpt::LoadedConfig fixed;
+    fixed.params.distToGround = n.sensorHeight;
+    gseg::mrpt::ScanSegmenter seg(fixed);
     const gseg::map::WorldScan w = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), seg);
     EXPECT_GE(w.reflections, 1900u);
     EXPECT_EQ(w.ground.size() / 3 + w.obstacles.size() / 3 + w.reflections, n.scan.size());
@@ -607,8 +607,10 @@ TEST(OctomapBuilder, ReflectionsBelowTheRoadBecomeNeitherGroundNorObstacles) {
     map.apply(gseg::map::castScan(w.groundView(), w.obstaclesView(), w.sensorOrigin, map.options()));
     EXPECT_GT(map.stats().groundVoxels, 1000u);
     // With distToGround: auto the same (reflections do not move the estimate either).
-    gseg::AutoHeightSegmenter autoSeg(gseg::Params{});
-    const gseg::map::WorldScan a = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), seg, &autoSeg);
+    gseg::mrpt::LoadedConfig automatic;
+    automatic.distToGroundAuto = true;
+    gseg::mrpt::ScanSegmenter autoSeg(automatic);
+    const gseg::map::WorldScan a = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), autoSeg);
     EXPECT_GE(a.reflections, 1900u);
     EXPECT_TRUE(a.heightNote.empty()) << a.heightNote;
 }

@@ -14,7 +14,9 @@
 
 namespace gseg::tools {
 
-/// Exit codes of every tool.
+/// Exit codes of every tool (README, "Exit codes"): 0 done; 1 failure (bad input, nothing or not
+/// everything written); 2 bad usage (before any work, nothing changed); 3 done, but inputs (scans,
+/// frames, files) were skipped and named.
 enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2, kPartlyDone = 3 };
 
 enum class Verbosity { Quiet, Normal, Verbose };

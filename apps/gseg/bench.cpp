@@ -7,6 +7,7 @@
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
+#include <gseg/ordered_pipeline.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -80,10 +81,11 @@ std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::
             tools::say("%s: %zu non-finite point(s) left out (labelled non-ground, not segmented)\n", in.name.c_str(),
                         nonFinite);
         if (cfg.distToGroundAuto) {
-            AutoHeightSegmenter height(cfg.params);
-            height.segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16), false);
-            in.params.distToGround = height.lastDecision().height;
-            tools::say("%s: distToGround auto %s\n", in.name.c_str(), height.lastDecision().describe().c_str());
+            const HeightDecision height = ::gseg::mrpt::ScanSegmenter(cfg)
+                                              .segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16))
+                                              .height;
+            in.params.distToGround = height.height;
+            tools::say("%s: distToGround auto %s\n", in.name.c_str(), height.describe().c_str());
         }
         inputs.push_back(std::move(in));
     }
@@ -112,27 +114,21 @@ void timeOnThread(const std::vector<Input>& inputs, int repeat, bool perScanPara
         }
 }
 
-/// timeOnThread() on `threads` threads. Returns the samples per scan (all threads) and the wall
-/// time of the whole run [s]. An exception in a thread is carried out and rethrown here (one
-/// escaping a thread would abort the process).
+/// timeOnThread() on `threads` threads at once (gseg::runOrdered, the one worker pool: one item
+/// per thread). Returns the samples per scan (all threads) and the wall time of the whole run [s].
+/// An exception in a thread is rethrown here once every thread has ended.
 std::vector<std::vector<Sample>> timeAll(const std::vector<Input>& inputs, int repeat, int threads, bool perScanParams,
                                          double& wallS) {
-    std::vector<std::vector<std::vector<Sample>>> byThread(std::size_t(threads),
-                                                           std::vector<std::vector<Sample>>(inputs.size()));
-    std::vector<std::exception_ptr> failures(static_cast<std::size_t>(threads));
+    const unsigned n = unsigned(std::max(1, threads));
+    std::vector<std::vector<std::vector<Sample>>> byThread(n, std::vector<std::vector<Sample>>(inputs.size()));
     const auto start = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (std::size_t t = 0; t < std::size_t(threads); ++t)
-        pool.emplace_back([&, t] {
-            try {
-                timeOnThread(inputs, repeat, perScanParams, byThread[t]);
-            } catch (...) {
-                failures[t] = std::current_exception();
-            }
-        });
-    for (auto& th : pool) th.join();
-    for (const auto& f : failures)
-        if (f) std::rethrow_exception(f);
+    unsigned next = 0;
+    runOrdered<unsigned, bool>([&](unsigned& t) { return next < n ? (t = next++, true) : false; },
+                               [&](unsigned, unsigned& t) {
+                                   timeOnThread(inputs, repeat, perScanParams, byThread[t]);
+                                   return true;
+                               },
+                               [](std::size_t, bool&) {}, {n, n});
     wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::vector<std::vector<Sample>> perScan(inputs.size());
     for (const auto& thread : byThread)
@@ -202,7 +198,7 @@ int run(const std::vector<std::string>& paths, const std::string& config, int re
     ::getrusage(RUSAGE_SELF, &ru);
     tools::say("peak memory (ru_maxrss, scans loaded included): %.1f MB\n", double(ru.ru_maxrss) / 1024.0);
     if (!skipped.empty()) tools::say("%zu scan(s) skipped (named above)\n", skipped.size());
-    return skipped.empty() ? 0 : 3;
+    return skipped.empty() ? tools::kDone : tools::kPartlyDone;
 }
 
 }  // namespace

@@ -10,7 +10,8 @@
 #include <gseg/metrics.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/mrpt/config.hpp>
-#include <gseg/sensor_height.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
+#include <gseg/ordered_pipeline.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -65,21 +66,18 @@ std::vector<Frame> findFrames(const fs::path& root, const std::vector<std::strin
     return frames;
 }
 
-/// A worker's segmenter: the fixed-height one, or with `distToGround: auto` the estimating one
-/// (frames are independent: each worker's frames get their own estimate, falling back to the
-/// configured height where a frame gives none).
+/// A worker's segmenter: the one height policy (gseg::mrpt::ScanSegmenter; with `distToGround:
+/// auto` each frame gets its own estimate, or the configured height where it gives none, so any
+/// thread count agrees). `note` says when the fallback was used.
 struct FrameSegmenter {
-    explicit FrameSegmenter(const Setup& setup) : fixed(setup.params), automatic(setup.params), useAuto(setup.autoHeight) {}
+    explicit FrameSegmenter(const Setup& setup) : seg(::gseg::mrpt::LoadedConfig{setup.params, setup.autoHeight}) {}
     Result segment(const PointCloudView& cloud, std::string& note) {
-        if (!useAuto) return fixed.segment(cloud, false);
-        automatic.reset();  // frames of a tree are independent: no history (and any thread count agrees)
-        Result r = automatic.segment(cloud, false);
-        if (automatic.lastDecision().source != HeightDecision::Source::Estimated) note = automatic.lastDecision().describe();
-        return r;
+        if (cloud.empty()) throw std::invalid_argument("gseg: the point cloud is empty");
+        ::gseg::mrpt::ScanSegmentation s = seg.segment(cloud, false, ::gseg::mrpt::HeightCheck::Never);
+        if (s.heightFallback()) note = s.height.describe();
+        return std::move(s.result);
     }
-    GroundSegmenter fixed;
-    AutoHeightSegmenter automatic;
-    bool useAuto;
+    ::gseg::mrpt::ScanSegmenter seg;
 };
 
 /// `warmUp`: segment once untimed first (a worker's first frame), so ms is a warm call's time.
@@ -117,36 +115,39 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
     return out;
 }
 
-/// The frames `todo` (indices into `frames`) are handed out one at a time to `threads` workers,
-/// each with its own segmenter; the segmenter is deterministic, so the results equal a serial run's.
-/// Progress counts the frames scored and names the skipped ones apart.
+/// The frames `todo` (indices into `frames`) are handed out one at a time to `threads` workers
+/// (gseg::runOrdered, the one worker pool), each with its own segmenter; the segmenter is
+/// deterministic, so the results equal a serial run's. Progress counts the frames scored, in frame
+/// order, and names the skipped ones apart.
 std::vector<FrameResult> evaluateAll(const std::vector<Frame>& frames, const std::vector<std::size_t>& todo,
                                      const Setup& setup, int threads) {
     std::vector<FrameResult> results(frames.size());
-    std::atomic<std::size_t> next{0}, scored{0}, skipped{0};
+    std::size_t next = 0, scored = 0, skipped = 0;
     Progress progress(tools::progressOut(), "gseg eval", "frames");
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t)
-        pool.emplace_back([&] {
-            FrameSegmenter seg(setup);
-            bool first = true;
-            for (std::size_t k; (k = next++) < todo.size();) {
-                const std::size_t i = todo[k];
-                const FrameResult& r = results[i] = evaluate(seg, frames[i], setup, first);
-                first = first && !r.skipped.empty();
-                const std::size_t s = r.skipped.empty() ? skipped.load() : ++skipped;
-                const std::size_t n = r.skipped.empty() ? ++scored : scored.load();
-                if (r.skipped.empty())
-                    tools::detail("%s/%s: %zu points, precision %.2f %%, recall %.2f %%, F1 %.2f %%, %.1f ms\n",
-                                  frames[i].sequence.c_str(), frames[i].name.c_str(), r.row.points,
-                                  r.row.score.withVegetation.precision(), r.row.score.withVegetation.recall(),
-                                  r.row.score.withVegetation.f1(), r.row.ms);
-                progress.update(n, double(n + s) / double(todo.size()), s ? std::to_string(s) + " skipped" : "");
-            }
-        });
-    for (auto& th : pool) th.join();
-    const std::size_t s = skipped.load();
-    progress.finish(scored.load(), s ? std::to_string(s) + " skipped" : "");
+    std::vector<FrameSegmenter> segs;
+    for (int t = 0; t < std::max(1, threads); ++t) segs.emplace_back(setup);
+    std::vector<char> warm(segs.size(), 0);  // a worker's first scored frame is segmented once untimed first
+    auto produce = [&](std::size_t& i) { return next < todo.size() ? (i = todo[next++], true) : false; };
+    auto work = [&](unsigned w, std::size_t& i) {
+        FrameResult r = evaluate(segs[w], frames[i], setup, !warm[w]);
+        if (r.skipped.empty()) warm[w] = 1;
+        return r;
+    };
+    auto consume = [&](std::size_t k, FrameResult& r) {
+        const std::size_t i = todo[k];
+        if (r.skipped.empty()) ++scored;
+        else ++skipped;
+        if (r.skipped.empty())
+            tools::detail("%s/%s: %zu points, precision %.2f %%, recall %.2f %%, F1 %.2f %%, %.1f ms\n",
+                          frames[i].sequence.c_str(), frames[i].name.c_str(), r.row.points,
+                          r.row.score.withVegetation.precision(), r.row.score.withVegetation.recall(),
+                          r.row.score.withVegetation.f1(), r.row.ms);
+        progress.update(scored, double(scored + skipped) / double(todo.size()), skipped ? std::to_string(skipped) + " skipped" : "");
+        results[i] = std::move(r);
+    };
+    runOrdered<std::size_t, FrameResult>(produce, work, consume,
+                                         {unsigned(std::max(1, threads)), 2 * std::size_t(std::max(1, threads)) + 2});
+    progress.finish(scored, skipped ? std::to_string(skipped) + " skipped" : "");
     return results;
 }
 

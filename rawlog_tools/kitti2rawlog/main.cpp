@@ -94,7 +94,9 @@ double parseStartTime(const std::string& text) {
 }
 
 /// Exit codes.
-enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2 };
+using gseg::tools::kBadInput;  // the exit codes of every tool (common/cli.hpp)
+using gseg::tools::kBadUsage;
+using gseg::tools::kDone;
 
 /// Parses the command line into `c`; returns -1 to go on, or the exit code (0 after --help /
 /// --version, 2 on bad usage, with the message printed).

@@ -46,7 +46,10 @@ struct Cli {
 };
 
 /// Exit codes (also in --help).
-enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2, kScansSkipped = 3 };
+using gseg::tools::kBadInput;  // the exit codes of every tool (common/cli.hpp)
+using gseg::tools::kBadUsage;
+using gseg::tools::kDone;
+using gseg::tools::kPartlyDone;
 
 /// Reports on the scans of one input: progress (gseg::Progress: a live line on a terminal, else a
 /// line every 10 s), the skipped scans (always: they make the exit code 3) and with --verbose a
@@ -90,7 +93,7 @@ private:
 
 /// What one input gave.
 struct FileResult {
-    int code = kDone;                  ///< kDone, kScansSkipped, or kBadInput (nothing written)
+    int code = kDone;                  ///< kDone, kPartlyDone (scans skipped), or kBadInput (nothing written)
     std::string message;               ///< the summary, or why it failed
     std::vector<std::string> skipped;  ///< the lines naming the scans passed through unsegmented
     std::vector<std::string> warnings; ///< remarks that are no error (a distToGround the scan contradicts)
@@ -132,7 +135,7 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
     if (t.alreadySplit) result.message += ", " + std::to_string(t.alreadySplit) + " already split (passed through)";
     if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";
     result.message += "; wrote " + outPath;
-    result.code = t.skipped.empty() ? kDone : kScansSkipped;
+    result.code = t.skipped.empty() ? kDone : kPartlyDone;
     return result;
 }
 

@@ -3,7 +3,7 @@
 // One pass over the rawlog, streamed: the reader assembles each scan with its pose (see
 // scan_stream.hpp), worker threads segment it (or take the `_ground` / `_obstacles` pair written
 // by rawlog-gseg as it is), put it into the world frame and ray-cast it into a ScanUpdate, and one
-// thread applies the updates to the maps strictly in scan order (gseg::map::runOrdered), so the
+// thread applies the updates to the maps strictly in scan order (gseg::runOrdered, in gseg::map::MapBuilder), so the
 // maps do not depend on the number of threads. At most a few scans are in memory at a time.
 // Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline
 // (remote_workers.hpp): the maps are the same bytes as one process's.
@@ -13,8 +13,6 @@
 
 #include "common/cli.hpp"
 
-#include <gseg/io/atomic_file.hpp>
-#include <gseg/map/ordered_pipeline.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
@@ -62,8 +60,8 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         "Traversability OctoMaps (ground / obstacles) from a rawlog of 3D LiDAR scans: writes PREFIX_ground.bt, "
         "PREFIX_obstacles.bt, PREFIX_traversability.ot and PREFIX_traversability.png (refused if one exists, unless "
         "-w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
-        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input or scans "
-        "skipped (named), 2 bad usage.",
+        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
+        "usage, 3 maps written but scans skipped (named).",
         true, printing);
     TCLAP::CmdLine& cmd = line.cmd();
     TCLAP::ValueArg<std::string> input("i", "input", "input rawlog (plain or gzip)", true, "", "IN.rawlog", cmd);
@@ -179,54 +177,45 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
                            outputs, {cli.overwrite, false});
     const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
     ScanStream stream(cli.poses);
+    gseg::map::MapBuilder builder(cfg, cli.options);
 
-    gseg::map::TraversabilityMap map(cli.options);
-    std::vector<ScanWorker> workers;  // one per thread: each has its own segmenter
-    for (unsigned i = 0; i < std::max(1u, cli.threads); ++i) workers.emplace_back(cfg, cli.options);
     // Under mpirun/srun rank 0 works too, with at least one thread like every other rank (with
     // --threads 0 one rank per core is the usual MPI layout): otherwise it would only read and map.
-    const unsigned remoteWorkers = remote ? remote->count() : 0;
-    const unsigned local = remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
+    gseg::map::BuildOptions how;
+    how.remoteWorkers = remote ? remote->count() : 0;
+    how.threads = how.remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
+    if (remote) how.remoteWork = [remote](unsigned slot, const ScanJob& job) { return (*remote)(slot, job); };
+    how.ranks = std::size_t(remote ? remote->processes() : 1);
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
-    RunReport report;
-    report.workers = local + remoteWorkers;
-    report.scansByProcess.assign(std::size_t(remote ? remote->processes() : 1), 0);
-    auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the other ranks' (if any)
-        return w < local || remoteWorkers == 0 ? workers[w](job) : (*remote)(w - local, job);
-    };
-    auto consume = [&](std::size_t k, ScanResult& r) {
-        report.times += r.times;
-        ++report.scansByProcess.at(std::size_t(r.rank));
+    how.onScan = [&](std::size_t k, const ScanResult& r) {
         if (!r.skipped.empty()) {
-            report.skipped.push_back(r.describe + ": " + r.skipped);
-            if (!quiet) progress.message("rawlog-octomap: skipped " + report.skipped.back());
+            const std::string& skipped = builder.tally().skipped.back();
+            if (!quiet) progress.message("rawlog-octomap: skipped " + skipped);
             if (!quiet && !gseg::tools::progressOut())  // --quiet: a skipped scan is still an error
-                std::fprintf(stderr, "rawlog-octomap: skipped %s\n", report.skipped.back().c_str());
-        } else {
-            const auto t0 = std::chrono::steady_clock::now();
-            map.apply(r.update);
-            report.times.mapUpdate += secondsSince(t0);
-            report.presegmented += r.presegmented;
-            report.reflections += r.reflections;
-            if (!r.heightNote.empty()) report.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
-            if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
-                const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
-                if (gseg::tools::progressOut()) progress.message(line);
-                else gseg::tools::note("%s\n", line.c_str());
-            }
+                std::fprintf(stderr, "rawlog-octomap: skipped %s\n", skipped.c_str());
+        } else if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
+            const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
+            if (gseg::tools::progressOut()) progress.message(line);
+            else gseg::tools::note("%s\n", line.c_str());
         }
         if (!quiet) progress.update(k + 1, r.fraction);
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
-    gseg::map::runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
-                                               {report.workers, 2 * std::size_t(std::max(1u, report.workers)) + 2});
-    const std::size_t total = map.path().size() + report.skipped.size();
+    builder.run(stream, how);
+    const gseg::map::TraversabilityMap& map = builder.map();
+    const gseg::map::BuildTally& tally = builder.tally();
+    const std::size_t total = map.path().size() + tally.skipped.size();
     if (!quiet) progress.finish(total);
     if (total == 0)
         throw std::runtime_error(cli.input + ": no 3D LiDAR scan in the rawlog (CObservationPointCloud, "
                                              "CObservationVelodyneScan, CObservation3DRangeScan)");
     if (map.empty()) throw std::runtime_error(cli.input + ": none of the " + std::to_string(total) + " scans could be used");
-    report.times.read = stream.readSeconds();
+    RunReport report;
+    report.workers = how.threads + how.remoteWorkers;
+    report.times = tally.times;
+    report.presegmented = tally.presegmented, report.reflections = tally.reflections;
+    report.heightFallbacks = tally.heightFallbacks, report.skipped = tally.skipped;
+    report.scansByProcess = tally.scansByRank;
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();
     report.poseSource = stream.poseSource();
@@ -251,7 +240,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     if (const int code = parseCli(argc, argv, ranks.root(), cli); code >= 0) return code;
     if (cli.benchRounds > 0 && ranks.size() > 1) {
         std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
-        return 2;
+        return gseg::tools::kBadUsage;
     }
     if (!ranks.root()) {
         serveScans(ranks, cli);
@@ -271,15 +260,15 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         printReport(r, cli.options.resolution);
         if (!r.skipped.empty()) {
             std::cerr << "rawlog-octomap: " << r.skipped.size() << " scan(s) skipped, first: " << r.skipped[0] << "\n";
-            return 1;
+            return gseg::tools::kPartlyDone;
         }
-        return 0;
+        return gseg::tools::kDone;
     } catch (const std::invalid_argument& e) {
         std::cerr << "rawlog-octomap: " << e.what() << "\n";
-        return 2;
+        return gseg::tools::kBadUsage;
     } catch (const std::exception& e) {
         std::cerr << "rawlog-octomap: " << gseg::mrpt::errorReason(e) << "\n";
-        return 1;
+        return gseg::tools::kBadInput;
     }
 }
 

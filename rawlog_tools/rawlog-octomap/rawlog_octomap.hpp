@@ -1,15 +1,23 @@
 #pragma once
-// rawlog-octomap: the command line, one map-building run, and the benchmark against plain OctoMap.
+// rawlog-octomap: the command line, one map-building run (gseg::map::MapBuilder), and the
+// benchmark against plain OctoMap. The per-scan work and the ordered integration are the map
+// layer's (gseg/map/map_builder.hpp); the tool adds the command line, progress, the report and the
+// MPI transport (remote_workers.hpp).
 
-#include "scan_stream.hpp"
-#include "scan_work.hpp"
+#include <gseg/map/map_builder.hpp>
 
-#include <gseg/map/traversability_map.hpp>
-
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace rawlog_octomap {
+
+using gseg::map::PhaseTimes;
+using gseg::map::PoseConfig;
+using gseg::map::ScanJob;
+using gseg::map::ScanResult;
+using gseg::map::ScanStream;
+using gseg::map::ScanWorker;
 
 struct Cli {
     std::string input, prefix, config;

@@ -1,8 +1,6 @@
 #include <gseg/map/octomap_plugin.hpp>
 
-#include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/config.hpp>
-#include <gseg/mrpt/observation_points.hpp>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/core/initializer.h>
@@ -57,11 +55,25 @@ void CTraversabilityOctoMap::TMapDefinition::dumpToTextStream_map_specific(std::
     return new CTraversabilityOctoMap(d.options, d.params);
 }
 
+namespace {
+
+gseg::mrpt::LoadedConfig withParams(const gseg::Params& params) {
+    gseg::mrpt::LoadedConfig c;
+    c.params = params;
+    return c;
+}
+
+}  // namespace
+
 CTraversabilityOctoMap::CTraversabilityOctoMap(const gseg::map::TraversabilityOptions& options, const gseg::Params& params)
-    : map_(options), segmenter_(params) {}
+    : CTraversabilityOctoMap(options, withParams(params)) {}
+
+CTraversabilityOctoMap::CTraversabilityOctoMap(const gseg::map::TraversabilityOptions& options,
+                                               const gseg::mrpt::LoadedConfig& config)
+    : builder_(config, options) {}
 
 void CTraversabilityOctoMap::saveMetricMapRepresentationToFile(const std::string& prefix) const {
-    if (!map_.empty()) map_.write(prefix);
+    if (!map().empty()) map().write(prefix);
 }
 
 void CTraversabilityOctoMap::getVisualizationInto(::mrpt::opengl::CSetOfObjects&) const {
@@ -69,29 +81,15 @@ void CTraversabilityOctoMap::getVisualizationInto(::mrpt::opengl::CSetOfObjects&
 }
 
 std::string CTraversabilityOctoMap::asString() const {
-    return "gseg traversability OctoMaps (" + std::to_string(map_.path().size()) + " scans, " +
-           std::to_string(map_.options().resolution) + " m voxels)";
+    return "gseg traversability OctoMaps (" + std::to_string(map().path().size()) + " scans, " +
+           std::to_string(map().options().resolution) + " m voxels)";
 }
 
-void CTraversabilityOctoMap::internal_clear() { map_ = gseg::map::TraversabilityMap(map_.options()); }
+void CTraversabilityOctoMap::internal_clear() { builder_.clear(); }
 
 bool CTraversabilityOctoMap::internal_insertObservation(const ::mrpt::obs::CObservation& obs,
                                                         const std::optional<const ::mrpt::poses::CPose3D>& robotPose) {
-    const ::mrpt::poses::CPose3D pose = robotPose ? *robotPose : ::mrpt::poses::CPose3D();
-    using namespace gseg::map;
-    const ScanPart part = scanPartOf(obs);
-    if (part == ScanPart::Raw && !gseg::mrpt::isLidarObservation(obs)) return false;
-    if (part == ScanPart::Raw) {
-        const WorldScan scan = segmentToWorld(obs, pose, segmenter_);
-        map_.insertScan(scan.groundView(), scan.obstaclesView(), scan.sensorOrigin);
-        return true;
-    }
-    std::vector<float> pts;
-    const Eigen::Vector3d origin = appendWorldPoints(obs, pose, pts);
-    const gseg::PointCloudView view(pts.data(), pts.size() / 3), none;
-    if (part == ScanPart::Ground) map_.insertScan(view, none, origin);
-    else map_.insertScan(none, view, origin);
-    return true;
+    return builder_.insert(obs, robotPose ? *robotPose : ::mrpt::poses::CPose3D());
 }
 
 double CTraversabilityOctoMap::internal_computeObservationLikelihood(const ::mrpt::obs::CObservation&,

@@ -19,14 +19,13 @@ std::int64_t floorDiv(std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : 
 constexpr int kTitleBand = 56, kMargin = 12, kMinWidth = 760;  // [px] around the map
 constexpr int kEnlargeTo = 640;                                   // [px] longer side of a small map
 
-gseg::mrpt::Colour colour(Rgb c) { return {c.r, c.g, c.b}; }
 const gseg::mrpt::Colour kPath{40, 120, 255}, kStart{255, 255, 255};
 
 /// The legend under the map.
 std::vector<gseg::mrpt::LegendEntry> legendEntries() {
-    return {{colour(colourOf(CellClass::Traversable)), "traversable (ground, nothing within clearance)"},
-            {colour(colourOf(CellClass::Obstacle)), "obstacle"},
-            {colour(colourOf(CellClass::Unknown)), "unknown: not seen (page around the map darker)"},
+    return {{colourOf(CellClass::Traversable), "traversable (ground, nothing within clearance)"},
+            {colourOf(CellClass::Obstacle), "obstacle"},
+            {colourOf(CellClass::Unknown), "unknown: not seen (page around the map darker)"},
             {kPath, "driven path; arrowhead: direction of travel"},
             {kStart, "start of the path"},
             {{}, "top view: x up, y (left) to the left", false},
@@ -140,12 +139,12 @@ PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Ve
 std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, const std::string& title) {
     const PictureLayout l = pictureLayout(grid, drivenPath);
     if (l.width <= 0) throw std::runtime_error("empty map: no picture to draw");
-    gseg::mrpt::Picture pic(l.width, l.height, colour(backgroundColour()));
+    gseg::mrpt::Picture pic(l.width, l.height, backgroundColour());
     const std::vector<std::uint8_t> px = mapPixels(grid, l);
     const int w = l.mapWidth / l.pixelsPerCell, p = l.pixelsPerCell;
     for (int row = 0; row < l.mapHeight; ++row)
         for (int col = 0; col < l.mapWidth; ++col)
-            pic.pixel(l.mapLeft + col, l.mapTop + row, colour(colourOf(CellClass(px[std::size_t(row / p) * std::size_t(w) + std::size_t(col / p)]))));
+            pic.pixel(l.mapLeft + col, l.mapTop + row, colourOf(CellClass(px[std::size_t(row / p) * std::size_t(w) + std::size_t(col / p)])));
     drawPath(pic, drivenPath, l);
     char scale[96];
     std::snprintf(scale, sizeof scale, "%.2f m cells%s", l.cell,

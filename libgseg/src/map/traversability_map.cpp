@@ -55,8 +55,20 @@ struct Column {
 using detail::kGround;
 using detail::kObstacles;
 
+/// The occupied voxels as every output shows them, each once (obstacles first, then ground): the
+/// rule "a voxel occupied in both maps is an obstacle" (ground never lowers an obstacle voxel).
+template <class F>
+void forEachShownVoxel(const detail::BrickMap& voxels, float occupied, F&& f) {
+    voxels.forEachVoxel(kObstacles, [&](std::uint64_t code, float value) {
+        if (value >= occupied) f(code, CellClass::Obstacle);
+    });
+    voxels.forEachVoxel(kGround, [&](std::uint64_t code, float value) {
+        if (value >= occupied && !voxels.occupied(kObstacles, code)) f(code, CellClass::Traversable);
+    });
+}
+
 /// The occupied voxels of the map as they are shown (.ply, .3Dscene): centres [m] and labels (1
-/// ground, 0 obstacle; a voxel occupied in both maps is an obstacle), in Morton-code order.
+/// ground, 0 obstacle; forEachShownVoxel()), in Morton-code order.
 struct OccupiedVoxels {
     std::vector<float> xyz;
     std::vector<std::uint8_t> labels;
@@ -64,12 +76,8 @@ struct OccupiedVoxels {
 
 OccupiedVoxels occupiedVoxels(const detail::BrickMap& voxels, const detail::MapTree& configured) {
     std::vector<std::pair<std::uint64_t, std::uint8_t>> codes;
-    const float occupied = configured.getOccupancyThresLog();
-    voxels.forEachVoxel(kObstacles, [&](std::uint64_t code, float value) {
-        if (value >= occupied) codes.emplace_back(code, 0);
-    });
-    voxels.forEachVoxel(kGround, [&](std::uint64_t code, float value) {
-        if (value >= occupied && !voxels.occupied(kObstacles, code)) codes.emplace_back(code, 1);
+    forEachShownVoxel(voxels, configured.getOccupancyThresLog(), [&](std::uint64_t code, CellClass c) {
+        codes.emplace_back(code, c == CellClass::Traversable ? 1 : 0);
     });
     std::sort(codes.begin(), codes.end());  // the files must not depend on the order the bricks were made in
     OccupiedVoxels v;
@@ -177,13 +185,7 @@ std::unique_ptr<octomap::ColorOcTree> TraversabilityMap::colouredTree() const {
         tree->updateNode(key, true, true);
         tree->setNodeColor(key, c.r, c.g, c.b);
     };
-    const float occupied = configured_->getOccupancyThresLog();
-    voxels_->forEachVoxel(kObstacles, [&](std::uint64_t code, float v) {
-        if (v >= occupied) add(code, colourOf(CellClass::Obstacle));
-    });
-    voxels_->forEachVoxel(kGround, [&](std::uint64_t code, float v) {
-        if (v >= occupied && !voxels_->occupied(kObstacles, code)) add(code, colourOf(CellClass::Traversable));
-    });
+    forEachShownVoxel(*voxels_, configured_->getOccupancyThresLog(), [&](std::uint64_t code, CellClass c) { add(code, colourOf(c)); });
     if (tree->size() > 0) tree->updateInnerOccupancy();  // ColorOcTree's crashes on an empty tree
     return tree;
 }

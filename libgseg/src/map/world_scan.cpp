@@ -5,18 +5,12 @@
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
 
-#include <gseg/sensor_height.hpp>
-
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 namespace gseg::map {
 namespace {
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 Eigen::Vector3d originOf(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose) {
     ::mrpt::poses::CPose3D sensorPose;
@@ -35,29 +29,20 @@ void pushWorld(const ::mrpt::poses::CPose3D& pose, const float* p, std::vector<f
 }  // namespace
 
 ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs) {
-    if (endsWith(obs.sensorLabel, "_ground")) return ScanPart::Ground;
-    if (endsWith(obs.sensorLabel, "_obstacles")) return ScanPart::Obstacles;
-    return ScanPart::Raw;
+    return gseg::mrpt::scanPartOfLabel(obs.sensorLabel);
 }
 
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight, WorldScanTimes* times,
-                         bool checkHeight) {
+                         gseg::mrpt::ScanSegmenter& segmenter, WorldScanTimes* times, gseg::mrpt::HeightCheck check) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> levelled = gseg::mrpt::levelledPoints(obs);
     if (levelled.empty()) throw std::invalid_argument("observation '" + obs.sensorLabel + "' has no points");
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 4 * sizeof(float));
     WorldScan out;
-    Result r;
-    if (autoHeight) {
-        r = autoHeight->segment(cloud, false);
-        if (autoHeight->lastDecision().source != HeightDecision::Source::Estimated)
-            out.heightNote = autoHeight->lastDecision().describe();
-    } else {
-        r = segmenter.segment(cloud, false);
-        if (checkHeight && r.numNonFinite < cloud.size())
-            out.heightWarning = checkDistToGround(cloud, segmenter.params().distToGround, segmenter.params().seedHeightTolerance);
-    }
+    gseg::mrpt::ScanSegmentation seg = segmenter.segment(cloud, false, check);
+    if (seg.heightFallback()) out.heightNote = seg.height.describe();
+    out.heightWarning = std::move(seg.heightWarning);
+    const Result& r = seg.result;
     const auto t1 = std::chrono::steady_clock::now();
 
     // Levelled frame = sensor position with the robot's axes: world = robot pose + sensor offset.

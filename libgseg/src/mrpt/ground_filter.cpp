@@ -1,6 +1,7 @@
 #include <gseg/io/float_cast.hpp>
 #include <gseg/mrpt/ground_filter.hpp>
 #include <gseg/mrpt/observation_points.hpp>
+#include <gseg/mrpt/scan_parts.hpp>
 
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/poses/CPose3D.h>
@@ -82,16 +83,16 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
         dst.insertPointFast(gseg::io::toFloat(x), gseg::io::toFloat(y), gseg::io::toFloat(z));
         dst.setPointIntensity(dst.size() - 1, p[3]);
     }
-    auto make = [&](const ::mrpt::maps::CPointsMapXYZI::Ptr& pts, const char* suffix) {
+    auto make = [&](const ::mrpt::maps::CPointsMapXYZI::Ptr& pts, gm::ScanPart part) {
         auto obs = ::mrpt::obs::CObservationPointCloud::Create();
         obs->pointcloud = pts;
-        obs->sensorLabel = label + suffix;
+        obs->sensorLabel = gm::partLabel(label, part);
         obs->sensorPose = vehicle ? ::mrpt::poses::CPose3D() : sensorPose;
         if (source) obs->timestamp = source->timestamp;
         return obs;
     };
-    out.ground = make(ground, "_ground");
-    out.obstacles = make(obstacles, "_obstacles");
+    out.ground = make(ground, gm::ScanPart::Ground);
+    out.obstacles = make(obstacles, gm::ScanPart::Obstacles);
     return out;
 }
 

@@ -2,6 +2,7 @@
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_segmenter.hpp>
+#include <gseg/mrpt/scan_parts.hpp>
 
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -12,13 +13,9 @@
 namespace gseg::mrpt {
 namespace {
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 // `half` is the `_ground` cloud gseg made from `scan`.
 bool isGroundHalfOf(const ::mrpt::obs::CObservation& half, const ::mrpt::obs::CObservation& scan) {
-    return dynamic_cast<const ::mrpt::obs::CObservationPointCloud*>(&half) && half.sensorLabel == scan.sensorLabel + "_ground" &&
+    return dynamic_cast<const ::mrpt::obs::CObservationPointCloud*>(&half) && half.sensorLabel == partLabel(scan.sensorLabel, ScanPart::Ground) &&
            half.timestamp == scan.timestamp;
 }
 
@@ -26,7 +23,7 @@ bool isGroundHalfOf(const ::mrpt::obs::CObservation& half, const ::mrpt::obs::CO
 
 bool isSegmentedHalf(const ::mrpt::obs::CObservation& obs) {
     return dynamic_cast<const ::mrpt::obs::CObservationPointCloud*>(&obs) &&
-           (endsWith(obs.sensorLabel, "_ground") || endsWith(obs.sensorLabel, "_obstacles"));
+           scanPartOfLabel(obs.sensorLabel) != ScanPart::Raw;
 }
 
 struct RawlogSegmenter::Pending {

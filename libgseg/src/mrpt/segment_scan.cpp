@@ -5,22 +5,24 @@ namespace gseg::mrpt {
 ScanSegmenter::ScanSegmenter(const LoadedConfig& config)
     : config_(config), fixed_(config.params), auto_(config.params) {}
 
-ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics) {
+ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics, HeightCheck check) {
     ScanSegmentation out;
+    out.autoHeight = config_.distToGroundAuto;
     out.distToGround = config_.params.distToGround;
     if (cloud.empty()) return out;  // nothing to label
     if (config_.distToGroundAuto) {
+        auto_.reset();  // the rule: this scan's own estimate or the fallback height, never an earlier scan's
         out.result = auto_.segment(cloud, keepCellDiagnostics);
         out.height = auto_.lastDecision();
         out.distToGround = out.height.height;
         out.distToGroundEstimated = out.height.source == HeightDecision::Source::Estimated;
     } else {
         out.result = fixed_.segment(cloud, keepCellDiagnostics);
-        out.distToGround = config_.params.distToGround;
-        if (!heightChecked_ && out.result.numNonFinite < cloud.size()) {
-            heightChecked_ = true;
+        const bool hasPoints = out.result.numNonFinite < cloud.size();
+        const bool checkNow = check == HeightCheck::Now || (check == HeightCheck::FirstScan && !heightChecked_);
+        if (checkNow && hasPoints)
             out.heightWarning = checkDistToGround(cloud, config_.params.distToGround, config_.params.seedHeightTolerance);
-        }
+        heightChecked_ = heightChecked_ || hasPoints;
     }
     out.nonFinitePoints = out.result.numNonFinite;
     return out;

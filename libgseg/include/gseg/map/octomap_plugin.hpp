@@ -16,8 +16,9 @@
 /// Saving (CMultiMetricMap names it `<prefix>_gseg_maps__CTraversabilityOctoMap_<NN>` (MRPT turns "::" into "__")) writes the
 /// four files of TraversabilityMap::write() with that prefix.
 
-#include <gseg/ground_segmenter.hpp>
+#include <gseg/map/map_builder.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/mrpt/config.hpp>
 #include <gseg/params.hpp>
 
 #include <mrpt/maps/CMetricMap.h>
@@ -26,20 +27,25 @@
 /// `namespace gseg` would find `gseg::mrpt` instead.
 namespace gseg_maps {
 
-/// Metric map holding a TraversabilityMap. Each inserted 3D LiDAR observation is segmented with
-/// gseg::GroundSegmenter (observations already split by rawlog-gseg, labels ending in `_ground` /
-/// `_obstacles`, are used as they are); other observation kinds are ignored (insertion returns
-/// false). Not serialisable (the OctoMap files are its persistent form); no likelihood.
+/// Metric map holding a TraversabilityMap, a thin adapter over gseg::map::MapBuilder (the builder
+/// of rawlog-octomap): each inserted 3D LiDAR observation is segmented with the configured height
+/// policy, moved into the world and ray-cast there (observations already split by rawlog-gseg,
+/// labels ending in `_ground` / `_obstacles`, are used as they are); other observation kinds, and
+/// scans without points, are not used (insertion returns false). Not serialisable (the OctoMap
+/// files are its persistent form); no likelihood.
 class CTraversabilityOctoMap : public ::mrpt::maps::CMetricMap {
     DEFINE_SERIALIZABLE(CTraversabilityOctoMap, gseg_maps)
 
 public:
     explicit CTraversabilityOctoMap(const gseg::map::TraversabilityOptions& options = gseg::map::TraversabilityOptions(),
                                     const gseg::Params& params = gseg::Params());
+    /// The whole configuration (`distToGround: auto` included).
+    CTraversabilityOctoMap(const gseg::map::TraversabilityOptions& options, const gseg::mrpt::LoadedConfig& config);
 
-    const gseg::map::TraversabilityMap& map() const { return map_; }
+    const gseg::map::TraversabilityMap& map() const { return builder_.map(); }
+    const gseg::map::MapBuilder& builder() const { return builder_; }
 
-    bool isEmpty() const override { return map_.empty(); }
+    bool isEmpty() const override { return builder_.map().empty(); }
     void saveMetricMapRepresentationToFile(const std::string& prefix) const override;
     void getVisualizationInto(::mrpt::opengl::CSetOfObjects& o) const override;
     std::string asString() const override;
@@ -58,8 +64,7 @@ protected:
     bool internal_canComputeObservationLikelihood(const ::mrpt::obs::CObservation& obs) const override;
 
 private:
-    gseg::map::TraversabilityMap map_;
-    gseg::GroundSegmenter segmenter_;
+    gseg::map::MapBuilder builder_;
 };
 
 }  // namespace gseg_maps

@@ -7,6 +7,7 @@
 /// Frame: everything is in one world frame (metres, z up). Callers transform points with the
 /// robot pose and the sensor mounting first, and give the sensor's world position as ray origin.
 
+#include <gseg/mrpt/picture.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <Eigen/Core>
@@ -228,10 +229,9 @@ void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std
 std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
                              const std::string& title = "");
 
+/// The one colour type of gseg's pictures and files (8-bit RGB, gseg/mrpt/picture.hpp).
+using Rgb = gseg::mrpt::Colour;
 /// RGB of each class in the PNG (also the voxel colours of the `.ot`, `.ply` and `.3Dscene`).
-struct Rgb {
-    std::uint8_t r, g, b;
-};
 Rgb colourOf(CellClass c);
 /// RGB of the page around the mapped area (darker than Unknown).
 Rgb backgroundColour();

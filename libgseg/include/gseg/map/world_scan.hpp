@@ -4,9 +4,9 @@
 /// with the sensor's world position as ray origin. The scan's mounting (`sensorPose`) is applied
 /// to the points and to the origin (MRPT 2.5.8's COctoMap applies it to the origin only).
 
-#include <gseg/ground_segmenter.hpp>
+#include <gseg/mrpt/scan_parts.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/point_cloud.hpp>
-#include <gseg/sensor_height.hpp>
 
 #include <Eigen/Core>
 
@@ -35,8 +35,8 @@ struct WorldScan {
 };
 
 /// What an observation written by `rawlog-gseg` holds: its sensor label ends in `_ground` or
-/// `_obstacles`. Anything else is Raw (to be segmented).
-enum class ScanPart { Raw, Ground, Obstacles };
+/// `_obstacles` (gseg/mrpt/scan_parts.hpp). Anything else is Raw (to be segmented).
+using gseg::mrpt::ScanPart;
 ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs);
 
 /// Where segmentToWorld() spent its time [s].
@@ -45,17 +45,17 @@ struct WorldScanTimes {
     double transform = 0;     ///< into the world frame
 };
 
-/// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) and puts
-/// both classes into the world frame with `robotPose` + the observation's sensorPose. With
-/// `autoHeight` given (`distToGround: auto`), that segmenter estimates the height per scan (and
-/// never refuses one); otherwise `segmenter` is used. Points without a return and reflections below
-/// the ground (Result::belowGround) go into neither class. With `checkHeight` (and a fixed
-/// height), the scan is also checked against the segmenter's distToGround (heightWarning; costs
-/// about one segmentation: the tools check their first scan). Throws std::invalid_argument for a
-/// non-LiDAR observation or an empty scan.
+/// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) with the
+/// configured height policy (gseg::mrpt::ScanSegmenter: fixed, or `distToGround: auto` per scan
+/// with the configured fallback; heightNote says when the fallback was used) and puts both classes
+/// into the world frame with `robotPose` + the observation's sensorPose. Points without a return
+/// and reflections below the ground (Result::belowGround) go into neither class. `check`: when a
+/// fixed height is checked against the scan (heightWarning; costs about one segmentation: the map
+/// builder checks the first scan of a drive). Throws std::invalid_argument for a non-LiDAR
+/// observation or an empty scan.
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         GroundSegmenter& segmenter, AutoHeightSegmenter* autoHeight = nullptr,
-                         WorldScanTimes* times = nullptr, bool checkHeight = false);
+                         gseg::mrpt::ScanSegmenter& segmenter, WorldScanTimes* times = nullptr,
+                         gseg::mrpt::HeightCheck check = gseg::mrpt::HeightCheck::Never);
 
 /// Appends every point of `obs` (one class already) in the world frame to `out` (x, y, z
 /// triples) and returns the sensor's world position.

@@ -1,9 +1,19 @@
 #pragma once
 /// \file segment_scan.hpp
-/// Segmenting real scans with a loaded configuration: `distToGround: auto` resolved per scan
-/// (gseg::AutoHeightSegmenter: never refuses a scan, keeps the previous scan's height as fallback)
-/// and points with NaN or infinite coordinates (a driver's "no return", the holes of an organised
-/// cloud) labelled non-ground and counted by the core. Used by the tools and gseg::GroundFilter.
+/// The one height policy: segmenting real scans with a loaded configuration, the sensor height
+/// fixed (`distToGround: 1.73`) or estimated per scan (`distToGround: auto`). Every tool and route
+/// (gseg segment | eval | bench, rawlog-gseg, gseg::GroundFilter, rawlog-octomap, the
+/// observations2map plugin) segments through ScanSegmenter, so they all decide alike.
+///
+/// The rule with `distToGround: auto`: each scan is estimated on its own
+/// (gseg::estimateSensorHeight(), a mounting tilt levelled out, see AutoHeightSegmenter); a scan
+/// that gives no estimate is segmented with the configured fallback height (Params::distToGround)
+/// and says so in its HeightDecision (Source::Fallback, with the estimator's reason). A scan never
+/// borrows an earlier scan's estimate: the labels of a scan depend on that scan alone, so they are
+/// the same in any order, on any thread and any MPI rank, and in a stream or alone.
+///
+/// Points with NaN or infinite coordinates (a driver's "no return", the holes of an organised
+/// cloud) are labelled non-ground and counted by the core.
 
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/mrpt/config.hpp>
@@ -11,10 +21,11 @@
 #include <gseg/sensor_height.hpp>
 
 #include <cstddef>
+#include <string>
 
 namespace gseg::mrpt {
 
-/// One segmented scan.
+/// One segmented scan, with the height decision that made it.
 struct ScanSegmentation {
     /// One label per input point (non-finite points 0, counted in result.numNonFinite).
     gseg::Result result;
@@ -22,20 +33,32 @@ struct ScanSegmentation {
     double distToGround = 0;             ///< [m] the sensor height used
     bool distToGroundEstimated = false;  ///< `distToGround: auto` and this scan gave an estimate
     HeightDecision height;               ///< with `distToGround: auto`: what was used and why
-    /// With a fixed distToGround, on the first scan with points only: the scan's own estimate
-    /// contradicts it (gseg::checkDistToGround()); "" otherwise.
+    /// With a fixed distToGround, where the height was checked (HeightCheck): the scan's own
+    /// estimate contradicts it (gseg::checkDistToGround()); "" otherwise.
     std::string heightWarning;
+    bool autoHeight = false;             ///< the configuration said `distToGround: auto`
+
+    /// `distToGround: auto` and this scan gave no estimate: the fallback height was used.
+    bool heightFallback() const { return autoHeight && !distToGroundEstimated; }
 };
 
-/// Segments scans with one configuration. One object per stream and thread.
+/// When a fixed distToGround is checked against the scan (costs about one segmentation).
+enum class HeightCheck {
+    FirstScan,  ///< the first scan with points this segmenter sees (a stream read in order)
+    Now,        ///< this scan (the first scan of a stream whose scans are shared out among workers)
+    Never,
+};
+
+/// Segments scans with one configuration. One object per stream and thread; scans are independent
+/// of each other (the only state is the FirstScan check).
 class ScanSegmenter {
 public:
     explicit ScanSegmenter(const LoadedConfig& config);
 
     /// Labels every point of `cloud` (levelled frame, sensor at the origin). A scan without finite
-    /// points gets all labels 0, an empty one no labels. Never refuses a scan for its height; with
-    /// a fixed distToGround the first scan with points is checked against it (heightWarning).
-    ScanSegmentation segment(const PointCloudView& cloud, bool keepCellDiagnostics = false);
+    /// points gets all labels 0, an empty one no labels. Never refuses a scan for its height.
+    ScanSegmentation segment(const PointCloudView& cloud, bool keepCellDiagnostics = false,
+                             HeightCheck check = HeightCheck::FirstScan);
 
     const LoadedConfig& config() const { return config_; }
 

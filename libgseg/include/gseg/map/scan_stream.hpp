@@ -1,17 +1,19 @@
 #pragma once
-// The scans of a rawlog, one at a time and in order, each with its robot pose: what the map
-// pipeline's producer reads. Nothing but the current scan (and the one being completed) is held.
-//
-// A scan is one raw LiDAR observation, or the `<label>_ground` / `<label>_obstacles` pair that
-// rawlog-gseg writes. Consecutive observations with the same base label and time stamp belong to
-// one scan; when it has a pair, the pair is used and the raw observation is not segmented again.
-//
-// Poses, in this order of preference:
-//   --poses TUM file (`t x y z qx qy qz qw`): the vehicle pose, matched to scans by time stamp;
-//   --poses KITTI file (3x4 per scan, camera-0) + calib.txt: the velodyne pose of scan k
-//     (Tr^-1 * P_k * Tr), scans taken in order;
-//   the rawlog's own: CObservationRobotPose (absolute, as kitti2rawlog writes), CObservationOdometry
-//     (absolute 2D odometry), CActionRobotMovement2D/3D (increments, integrated from the origin).
+/// \file scan_stream.hpp
+/// The scans of a rawlog, one at a time and in order, each with its robot pose: what the map
+/// builder's producer reads (MapBuilder::run()). Nothing but the current scan (and the one being
+/// completed) is held.
+///
+/// A scan is one raw LiDAR observation, or the `<label>_ground` / `<label>_obstacles` pair that
+/// rawlog-gseg writes. Consecutive observations with the same base label and time stamp belong to
+/// one scan; when it has a pair, the pair is used and the raw observation is not segmented again.
+///
+/// Poses, in this order of preference:
+///   a TUM file (`t x y z qx qy qz qw`): the vehicle pose, matched to scans by time stamp;
+///   a KITTI file (3x4 per scan, camera-0) + calib.txt: the velodyne pose of scan k
+///     (Tr^-1 * P_k * Tr), scans taken in order;
+///   the rawlog's own: CObservationRobotPose (absolute, as kitti2rawlog writes), CObservationOdometry
+///     (absolute 2D odometry), CActionRobotMovement2D/3D (increments, integrated from the origin).
 
 #include <gseg/map/poses.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
@@ -24,7 +26,7 @@
 #include <string>
 #include <vector>
 
-namespace rawlog_octomap {
+namespace gseg::map {
 
 /// Where the poses come from and how the world is shifted.
 struct PoseConfig {
@@ -40,14 +42,16 @@ struct ScanJob {
     std::size_t entry = 0;   ///< rawlog entry of its first observation
     std::string label;       ///< sensor label without the part suffix
     double t = 0;            ///< [s] time stamp
-    mrpt::obs::CObservation::Ptr raw, ground, obstacles;  ///< raw scan, or the pre-segmented parts
-    mrpt::poses::CPose3D robotPose;                      ///< vehicle pose in the (shifted) world
+    ::mrpt::obs::CObservation::Ptr raw, ground, obstacles;  ///< raw scan, or the pre-segmented parts
+    ::mrpt::poses::CPose3D robotPose;                      ///< vehicle pose in the (shifted) world
     double fraction = 0;     ///< of the rawlog read when this scan was complete (progress)
 
     bool presegmented() const { return ground || obstacles; }
     std::string describe() const;  ///< "scan 3 ('VELODYNE' at rawlog entry 7, t = ... s)"
+
 };
 
+/// The scans of a rawlog with their poses (see the file comment).
 class ScanStream {
 public:
     /// Opens the rawlog and reads the pose files (errors naming file and line come here, before
@@ -67,22 +71,22 @@ public:
 private:
     PoseConfig config_;
     gseg::mrpt::RawlogReader reader_;
-    std::vector<gseg::map::StampedPose> tum_;
+    std::vector<StampedPose> tum_;
     std::vector<Eigen::Isometry3d> kitti_;
-    std::optional<mrpt::poses::CPose3D> rawlogPose_;  ///< current pose from the rawlog
+    std::optional<::mrpt::poses::CPose3D> rawlogPose_;  ///< current pose from the rawlog
     std::optional<Eigen::Vector3d> shift_;
 
     std::optional<ScanJob> open_;      ///< the scan being completed
-    std::optional<mrpt::poses::CPose3D> openPose_;  ///< rawlog pose when it was opened
+    std::optional<::mrpt::poses::CPose3D> openPose_;  ///< rawlog pose when it was opened
     std::deque<ScanJob> ready_;
     std::size_t emitted_ = 0, rawWithPair_ = 0;
     bool eof_ = false;
     double readSeconds_ = 0;
 
-    void visit(std::size_t entry, const std::shared_ptr<mrpt::serialization::CSerializable>& obj);
-    void observation(std::size_t entry, const mrpt::obs::CObservation::Ptr& obs);
+    void visit(std::size_t entry, const std::shared_ptr<::mrpt::serialization::CSerializable>& obj);
+    void observation(std::size_t entry, const ::mrpt::obs::CObservation::Ptr& obs);
     void close();
-    mrpt::poses::CPose3D poseOf(const ScanJob& job, const std::optional<mrpt::poses::CPose3D>& rawlogPose);
+    ::mrpt::poses::CPose3D poseOf(const ScanJob& job, const std::optional<::mrpt::poses::CPose3D>& rawlogPose);
 };
 
-}  // namespace rawlog_octomap
+}  // namespace gseg::map

@@ -1,8 +1,10 @@
 #pragma once
 /// \file ordered_pipeline.hpp
-/// The structure of map building: items (scans) are produced in order, worked on in parallel
-/// (segmentation, transform, ray casting: independent of the map), and their results consumed
-/// strictly in item order (the map updates), with a bounded number of items in flight.
+/// gseg's one worker pool: items are produced in order, worked on in parallel, and their results
+/// consumed strictly in item order, with a bounded number of items in flight. Map building
+/// (gseg::map::MapBuilder: scans read, segmented and ray cast in parallel, the map updates in scan
+/// order), `gseg eval` (frames scored in parallel, reported in order) and `gseg bench` (one timing
+/// run per thread) all run on it.
 ///
 /// The three roles are plain functions, so the same split serves other transports: rawlog-octomap
 /// under MPI gives this pipeline one more worker per worker thread of every other process, whose
@@ -20,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-namespace gseg::map {
+namespace gseg {
 
 /// How runOrdered() runs.
 struct PipelineOptions {
@@ -144,4 +146,4 @@ void runOrdered(const std::function<bool(Item&)>& produce, const std::function<R
     if (error) std::rethrow_exception(error);
 }
 
-}  // namespace gseg::map
+}  // namespace gseg

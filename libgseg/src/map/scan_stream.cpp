@@ -1,4 +1,4 @@
-#include "scan_stream.hpp"
+#include <gseg/map/scan_stream.hpp>
 
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/observation_points.hpp>
@@ -18,22 +18,16 @@
 #include <stdexcept>
 
 namespace fs = std::filesystem;
-using gseg::map::ScanPart;
-using mrpt::poses::CPose3D;
+using ::mrpt::poses::CPose3D;
 
-namespace rawlog_octomap {
+namespace gseg::map {
 namespace {
 
 CPose3D toPose(const Eigen::Isometry3d& p) {
-    mrpt::math::CMatrixDouble44 m;
+    ::mrpt::math::CMatrixDouble44 m;
     for (int r = 0; r < 4; ++r)
         for (int c = 0; c < 4; ++c) m(r, c) = p.matrix()(r, c);
     return CPose3D(m);
-}
-
-std::string baseLabel(const std::string& label, ScanPart part) {
-    const std::size_t cut = part == ScanPart::Ground ? 7 : part == ScanPart::Obstacles ? 10 : 0;
-    return label.substr(0, label.size() - cut);
 }
 
 /// "X,Y,Z" in metres.
@@ -45,7 +39,7 @@ Eigen::Vector3d parseOrigin(const std::string& text) {
     return v;
 }
 
-const mrpt::obs::CObservation& anyPart(const ScanJob& job) {
+const ::mrpt::obs::CObservation& anyPart(const ScanJob& job) {
     return job.raw ? *job.raw : job.ground ? *job.ground : *job.obstacles;
 }
 
@@ -89,40 +83,40 @@ bool ScanStream::next(ScanJob& job) {
     return true;
 }
 
-void ScanStream::visit(std::size_t entry, const std::shared_ptr<mrpt::serialization::CSerializable>& obj) {
-    if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
+void ScanStream::visit(std::size_t entry, const std::shared_ptr<::mrpt::serialization::CSerializable>& obj) {
+    if (auto sf = std::dynamic_pointer_cast<::mrpt::obs::CSensoryFrame>(obj)) {
         if (!rawlogPose_) rawlogPose_ = CPose3D();  // sensory-frame layout: odometry starts at the origin
         for (std::size_t i = 0; i < sf->size(); ++i) observation(entry, sf->getObservationByIndex(i));
-    } else if (auto acts = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj)) {
+    } else if (auto acts = std::dynamic_pointer_cast<::mrpt::obs::CActionCollection>(obj)) {
         if (!rawlogPose_) rawlogPose_ = CPose3D();
-        const mrpt::obs::CActionCollection& actions = *acts;
+        const ::mrpt::obs::CActionCollection& actions = *acts;
         for (std::size_t i = 0; i < actions.size(); ++i) {
-            const mrpt::obs::CAction* a = &actions.get(i);
-            if (auto m3 = dynamic_cast<const mrpt::obs::CActionRobotMovement3D*>(a)) {
+            const ::mrpt::obs::CAction* a = &actions.get(i);
+            if (auto m3 = dynamic_cast<const ::mrpt::obs::CActionRobotMovement3D*>(a)) {
                 rawlogPose_ = *rawlogPose_ + m3->poseChange.mean;
-            } else if (auto m2 = dynamic_cast<const mrpt::obs::CActionRobotMovement2D*>(a)) {
+            } else if (auto m2 = dynamic_cast<const ::mrpt::obs::CActionRobotMovement2D*>(a)) {
                 rawlogPose_ = *rawlogPose_ + CPose3D(m2->poseChange->getMeanVal());
             }
         }
-    } else if (auto obs = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
+    } else if (auto obs = std::dynamic_pointer_cast<::mrpt::obs::CObservation>(obj)) {
         observation(entry, obs);
     }
 }
 
-void ScanStream::observation(std::size_t entry, const mrpt::obs::CObservation::Ptr& obs) {
-    if (auto rp = std::dynamic_pointer_cast<mrpt::obs::CObservationRobotPose>(obs)) {
+void ScanStream::observation(std::size_t entry, const ::mrpt::obs::CObservation::Ptr& obs) {
+    if (auto rp = std::dynamic_pointer_cast<::mrpt::obs::CObservationRobotPose>(obs)) {
         rawlogPose_ = rp->pose.mean;
         return;
     }
-    if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs)) {
+    if (auto odo = std::dynamic_pointer_cast<::mrpt::obs::CObservationOdometry>(obs)) {
         rawlogPose_ = CPose3D(odo->odometry);
         return;
     }
     const ScanPart part = gseg::map::scanPartOf(*obs);
     if (part == ScanPart::Raw && !gseg::mrpt::isLidarObservation(*obs)) return;
-    const double t = mrpt::Clock::toDouble(obs->timestamp);
-    const std::string label = baseLabel(obs->sensorLabel, part);
-    auto slotOf = [part](ScanJob& j) -> mrpt::obs::CObservation::Ptr& {
+    const double t = ::mrpt::Clock::toDouble(obs->timestamp);
+    const std::string label = gseg::mrpt::baseLabelOf(obs->sensorLabel);
+    auto slotOf = [part](ScanJob& j) -> ::mrpt::obs::CObservation::Ptr& {
         return part == ScanPart::Raw ? j.raw : part == ScanPart::Ground ? j.ground : j.obstacles;
     };
     if (open_ && open_->label == label && open_->t == t && !slotOf(*open_)) {  // same scan: raw form or other part
@@ -183,4 +177,4 @@ CPose3D ScanStream::poseOf(const ScanJob& job, const std::optional<CPose3D>& raw
     return pose;
 }
 
-}  // namespace rawlog_octomap
+}  // namespace gseg::map

@@ -1,0 +1,137 @@
+#include <gseg/map/map_builder.hpp>
+
+#include <gseg/ordered_pipeline.hpp>
+#include <gseg/map/world_scan.hpp>
+#include <gseg/mrpt/observation_points.hpp>
+
+#include <mrpt/obs/CObservation.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <stdexcept>
+
+namespace gseg::map {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
+    read += o.read, segmentation += o.segmentation, transform += o.transform;
+    rayCasting += o.rayCasting, mapUpdate += o.mapUpdate, writing += o.writing;
+    return *this;
+}
+
+ScanWorker::ScanWorker(const gseg::mrpt::LoadedConfig& config, const TraversabilityOptions& options)
+    : segmenter_(config), options_(options) {}
+
+ScanResult ScanWorker::operator()(const ScanJob& job) {
+    ScanResult r = (*this)(ScanParts{job.raw.get(), job.ground.get(), job.obstacles.get()}, job.robotPose, job.describe(),
+                           job.index == 0 ? gseg::mrpt::HeightCheck::Now : gseg::mrpt::HeightCheck::Never);
+    r.fraction = job.fraction;
+    return r;
+}
+
+ScanResult ScanWorker::operator()(const ScanParts& parts, const ::mrpt::poses::CPose3D& robotPose,
+                                  const std::string& describe, gseg::mrpt::HeightCheck check) {
+    ScanResult r;
+    r.describe = describe;
+    r.presegmented = parts.ground || parts.obstacles;
+    WorldScan world;
+    if (parts.raw) {
+        WorldScanTimes t;
+        try {
+            world = segmentToWorld(*parts.raw, robotPose, segmenter_, &t, check);
+            r.reflections = world.reflections;
+            r.heightNote = world.heightNote;
+            r.heightWarning = world.heightWarning;
+        } catch (const std::invalid_argument& e) {
+            r.skipped = e.what();
+            return r;
+        }
+        r.times.segmentation = t.segmentation, r.times.transform = t.transform;
+    } else {
+        const auto t0 = std::chrono::steady_clock::now();
+        if (parts.ground) world.sensorOrigin = appendWorldPoints(*parts.ground, robotPose, world.ground);
+        if (parts.obstacles) world.sensorOrigin = appendWorldPoints(*parts.obstacles, robotPose, world.obstacles);
+        r.times.transform = secondsSince(t0);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+        r.update = castScan(world.groundView(), world.obstaclesView(), world.sensorOrigin, options_);
+    } catch (const std::out_of_range& e) {
+        throw std::runtime_error(r.describe + ": " + e.what() + "; for poses in UTM or other large coordinates use --origin first");
+    } catch (const std::exception& e) {
+        throw std::runtime_error(r.describe + ": " + e.what());
+    }
+    r.times.rayCasting = secondsSince(t0);
+    return r;
+}
+
+MapBuilder::MapBuilder(const gseg::mrpt::LoadedConfig& config, const TraversabilityOptions& options)
+    : config_(config), map_(options) {
+    tally_.scansByRank.assign(1, 0);
+}
+
+void MapBuilder::integrate(const ScanResult& r) {
+    tally_.times += r.times;
+    const std::size_t rank = std::size_t(std::max(0, r.rank));
+    if (rank >= tally_.scansByRank.size()) tally_.scansByRank.resize(rank + 1, 0);
+    ++tally_.scansByRank[rank];
+    if (!r.skipped.empty()) {
+        tally_.skipped.push_back(r.describe + ": " + r.skipped);
+        return;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    map_.apply(r.update);
+    tally_.times.mapUpdate += secondsSince(t0);
+    tally_.presegmented += r.presegmented;
+    tally_.reflections += r.reflections;
+    if (!r.heightNote.empty()) tally_.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
+}
+
+void MapBuilder::run(ScanStream& stream, const BuildOptions& o) {
+    if (o.remoteWorkers > 0 && !o.remoteWork) throw std::invalid_argument("MapBuilder::run: remote workers without remoteWork");
+    const unsigned local = o.threads, workers = o.threads + o.remoteWorkers;
+    workers_.clear();
+    for (unsigned i = 0; i < std::max(1u, local); ++i) workers_.emplace_back(config_, map_.options());
+    if (tally_.scansByRank.size() < o.ranks) tally_.scansByRank.resize(o.ranks, 0);
+    auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the remote ones (if any)
+        return w < local || o.remoteWorkers == 0 ? workers_[w](job) : o.remoteWork(w - local, job);
+    };
+    auto consume = [&](std::size_t k, ScanResult& r) {
+        integrate(r);
+        if (o.onScan) o.onScan(k, r);
+    };
+    const double readBefore = stream.readSeconds();
+    runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
+                                    {workers, 2 * std::size_t(std::max(1u, workers)) + 2});
+    tally_.times.read += stream.readSeconds() - readBefore;
+}
+
+bool MapBuilder::insert(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose) {
+    const ScanPart part = scanPartOf(obs);
+    if (part == ScanPart::Raw && !gseg::mrpt::isLidarObservation(obs)) return false;
+    ScanParts parts;
+    (part == ScanPart::Raw ? parts.raw : part == ScanPart::Ground ? parts.ground : parts.obstacles) = &obs;
+    if (workers_.empty()) workers_.emplace_back(config_, map_.options());
+    char describe[200];
+    std::snprintf(describe, sizeof describe, "observation %zu ('%s', t = %.6f s)", inserted_++, obs.sensorLabel.c_str(),
+                  ::mrpt::Clock::toDouble(obs.timestamp));
+    const ScanResult r = workers_.front()(parts, robotPose, describe);
+    integrate(r);
+    return r.skipped.empty();
+}
+
+void MapBuilder::clear() {
+    map_ = TraversabilityMap(map_.options());
+    tally_ = BuildTally();
+    tally_.scansByRank.assign(1, 0);
+    inserted_ = 0;
+}
+
+}  // namespace gseg::map
