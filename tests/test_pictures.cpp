@@ -1,6 +1,8 @@
 // The shared picture conventions (gseg/mrpt/picture.hpp): titles name files, legends name every
 // colour, the scale bar has the length it says, x forward is up with an arrow.
 #include <gseg/mrpt/picture.hpp>
+#include <gseg/mrpt/png.hpp>
+#include <gseg/mrpt/top_view.hpp>
 #include <gseg/mrpt/render.hpp>
 
 #include <mrpt/img/CImage.h>

@@ -137,11 +137,29 @@ TEST(Progress, WorkerThreadsReportWholeLines) {
 }
 
 TEST(Progress, NoOutputPrintsNothing) {  // --quiet
-    gseg::Progress p(nullptr, "tool", "scans");
-    p.update(1, 0.5);
-    p.message("nothing");
-    p.finish(1);
-    SUCCEED();
+    // In a child whose stdout and stderr go to a file: nothing may reach either, on a terminal or not.
+    const fs::path dir = gseg::test::freshDir("tool_common", "progress_quiet");
+    const std::string captured = (dir / "printed.txt").string();
+    for (int tty : {0, 1}) {
+        const auto r = gseg::test::runInChild([&] {
+            std::FILE* f = std::fopen(captured.c_str(), "w");
+            if (!f) return 2;
+            ::dup2(::fileno(f), 1);
+            ::dup2(::fileno(f), 2);
+            double now = 0;
+            gseg::Progress p(nullptr, "tool", "scans", tty, 0.0, [&] { return now; });
+            for (int k = 1; k <= 20; ++k) {
+                now = k;
+                p.update(std::size_t(k), k / 20.0, "note");
+            }
+            p.message("nothing");
+            p.finish(20);
+            std::fflush(nullptr);
+            return 0;
+        });
+        EXPECT_TRUE(r.exited && r.code == 0);
+        EXPECT_EQ(gseg::test::readText(captured), "") << "tty " << tty;
+    }
 }
 
 TEST(Progress, DurationsReadLikeClocks) {

@@ -3,6 +3,8 @@
 #include "eval_plot.hpp"
 
 #include <gseg/mrpt/picture.hpp>
+#include <gseg/mrpt/png.hpp>
+#include <gseg/mrpt/top_view.hpp>
 
 #include <algorithm>
 #include <cmath>

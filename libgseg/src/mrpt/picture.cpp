@@ -1,10 +1,9 @@
-// The shared drawing of every gseg picture, and PNG output.
+// The canvas of every gseg picture: lines, text, title, legend, scale bar, arrows (MRPT CImage).
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/picture.hpp>
+#include <gseg/mrpt/png.hpp>
 
 #include <mrpt/img/CImage.h>
-
-#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -24,38 +23,15 @@ std::mutex& textMutex() {
     return m;
 }
 
-void putBigEndian(std::string& out, std::uint32_t v) {
-    for (int shift = 24; shift >= 0; shift -= 8) out += char((v >> shift) & 0xff);
-}
 
-void putChunk(std::string& out, const char* type, const std::string& data) {
-    putBigEndian(out, std::uint32_t(data.size()));
-    const std::size_t start = out.size();
-    out += type;
-    out += data;
-    putBigEndian(out, std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(out.data() + start), uInt(out.size() - start))));
-}
 
-double fitRange(const PointCloudView& cloud) {
-    std::vector<float> r;
-    r.reserve(cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i)
-        if (const float d = std::hypot(cloud.x(i), cloud.y(i)); std::isfinite(d)) r.push_back(d);
-    if (r.empty()) return 10.0;
-    const std::size_t k = std::min(r.size() - 1, std::size_t(0.98 * double(r.size())));
-    std::nth_element(r.begin(), r.begin() + long(k), r.end());
-    return std::clamp(double(r[k]) * 1.05, 5.0, 80.0);
-}
+}  // namespace
 
-std::string metres(double m) {
+std::string metresLabel(double m) {
     char buf[32];
     std::snprintf(buf, sizeof buf, m >= 1 ? "%.0f m" : "%.1f m", m);
     return buf;
 }
-
-}  // namespace
-
-const char* const kTopViewOrientation = "top view: x (forward) up, y (left) to the left";
 
 std::string displayName(const std::string& path) {
     const std::filesystem::path p = std::filesystem::path(path).lexically_normal();
@@ -144,7 +120,7 @@ void Picture::scaleBar(int xRight, int y, double pixelsPerMetre, int maxPixels) 
             if (m * decade * pixelsPerMetre <= maxPixels) length = m * decade;
     if (length <= 0) return;
     const int px = std::max(1, int(std::lround(length * pixelsPerMetre)));
-    const std::string label = metres(length);
+    const std::string label = metresLabel(length);
     fill(xRight - std::max(px, int(label.size()) * kCharWidth) - 6, y - 26, xRight + 4, y + 8, background_);
     fill(xRight - px, y, xRight, y + 4, textColour());
     fill(xRight - px, y - 4, xRight - px + 1, y + 4, textColour());
@@ -176,91 +152,6 @@ void Picture::save(const std::string& path) const {
     gseg::io::writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
-Picture drawTopView(const PointCloudView& cloud, const std::vector<std::uint8_t>& classOf,
-                    const std::vector<PointClass>& classes, const TopViewOptions& opt) {
-    if (classOf.size() != cloud.size())
-        throw std::invalid_argument("drawTopView: " + std::to_string(classOf.size()) + " classes for " +
-                                    std::to_string(cloud.size()) + " points");
-    const int size = std::max(300, opt.sizePx), c = size / 2;
-    const double range = opt.rangeM > 0 ? opt.rangeM : fitRange(cloud);
-    const double scale = 0.5 * size / range;  // px per metre
-    Picture pic(size, size, {24, 24, 30});
-    const Colour ringColour{70, 70, 82}, white{255, 255, 255};
-    const bool rings = opt.ringStepM > 0 && opt.ringStepM >= range / 100;
-    for (double ring = opt.ringStepM; rings && ring <= range * 1.5; ring += opt.ringStepM)
-        pic.circle(c, c, int(ring * scale), ringColour);
 
-    std::vector<std::size_t> counts(classes.size(), 0);
-    for (std::uint8_t k : classOf)
-        if (k < classes.size()) ++counts[k];
-    std::vector<std::size_t> order(classes.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return classes[a].layer < classes[b].layer; });
-    for (const std::size_t k : order) {
-        const int lo = (std::max(1, classes[k].sizePx) - 1) / 2, hi = std::max(1, classes[k].sizePx) - 1 - lo;
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            if (classOf[i] != k) continue;
-            const double u = c - std::round(cloud.y(i) * scale);  // y (left) to the left
-            const double v = c - std::round(cloud.x(i) * scale);  // x (forward) up
-            if (!(u >= lo && v >= lo && u < size - hi && v < size - hi)) continue;  // also NaN
-            pic.fill(int(u) - lo, int(v) - lo, int(u) + hi, int(v) + hi, classes[k].colour);
-        }
-    }
-    // The sensor and its forward direction.
-    pic.line(c - 6, c, c + 6, c, white, 2);
-    pic.arrow(c, c + 6, 0, -46, "x (forward)");
-
-    char subtitle[160];
-    std::snprintf(subtitle, sizeof subtitle, "%s; sensor at the centre, %.0f m each side", kTopViewOrientation, range);
-    pic.title(opt.title, subtitle);
-    std::vector<LegendEntry> legend;
-    for (std::size_t k = 0; k < classes.size(); ++k) legend.push_back({classes[k].colour, classes[k].name + ": " + std::to_string(counts[k])});
-    if (rings) legend.push_back({ringColour, "range circles every " + metres(opt.ringStepM)});
-    legend.push_back({white, "sensor (+) and its forward direction (arrow)"});
-    pic.legend(12, size - 12 - Picture::legendHeight(legend.size()), legend);
-    pic.scaleBar(size - 24, size - 24, scale);
-    return pic;
-}
-
-std::string encodePng(const ::mrpt::img::CImage& image) {
-    const std::size_t w = image.getWidth(), h = image.getHeight();
-    const bool colour = image.isColor();
-    if (w == 0 || h == 0 || image.getPixelDepth() != ::mrpt::img::PixelDepth::D8U)
-        throw std::invalid_argument("encodePng: needs a non-empty 8-bit image");
-    const bool bgr = colour && image.getChannelsOrder() == "BGR";
-    const std::size_t channels = colour ? 3 : 1;
-    // Rows, each led by filter type 0 (none), RGB or grey.
-    std::string raw;
-    raw.reserve(h * (1 + w * channels));
-    for (std::size_t y = 0; y < h; ++y) {
-        raw += '\0';
-        const std::uint8_t* line = image.ptrLine<std::uint8_t>(unsigned(y));
-        for (std::size_t x = 0; x < w; ++x, line += channels) {
-            if (!colour) raw += char(line[0]);
-            else if (bgr) raw += {char(line[2]), char(line[1]), char(line[0])};
-            else raw += {char(line[0]), char(line[1]), char(line[2])};
-        }
-    }
-    uLongf packedSize = compressBound(uLong(raw.size()));
-    std::string packed(packedSize, '\0');
-    if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packedSize, reinterpret_cast<const Bytef*>(raw.data()),
-                  uLong(raw.size()), 6) != Z_OK)
-        throw std::runtime_error("encodePng: compression failed");
-    packed.resize(packedSize);
-    std::string header;
-    putBigEndian(header, std::uint32_t(w));
-    putBigEndian(header, std::uint32_t(h));
-    header += {char(8), char(colour ? 2 : 0), char(0), char(0), char(0)};  // 8 bit, RGB/grey, deflate, no interlace
-    std::string png("\x89PNG\r\n\x1a\n", 8);
-    putChunk(png, "IHDR", header);
-    putChunk(png, "IDAT", packed);
-    putChunk(png, "IEND", "");
-    return png;
-}
-
-void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
-    const std::string png = encodePng(image);
-    gseg::io::writeFileAtomic(path, png.data(), png.size());
-}
 
 }  // namespace gseg::mrpt

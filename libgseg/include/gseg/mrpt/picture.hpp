@@ -95,36 +95,7 @@ private:
     bool bgr_ = false;  ///< channel order of the image
 };
 
-/// One class of points in a top view of a scan.
-struct PointClass {
-    Colour colour;
-    std::string name;  ///< legend text; the count is appended ("ground: 81122")
-    int layer = 0;     ///< drawn in increasing layer (errors last, over the rest)
-    int sizePx = 2;    ///< [px] edge of a point's square
-};
-
-/// How a top view of a scan is drawn: the sensor at the centre, x forward up, y left to the left.
-struct TopViewOptions {
-    int sizePx = 800;          ///< [px] width and height
-    double rangeM = 0;         ///< [m] half-width shown; 0: fit the 98th percentile of the points' range (5 to 80 m)
-    double ringStepM = 10;     ///< [m] distance between range circles (0: none)
-    std::string title;         ///< first line (name files with displayName())
-};
-
-/// Draws a top view: every point i in the colour of classes[classOf[i]] (points with a NaN or
-/// infinite coordinate, or a class index out of range, are not drawn), range circles, the sensor
-/// at the centre with an arrow along x (forward), a scale bar, the title, the orientation and a
-/// legend with every class and its count. Throws std::invalid_argument if classOf and the cloud
-/// differ in size.
-Picture drawTopView(const PointCloudView& cloud, const std::vector<std::uint8_t>& classOf,
-                    const std::vector<PointClass>& classes, const TopViewOptions& options);
-
-/// PNG bytes of an 8-bit grey or colour image, encoded by gseg (zlib).
-std::string encodePng(const ::mrpt::img::CImage& image);
-
-/// Writes `image` as a PNG through gseg::io::AtomicFile: every write and the close checked, so a
-/// full disk is an error and leaves nothing (MRPT's CImage::saveToFile reports success on a
-/// truncated file). Throws std::runtime_error naming `path`.
-void writePng(const std::string& path, const ::mrpt::img::CImage& image);
+/// "12 m", "0.5 m": a length as the pictures label it.
+std::string metresLabel(double m);
 
 }  // namespace gseg::mrpt

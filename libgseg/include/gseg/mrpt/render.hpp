@@ -4,6 +4,8 @@
 /// gseg/mrpt/picture.hpp.
 
 #include <gseg/mrpt/picture.hpp>
+#include <gseg/mrpt/png.hpp>
+#include <gseg/mrpt/top_view.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <cstdint>
