@@ -85,7 +85,7 @@ TEST(ConfigClaims, TheObservations2mapIniIsRawlogOctomapWithKittiHdl64AsItSays) 
     ASSERT_NE(def, nullptr) << "the INI does not ask for gseg's map";
     // creationOpts: rawlog-octomap's defaults (TraversabilityOptions), as the file says.
     EXPECT_TRUE(claimedDifferences(text, "rawlog-octomap's defaults").empty());
-    const gseg::map::TraversabilityOptions o, d = def->options;
+    const gseg::map::TraversabilityOptions o, d = def->config.traversability;
     EXPECT_EQ(d.resolution, o.resolution);
     EXPECT_EQ(d.maxRange, o.maxRange);
     EXPECT_EQ(d.clearance, o.clearance);
@@ -99,7 +99,7 @@ TEST(ConfigClaims, TheObservations2mapIniIsRawlogOctomapWithKittiHdl64AsItSays) 
     EXPECT_TRUE(claimedDifferences(text, "the library defaults").empty());
     const auto kitti = gseg::mrpt::loadConfig(kConfig + "kitti_hdl64.yaml");
     for (const auto& key : gseg::Params::keys()) {
-        EXPECT_EQ(def->params.get(key), gseg::Params().get(key)) << key;
-        EXPECT_EQ(def->params.get(key), kitti.params.get(key)) << key;
+        EXPECT_EQ(def->config.params.get(key), gseg::Params().get(key)) << key;
+        EXPECT_EQ(def->config.params.get(key), kitti.params.get(key)) << key;
     }
 }

@@ -15,7 +15,7 @@ PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
 
 ScanWorker::ScanWorker(const gseg::mrpt::LoadedConfig& config, const gseg::map::TraversabilityOptions& options)
     : segmenter_(config.params),
-      autoHeight_(config.distToGroundAuto ? std::make_unique<gseg::AutoHeightSegmenter>(config.params) : nullptr),
+      autoHeight_(config.distToGroundAuto ? std::make_unique<gseg::AutoHeightSegmenter>(config.params, config.sensorHeight) : nullptr),
       options_(options) {}
 
 ScanResult ScanWorker::operator()(const ScanJob& job) {

@@ -3,7 +3,7 @@
 namespace gseg::mrpt {
 
 ScanSegmenter::ScanSegmenter(const LoadedConfig& config)
-    : config_(config), fixed_(config.params), auto_(config.params) {}
+    : config_(config), fixed_(config.params), auto_(config.params, config.sensorHeight) {}
 
 ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics) {
     ScanSegmentation out;
@@ -19,7 +19,7 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
         out.distToGround = config_.params.distToGround;
         if (!heightChecked_ && out.result.numNonFinite < cloud.size()) {
             heightChecked_ = true;
-            out.heightWarning = checkDistToGround(cloud, config_.params.distToGround, config_.params.seedHeightTolerance);
+            out.heightWarning = checkDistToGround(cloud, config_.params.distToGround, config_.params.seedHeightTolerance, config_.sensorHeight);
         }
     }
     out.nonFinitePoints = out.result.numNonFinite;
