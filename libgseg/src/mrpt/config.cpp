@@ -194,16 +194,23 @@ std::vector<YamlEntry> parseFlatYaml(const std::string& text, const std::string&
 }
 
 // --- INI ---------------------------------------------------------------------------------------------
-// MRPT's INI preprocessor evaluates `$eval{...}` with exprtk, which has loops, and expands
-// `$env{VAR}` repeatedly: `$eval{var x:=0; while(x<1e12)(x+=1); 1}` or a variable whose value holds
-// `$env{...}` again would run forever. Both are refused before the preprocessor runs.
-void refuseUnboundedIni(const std::string& text, const std::string& path) {
+// Calls f(number, line) for each line of an INI text (numbered from 1, without its '\n').
+template <class F>
+void forEachIniLine(const std::string& text, F&& f) {
     int number = 1;
     for (std::size_t pos = 0; pos < text.size(); ++number) {
         std::size_t end = text.find('\n', pos);
         if (end == std::string::npos) end = text.size();
-        const std::string line = text.substr(pos, end - pos);
+        f(number, text.substr(pos, end - pos));
         pos = end + 1;
+    }
+}
+
+// MRPT's INI preprocessor evaluates `$eval{...}` with exprtk, which has loops, and expands
+// `$env{VAR}` repeatedly: `$eval{var x:=0; while(x<1e12)(x+=1); 1}` or a variable whose value holds
+// `$env{...}` again would run forever. Both are refused before the preprocessor runs.
+void refuseUnboundedIni(const std::string& text, const std::string& path) {
+    forEachIniLine(text, [&](int number, const std::string& line) {
         const std::string where = path + ":" + std::to_string(number);
         if (line.find("$eval{") != std::string::npos || line.find("@define") != std::string::npos) {
             for (std::size_t i = 0; i < line.size();) {
@@ -228,7 +235,7 @@ void refuseUnboundedIni(const std::string& text, const std::string& path) {
                 throw std::runtime_error(where + ": the environment variable " + line.substr(at + 5, close - at - 5) +
                                          " holds $env{} or $eval{} itself (it would expand forever)");
         }
-    }
+    });
 }
 
 
@@ -245,24 +252,19 @@ struct IniKey {
 std::vector<IniKey> scanIniKeys(const std::string& text) {
     std::vector<IniKey> keys;
     std::string section;
-    int number = 1;
-    for (std::size_t pos = 0; pos < text.size(); ++number) {
-        std::size_t end = text.find('\n', pos);
-        if (end == std::string::npos) end = text.size();
-        std::string t = text.substr(pos, end - pos);
-        pos = end + 1;
+    forEachIniLine(text, [&](int number, std::string t) {
         if (!t.empty() && t.back() == '\r') t.pop_back();
         t = trim(t);
-        if (t.empty() || t[0] == ';' || t[0] == '#' || t.rfind("//", 0) == 0 || t[0] == '@') continue;
+        if (t.empty() || t[0] == ';' || t[0] == '#' || t.rfind("//", 0) == 0 || t[0] == '@') return;
         if (t[0] == '[') {
             const std::size_t close = t.find(']');
             if (close != std::string::npos) section = trim(t.substr(1, close - 1));
-            continue;
+            return;
         }
         const std::size_t eq = t.find('=');
-        if (eq == std::string::npos || eq == 0) continue;  // MRPT's syntax, not ours to judge
+        if (eq == std::string::npos || eq == 0) return;  // MRPT's syntax, not ours to judge
         keys.push_back({section, trim(t.substr(0, eq)), number});
-    }
+    });
     return keys;
 }
 
