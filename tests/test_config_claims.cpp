@@ -7,7 +7,6 @@
 #include <gseg/params.hpp>
 
 #include <mrpt/config/CConfigFile.h>
-#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/maps/TMetricMapInitializer.h>
 
 #include <gtest/gtest.h>
@@ -111,8 +110,11 @@ TEST(ConfigClaims, TheObservations2mapIniIsRawlogOctomapWithKittiHdl64AsItSays) 
 TEST(ConfigClaims, ThePluginDefinitionKeepsTheWholeConfigurationAndRefusesWhatYamlRefuses) {
     const std::string head = "[MappingApplication]\ngsegTraversabilityMap_count = 1\n";
     const std::string prefix = "[MappingApplication_gsegTraversabilityMap_00_";
+    // As observations2map reads it: a CConfigFile (whose file the loader reads again for repeated keys).
     const auto load = [](const std::string& text) {
-        mrpt::config::CConfigFileMemory ini(text);
+        const std::string path = std::string(GSEG_BINARY_DIR) + "/tests/plugin_definition.ini";
+        std::ofstream(path) << text;
+        mrpt::config::CConfigFile ini(path);
         mrpt::maps::TSetOfMetricMapInitializers maps;
         maps.loadFromConfigFile(ini, "MappingApplication");
         const auto* def = dynamic_cast<const gseg_maps::CTraversabilityOctoMap::TMapDefinition*>(maps.begin()->get());

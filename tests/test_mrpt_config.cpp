@@ -292,13 +292,16 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
     ASSERT_EQ(mapValues.size(), gseg::map::TraversabilityOptions::keys().size());
     for (const auto& key : gseg::SensorHeightOptions::keys()) {
         yaml += "  " + key + ": " + heightValues.at(key) + "\n", ini += key + " = " + heightValues.at(key) + "\n";
-        EXPECT_NE(h.get(key), gseg::SensorHeightOptions().get(key)) << key;
+        h.set(key, heightValues.at(key));
+        EXPECT_NE(h.get(key), gseg::SensorHeightOptions().get(key)) << key << ": pick a value other than the default";
         EXPECT_FALSE(gseg::SensorHeightOptions::describe(key).first.empty()) << key << " has no unit";
     }
     yaml += "traversability:\n", ini += "[traversability]\n";
     for (const auto& key : gseg::map::TraversabilityOptions::keys()) {
         yaml += "  " + key + ": " + mapValues.at(key) + "\n", ini += key + " = " + mapValues.at(key) + "\n";
         EXPECT_FALSE(gseg::map::TraversabilityOptions::describe(key).second.empty()) << key << " has no meaning";
+        t.set(key, mapValues.at(key));
+        EXPECT_NE(t.get(key), gseg::map::TraversabilityOptions().get(key)) << key << ": pick a value other than the default";
     }
     const auto a = gseg::mrpt::loadConfig(writeTemp("all.yaml", yaml)), b = gseg::mrpt::loadConfig(writeTemp("all.ini", ini));
     EXPECT_TRUE(a.distToGroundAuto && b.distToGroundAuto);
@@ -313,6 +316,15 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
     // toYaml writes both maps, and reads back to the same configuration.
     const auto c = gseg::mrpt::loadConfigFromText(gseg::mrpt::toYaml(a), gseg::mrpt::ConfigFormat::Yaml, "round trip");
     EXPECT_EQ(gseg::mrpt::toYaml(c), gseg::mrpt::toYaml(a));
+    // The same maps through an already parsed document.
+    const auto doc = mrpt::containers::yaml::FromText(
+        "gseg:\n  heightGate: 0.2\nsensorHeight:\n  maxRange: 25\ntraversability:\n  resolution: 0.1\n");
+    const auto d = gseg::mrpt::loadConfigFromYaml(doc, "doc");
+    EXPECT_EQ(d.params.heightGate, 0.2);
+    EXPECT_EQ(d.sensorHeight.maxRange, 25);
+    EXPECT_EQ(d.traversability.resolution, 0.1);
+    EXPECT_THROW(gseg::mrpt::loadConfigFromYaml(mrpt::containers::yaml::FromText("traversability:\n  banana: 1\n"), "doc"),
+                 std::runtime_error);
     // Invalid values are refused with the file, line and key.
     EXPECT_NE(errorOf(writeTemp("bad.yaml", "traversability:\n  resolution: 0\n")).find("resolution"), std::string::npos);
     EXPECT_NE(errorOf(writeTemp("bad2.yaml", "traversability:\n  probHit: 1.5\n")).find("probHit"), std::string::npos);

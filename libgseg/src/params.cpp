@@ -43,12 +43,7 @@ const OptionTable<Params>& table() {
     return t;
 }
 
-void require(bool ok, const char* key, double value, const char* what) {
-    if (ok) return;
-    std::ostringstream msg;
-    msg << "parameter '" << key << "' = " << value << " is invalid: " << what;
-    throw std::invalid_argument(msg.str());
-}
+void require(bool ok, const char* key, double value, const char* what) { requireOption(ok, "parameter", key, value, what); }
 
 }  // namespace
 

@@ -236,10 +236,7 @@ const OptionTable<SensorHeightOptions>& heightTable() {
 }
 
 void requireHeightOption(bool ok, const char* key, double value, const char* what) {
-    if (ok) return;
-    std::ostringstream msg;
-    msg << "sensorHeight option '" << key << "' = " << value << " is invalid: " << what;
-    throw std::invalid_argument(msg.str());
+    requireOption(ok, "sensorHeight option", key, value, what);
 }
 
 }  // namespace

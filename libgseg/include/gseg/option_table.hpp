@@ -20,6 +20,15 @@
 
 namespace gseg {
 
+/// Throws std::invalid_argument "<what> '<key>' = <value> is invalid: <why>" unless `ok`: the one
+/// message of every options struct's validate().
+inline void requireOption(bool ok, const char* what, const char* key, double value, const char* why) {
+    if (ok) return;
+    std::ostringstream msg;
+    msg << what << " '" << key << "' = " << value << " is invalid: " << why;
+    throw std::invalid_argument(msg.str());
+}
+
 /// One key of an options struct S.
 template <class S>
 struct OptionKey {

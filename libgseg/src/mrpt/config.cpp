@@ -345,18 +345,18 @@ LoadedConfig loadConfigFromYaml(const ::mrpt::containers::yaml& root, const std:
                                          "' beside the 'gseg:' map: put every parameter inside it, or drop 'gseg:'");
         params = &nested->second.asMap();
     }
-    const auto applyMap = [&](const ::mrpt::containers::yaml::map_t& map, Section section, bool top) {
+    const auto applyMap = [&](const ::mrpt::containers::yaml::map_t& map, Section section) {
+        const bool isTop = &map == &top;  // the top level also holds the maps, read on their own
         for (const auto& [k, v] : map) {
             const std::string key = k.as<std::string>();
-            if (top && key == "gseg" && v.isMap()) continue;
-            if (top && sectionOf(key) && v.isMap()) continue;
+            if (isTop && (key == "gseg" || sectionOf(key)) && v.isMap()) continue;
             if (!v.isScalar()) throw std::runtime_error(where + ": parameter '" + key + "' must be a single value");
             apply(cfg, section, key, v.as<std::string>(), where);
         }
     };
-    applyMap(*params, Section::Params, true);
+    applyMap(*params, Section::Params);
     for (const auto& [k, v] : top)
-        if (const SectionName* s = sectionOf(k.as<std::string>()); s && v.isMap()) applyMap(v.asMap(), s->section, false);
+        if (const SectionName* s = sectionOf(k.as<std::string>()); s && v.isMap()) applyMap(v.asMap(), s->section);
     finish(cfg, where);
     return cfg;
 }
@@ -372,9 +372,7 @@ LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const
             text.assign(bytes.begin(), bytes.end()), haveText = true;
         } catch (const std::exception&) {  // MRPT read it: go on without the repeated-key check
         }
-    } else if (const auto* memory = dynamic_cast<const ::mrpt::config::CConfigFileMemory*>(&ini)) {
-        text = memory->getContent(), haveText = true;
-    }
+    }  // a CConfigFileMemory's content has repeated keys merged already: nothing to scan
     return loadIni(ini, sections, name.empty() ? "INI" : name, haveText ? &text : nullptr);
 }
 

@@ -75,8 +75,9 @@ struct IniSections {
 
 /// From the sections `sections` of an MRPT INI configuration (the plugin: `<prefix>_gseg`,
 /// `<prefix>_sensorHeight`, `<prefix>_creationOpts`). Unknown keys are refused; repeated keys too
-/// where the text can be read again (a CConfigFile's file, a CConfigFileMemory's content), and
-/// messages then name its line. `where` names the source (the file when none is given).
+/// where the text can be read again (a CConfigFile's file: MRPT itself keeps the last silently, and
+/// a CConfigFileMemory holds them merged already), and messages then name the line. `where` names
+/// the source (the file when none is given).
 LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const IniSections& sections = IniSections(),
                                const std::string& where = "");
 
