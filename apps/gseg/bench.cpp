@@ -80,7 +80,7 @@ std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::
             tools::say("%s: %zu non-finite point(s) left out (labelled non-ground, not segmented)\n", in.name.c_str(),
                         nonFinite);
         if (cfg.distToGroundAuto) {
-            AutoHeightSegmenter height(cfg.params);
+            AutoHeightSegmenter height(cfg.params, cfg.sensorHeight);
             height.segment(PointCloudView(in.scan.xyzi.data(), in.scan.size(), 16), false);
             in.params.distToGround = height.lastDecision().height;
             tools::say("%s: distToGround auto %s\n", in.name.c_str(), height.lastDecision().describe().c_str());

@@ -37,6 +37,7 @@ struct FrameResult {
 struct Setup {
     Params params;
     bool autoHeight = false;  ///< distToGround: auto, estimated per frame
+    SensorHeightOptions sensorHeight;  ///< how (the config's sensorHeight:)
     std::string predDir;      ///< write each frame's predictions here ("" = not)
     bool breakdown = false;   ///< count where the errors are
     std::string pictureDir;   ///< breakdown picture per frame here ("" = none)
@@ -113,7 +114,7 @@ FrameList findFrames(const fs::path& root, const std::vector<std::string>& only)
 /// (frames are independent: each worker's frames get their own estimate, falling back to the
 /// configured height where a frame gives none).
 struct FrameSegmenter {
-    explicit FrameSegmenter(const Setup& setup) : fixed(setup.params), automatic(setup.params), useAuto(setup.autoHeight) {}
+    explicit FrameSegmenter(const Setup& setup) : fixed(setup.params), automatic(setup.params, setup.sensorHeight), useAuto(setup.autoHeight) {}
     Result segment(const PointCloudView& cloud, std::string& note) {
         if (!useAuto) return fixed.segment(cloud, false);
         automatic.reset();  // frames of a tree are independent: no history (and any thread count agrees)
@@ -246,7 +247,7 @@ Setup makeSetup(const Cli& cli) {
     } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
         throw std::runtime_error(e.what());
     }
-    setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto;
+    setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto, setup.sensorHeight = cfg.sensorHeight;
     tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
     setup.predDir = cli.predDir;
