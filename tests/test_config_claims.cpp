@@ -85,7 +85,7 @@ TEST(ConfigClaims, TheObservations2mapIniIsRawlogOctomapWithKittiHdl64AsItSays) 
     ASSERT_NE(def, nullptr) << "the INI does not ask for gseg's map";
     // creationOpts: rawlog-octomap's defaults (TraversabilityOptions), as the file says.
     EXPECT_TRUE(claimedDifferences(text, "rawlog-octomap's defaults").empty());
-    const gseg::map::TraversabilityOptions o, d = def->options;
+    const gseg::map::TraversabilityOptions o, d = def->config.traversability;
     EXPECT_EQ(d.resolution, o.resolution);
     EXPECT_EQ(d.maxRange, o.maxRange);
     EXPECT_EQ(d.clearance, o.clearance);
@@ -99,7 +99,47 @@ TEST(ConfigClaims, TheObservations2mapIniIsRawlogOctomapWithKittiHdl64AsItSays) 
     EXPECT_TRUE(claimedDifferences(text, "the library defaults").empty());
     const auto kitti = gseg::mrpt::loadConfig(kConfig + "kitti_hdl64.yaml");
     for (const auto& key : gseg::Params::keys()) {
-        EXPECT_EQ(def->params.get(key), gseg::Params().get(key)) << key;
-        EXPECT_EQ(def->params.get(key), kitti.params.get(key)) << key;
+        EXPECT_EQ(def->config.params.get(key), gseg::Params().get(key)) << key;
+        EXPECT_EQ(def->config.params.get(key), kitti.params.get(key)) << key;
     }
+}
+
+// #17: the plugin's map definition keeps the whole loaded configuration (distToGround = auto and
+// the sensorHeight options included), read by the tools' loader: repeated and unknown keys are
+// refused as in a YAML file.
+TEST(ConfigClaims, ThePluginDefinitionKeepsTheWholeConfigurationAndRefusesWhatYamlRefuses) {
+    const std::string head = "[MappingApplication]\ngsegTraversabilityMap_count = 1\n";
+    const std::string prefix = "[MappingApplication_gsegTraversabilityMap_00_";
+    // As observations2map reads it: a CConfigFile (whose file the loader reads again for repeated keys).
+    const auto load = [](const std::string& text) {
+        const std::string path = std::string(GSEG_BINARY_DIR) + "/tests/plugin_definition.ini";
+        std::ofstream(path) << text;
+        mrpt::config::CConfigFile ini(path);
+        mrpt::maps::TSetOfMetricMapInitializers maps;
+        maps.loadFromConfigFile(ini, "MappingApplication");
+        const auto* def = dynamic_cast<const gseg_maps::CTraversabilityOctoMap::TMapDefinition*>(maps.begin()->get());
+        if (!def) throw std::logic_error("no gseg map definition");
+        return def->config;
+    };
+    const auto cfg = load(head + prefix + "gseg]\ndistToGround = auto\nheightGate = 0.2\n" + prefix +
+                          "sensorHeight]\nmaxRange = 25\nminColumns = 6\n" + prefix + "creationOpts]\nresolution = 0.1\n");
+    EXPECT_TRUE(cfg.distToGroundAuto);
+    EXPECT_EQ(cfg.params.heightGate, 0.2);
+    EXPECT_EQ(cfg.sensorHeight.maxRange, 25);
+    EXPECT_EQ(cfg.sensorHeight.minColumns, 6);
+    EXPECT_EQ(cfg.traversability.resolution, 0.1);
+    const auto errorOf = [&](const std::string& text) -> std::string {
+        try {
+            load(text);
+        } catch (const std::exception& e) {
+            return e.what();
+        }
+        return "";
+    };
+    EXPECT_NE(errorOf(head + prefix + "creationOpts]\nresolution = 0.1\nresolution = 0.3\n").find("'resolution' given twice"),
+              std::string::npos);
+    EXPECT_NE(errorOf(head + prefix + "creationOpts]\nbanana = 1\n").find("unknown traversability option 'banana'"),
+              std::string::npos);
+    EXPECT_NE(errorOf(head + prefix + "sensorHeight]\nbanana = 1\n").find("unknown sensorHeight option 'banana'"),
+              std::string::npos);
 }

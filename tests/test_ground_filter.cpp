@@ -910,3 +910,27 @@ TEST(RawlogGseg, UnderMpiAScanSkippedOnAnotherRankIsNamedByRankZeroAndExitsThree
     EXPECT_NE(r.output.find("2 of 2 rawlogs written (inputs per process: 1, 1)"), std::string::npos) << r.output;
     EXPECT_EQ(entryLabels((dir / "out/broken.rawlog").string()), (std::vector<std::string>{"BROKEN"}));
 }
+
+// #18 point 10: a --sensor label that matches nothing (a typo) is named with the labels the
+// rawlog has, and the run ends with exit 3 (done, but not what was asked), even with -q.
+TEST(RawlogGsegHostile, ASensorFilterThatMatchesNothingIsNamedWithTheLabelsThereAre) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = freshDir("sensor_typo");
+    auto r = rawlogGseg("-q -i " + q(kVlp16) + " -o " + q(dir / "out.rawlog") + " --sensor Velodyne1_SCA");
+    EXPECT_EQ(r.status, 3) << r.output;
+    EXPECT_NE(r.output.find("rawlog-gseg: --sensor Velodyne1_SCA matched no observation; the rawlog has LiDAR observations "
+                            "from: Velodyne1_SCAN (1)"),
+              std::string::npos) << r.output;
+    EXPECT_EQ(entryLabels((dir / "out.rawlog").string()), entryLabels(kVlp16)) << "passed through unchanged";
+    // The right label: segmented, no remark, exit 0.
+    r = rawlogGseg("-i " + q(kVlp16) + " -o " + q(dir / "out.rawlog") + " -w --sensor Velodyne1_SCAN");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(r.output.find("matched no observation"), std::string::npos) << r.output;
+    // A rawlog without LiDAR scans says so.
+    if (fs::exists(kKfSlam)) {
+        r = rawlogGseg("-i " + q(kKfSlam) + " -o " + q(dir / "kf.rawlog") + " --sensor VELODYNE");
+        EXPECT_EQ(r.status, 3) << r.output;
+        EXPECT_NE(r.output.find("--sensor VELODYNE matched no observation; the rawlog has no LiDAR observation"),
+                  std::string::npos) << r.output;
+    }
+}

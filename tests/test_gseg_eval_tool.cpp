@@ -154,6 +154,47 @@ TEST(EvalTool, BadTrees) {
     EXPECT_EQ(status, 2);
 }
 
+// #18 point 10: a sequence asked for that gives no frame is named, and so is one whose velodyne/
+// cannot be listed (a symbolic link loop); the other sequences are still evaluated, exit 3.
+TEST(EvalTool, SequencesWithoutFramesOrWithAnUnlistableFolderAreNamedAndTheOthersEvaluated) {
+    const fs::path root = kDir / "seqs";
+    fs::remove_all(root);
+    std::vector<float> pts;
+    for (int i = 0; i < 400; ++i) pts.insert(pts.end(), {float(i % 20) * 0.5f, float(i / 20) * 0.5f, -1.7f, 0.f});
+    writeFloats(root / "sequences/00/velodyne/000000.bin", pts);
+    const std::vector<std::uint32_t> labels(400, 40);
+    fs::create_directories(root / "sequences/00/labels");
+    std::ofstream(root / "sequences/00/labels/000000.label", std::ios::binary)
+        .write(reinterpret_cast<const char*>(labels.data()), 1600);
+    fs::create_directories(root / "sequences/05/velodyne");  // no frames
+    fs::create_directories(root / "sequences/06");
+    fs::create_symlink("loop", root / "sequences/06/loop");
+    fs::create_symlink("loop", root / "sequences/06/velodyne");  // velodyne -> loop -> loop
+    int status = -1;
+    std::string out = runTool("'" + root.string() + "' --sequences 00,05", status);
+    EXPECT_EQ(status, 3) << out;
+    EXPECT_NE(out.find("gseg eval: sequence 05: no scans (*.bin) in " + (root / "sequences/05/velodyne").string()),
+              std::string::npos) << out;
+    EXPECT_NE(out.find("1 frames evaluated, 0 skipped, 1 sequence(s) without frames"), std::string::npos) << out;
+    out = runTool("'" + root.string() + "' --sequences 00,07", status);
+    EXPECT_EQ(status, 3) << out;
+    EXPECT_NE(out.find("gseg eval: sequence 07: no folder " + (root / "sequences/07/velodyne").string()), std::string::npos)
+        << out;
+    // Every sequence: 06 is named with the folder and the reason, 00 is evaluated.
+    out = runTool("'" + root.string() + "'", status);
+    EXPECT_EQ(status, 3) << out;
+    EXPECT_NE(out.find("gseg eval: sequence 06: no folder " + (root / "sequences/06/velodyne").string() +
+                       " (Too many levels of symbolic links)"),
+              std::string::npos) << out;
+    EXPECT_NE(out.find("1 frames evaluated"), std::string::npos) << out;
+    // Nothing to evaluate at all: an error naming what was wrong.
+    out = runTool("'" + root.string() + "' --sequences 05,06", status);
+    EXPECT_EQ(status, 1) << out;
+    EXPECT_NE(out.find("sequence 05: no scans"), std::string::npos) << out;
+    EXPECT_NE(out.find("sequence 06: no folder"), std::string::npos) << out;
+    fs::remove_all(root);
+}
+
 TEST(EvalTool, BreakdownCountsAgreeWithTheScoresAndDrawOnePicturePerFrame) {
     const std::string root = gseg::test::sharedData("semantickitti");
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");

@@ -115,6 +115,18 @@ TEST(SegmentTool, RawlogIndexPastTheEndIsAnError) {
     EXPECT_NE(r.output.find("past the last LiDAR observation"), std::string::npos) << r.output;
 }
 
+// #18 point 10: a negative --index used the first scan; it is bad usage, refused before reading.
+TEST(SegmentTool, ANegativeIndexIsBadUsage) {
+    for (const char* index : {"-1", "-7"}) {
+        const ToolRun r = segmentTool("'" + kVlp16 + "' --index " + index + " --labels-out /nonexistent/x.labels");
+        EXPECT_EQ(r.status, 2) << r.output;
+        EXPECT_NE(r.output.find(std::string("--index needs N >= 0 (the N-th LiDAR observation of a rawlog, 0-based), got ") + index),
+                  std::string::npos) << r.output;
+    }
+    if (!exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    EXPECT_EQ(segmentTool("'" + kVlp16 + "' --index 0").status, 0);
+}
+
 TEST(SegmentTool, BadInputsFailWithOneLineAndWriteNothing) {
     std::vector<float> good;
     for (int i = 0; i < 200; ++i) good.insert(good.end(), {float(i % 20), float(i / 20), -1.7f, 0.f});

@@ -216,7 +216,12 @@ TEST(Kitti2Rawlog, BadPosesCalibrationAndTimesNameFileAndLine) {
     const Case cases[] = {{"poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n2 0 0 1 0 2 0 0 0 0 2 0\n1 0 0 2 0 1 0 0 0 0 1 0\n",
                            "/poses.txt:2: the 3x3 part is not a rotation"},
                           {"calib.txt", "Tr: 0 0 0 0 0 0 0 0 0 0 0 0\n", "/calib.txt:1: the 3x3 part is not a rotation"},
-                          {"times.txt", "0.0\nnan\n1.0\n", "/times.txt:2: expected one finite time"}};
+                          {"times.txt", "0.0\nnan\n1.0\n", "/times.txt:2: 'nan' is not a finite number"},
+                          // #18 point 6: beyond what an MRPT time stamp holds (1e13 s wrapped to 1970), or negative.
+                          {"times.txt", "0.0\n1e13\n1e13\n", "/times.txt:2: time 10000000000000 s is outside 0 to"},
+                          {"times.txt", "0.0\n0.1\n1e18\n", "/times.txt:3: time 1e+18 s is outside 0 to"},
+                          {"times.txt", "0.0\n0.1\n1e30\n", "/times.txt:3: time 1e+30 s is outside 0 to"},
+                          {"times.txt", "-5\n0.1\n0.2\n", "/times.txt:1: time -5 s is outside 0 to"}};
     for (const auto& c : cases) {
         const std::string seq = syntheticSequence("badfile", 3, 3, true), dir = tempDir("badfile_out");
         std::ofstream(seq + "/" + c.file) << c.text;
@@ -226,6 +231,20 @@ TEST(Kitti2Rawlog, BadPosesCalibrationAndTimesNameFileAndLine) {
         expectNothingLeftBehind(dir);
         fs::remove_all(seq), fs::remove_all(dir);
     }
+}
+
+// #18 point 6: the last time stamp (--start-time + times.txt) must be a date a time stamp holds.
+TEST(Kitti2Rawlog, ATimeStampAfterTheYear9999IsRefusedNamingTimesTxt) {
+    const std::string seq = syntheticSequence("latetime", 3, 3, true), dir = tempDir("latetime_out");
+    std::ofstream(seq + "/times.txt") << "0\n1\n1e9\n";
+    ToolRun r = runTool(seq + " -o " + dir + "/x.rawlog --start-time 9999-01-01", dir);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("/times.txt: the last frame's time stamp (--start-time + 1000000000 s) is after 9999-12-31"),
+              std::string::npos) << r.err;
+    expectNothingLeftBehind(dir);
+    r = runTool(seq + " -o " + dir + "/x.rawlog --start-time 2011-09-26", dir);  // 1e9 s later: 2043
+    EXPECT_EQ(r.status, 0) << r.err;
+    fs::remove_all(seq), fs::remove_all(dir);
 }
 
 TEST(Kitti2Rawlog, AnInputAsOutputIsRefusedBeforeAnythingIsWritten) {

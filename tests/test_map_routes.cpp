@@ -14,9 +14,12 @@
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -149,5 +152,63 @@ TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_EQ(runCommand(wrapper + " --version").status, 0);
     EXPECT_EQ(runCommand(wrapper + " --help").status, 0);
+    fs::remove_all(dir);
+}
+
+// #18 points 7 and 8, #17 item 5: the wrapper prints why observations2map failed, in one line
+// naming the file (and line and key where there is one), exit 1; the plugin's INI refuses unknown
+// and repeated keys as a YAML file does, and keeps the whole configuration (distToGround = auto).
+TEST(MapRoutes, TheWrapperNamesTheFileAndReasonOfEveryConfigurationError) {
+    if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps)";
+    const std::string dir = tempDir("wrapper_errors");
+    auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + simulatedSequence(dir + "/seq") + "' -o " + dir +
+                        "/seq.rawlog --simplemap " + dir + "/seq.simplemap --last 1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::ifstream in(kSource + "/config/octomap_maps.ini");
+    const std::string ini((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto lineOf = [&](const std::string& text, const std::string& key) {
+        const std::size_t at = text.find("\n" + key + " = ");
+        return std::to_string(1 + std::count(text.begin(), text.begin() + long(at) + 1, '\n'));
+    };
+    struct Case {
+        std::string key, replacement, expected;  // expected: after "<file>"
+    };
+    const std::string gsegSection = "[MappingApplication_gsegTraversabilityMap_00_gseg]";
+    const std::string optsSection = "[MappingApplication_gsegTraversabilityMap_00_creationOpts]";
+    const Case cases[] = {
+        {"distToGround", "distToGround = banana", ":" + lineOf(ini, "distToGround") + ": " + gsegSection +
+                                                      ": parameter 'distToGround': cannot read 'banana' as a number"},
+        {"resolution", "resolution = 0", ": TraversabilityOptions.resolution [m] = 0: must lie in [0.01, 10]"},
+        {"probHit", "probHit = 1.5", ": TraversabilityOptions.probHit = 1.5: must lie in (0.5, 1)"},
+        {"distToGround", "distToGround = 1.723\nbananaKey = 1",
+         ":" + std::to_string(std::stoi(lineOf(ini, "distToGround")) + 1) + ": " + gsegSection + ": unknown parameter 'bananaKey'"},
+        {"probHit", "probHit = 0.7\nprobHits = 0.7",
+         ":" + std::to_string(std::stoi(lineOf(ini, "probHit")) + 1) + ": " + optsSection + ": unknown traversability option 'probHits'"},
+        {"distToGround", "distToGround = 1.723\ndistToGround = 1.9",
+         ":" + std::to_string(std::stoi(lineOf(ini, "distToGround")) + 1) + ": " + gsegSection +
+             " 'distToGround' given twice (also on line " + lineOf(ini, "distToGround") + ")"},
+    };
+    const std::string wrapper = kHostEnv + gseg::test::tool("gseg-observations2map");
+    for (const Case& c : cases) {
+        std::string text = ini;
+        const std::size_t at = text.find("\n" + c.key + " = ") + 1;
+        text.replace(at, text.find('\n', at) - at, c.replacement);
+        const std::string path = dir + "/bad.ini";
+        std::ofstream(path) << text;
+        r = runCommand(wrapper + " -w " + path + " " + dir + "/seq.simplemap " + dir + "/m");
+        EXPECT_EQ(r.status, 1) << r.output;
+        EXPECT_NE(r.output.find("gseg-observations2map: " + path + c.expected + "\n"), std::string::npos)
+            << c.replacement << " -> " << r.output;
+        EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one line: " << r.output;
+        EXPECT_FALSE(fs::exists(dir + "/m_gseg_maps__CTraversabilityOctoMap_00_ground.bt"));
+    }
+    // A FIFO (as configuration or input) is refused before observations2map runs.
+    ASSERT_EQ(::mkfifo((dir + "/fifo").c_str(), 0600), 0);
+    r = runCommand(wrapper + " '" + kSource + "/config/octomap_maps.ini' " + dir + "/fifo " + dir + "/m");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/fifo: not a regular file"), std::string::npos) << r.output;
+    r = runCommand(wrapper + " " + dir + "/fifo " + dir + "/seq.simplemap " + dir + "/m");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find(dir + "/fifo: not a regular file"), std::string::npos) << r.output;
     fs::remove_all(dir);
 }

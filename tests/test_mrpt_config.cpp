@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <unistd.h>
 
 namespace {
@@ -235,4 +236,101 @@ TEST(ConfigHostile, IniLoopsThatWouldNeverEndAreRefused) {
     ::setenv("GSEG_TEST_SELF", "$env{GSEG_TEST_SELF}", 1);
     const std::string self = writeTemp("self.ini", "[gseg]\nheightGate = $env{GSEG_TEST_SELF}\n");
     EXPECT_EQ(loadWithin(self, 20), 1) << "hang or wrong error type";
+}
+
+// #18 point 8: INI refuses what YAML refuses. MRPT's CConfigFile keeps the last of a repeated key
+// without a word; the loader reads the text again and refuses it, naming both lines.
+TEST(ConfigIniYamlAgree, ARepeatedKeyIsRefusedInBothFormatsNamingTheLines) {
+    const std::string yaml = errorOf(writeTemp("twice.yaml", "distToGround: 1.7\nheightGate: 0.2\ndistToGround: 1.9\n"));
+    EXPECT_NE(yaml.find("twice.yaml:3: 'distToGround' given twice (also on line 1)"), std::string::npos) << yaml;
+    const std::string ini = errorOf(writeTemp("twice.ini", "[gseg]\ndistToGround = 1.7\nheightGate = 0.2\ndistToGround = 1.9\n"));
+    EXPECT_NE(ini.find("twice.ini:4: [gseg] 'distToGround' given twice (also on line 2)"), std::string::npos) << ini;
+    // MRPT's keys ignore case, so two spellings are one key given twice; so is a key repeated in a
+    // second [gseg] section (MRPT merges the two).
+    EXPECT_NE(errorOf(writeTemp("case.ini", "[gseg]\nheightGate = 0.2\nHEIGHTGATE = 0.3\n")).find("given twice"), std::string::npos);
+    EXPECT_NE(errorOf(writeTemp("again.ini", "[gseg]\nheightGate = 0.2\n[gseg]\nheightGate = 0.3\n")).find("given twice"),
+              std::string::npos);
+    // The same key in two sections is two keys.
+    const auto cfg = gseg::mrpt::loadConfig(
+        writeTemp("two.ini", "[gseg]\ndistToGround = auto\n[sensorHeight]\nmaxRange = 25\n[traversability]\nmaxRange = 40\n"));
+    EXPECT_TRUE(cfg.distToGroundAuto);
+    EXPECT_EQ(cfg.sensorHeight.maxRange, 25);
+    EXPECT_EQ(cfg.traversability.maxRange, 40);
+}
+
+TEST(ConfigIniYamlAgree, UnknownKeysAndSectionsAreRefusedInBothFormats) {
+    const std::string yaml = errorOf(writeTemp("unknown.yaml", "traversability:\n  resolution: 0.1\n  banana: 1\n"));
+    EXPECT_NE(yaml.find("unknown.yaml:3: unknown traversability option 'banana'"), std::string::npos) << yaml;
+    const std::string ini = errorOf(writeTemp("unknown.ini", "[gseg]\n[traversability]\nresolution = 0.1\nbanana = 1\n"));
+    EXPECT_NE(ini.find("unknown.ini:4: [traversability]: unknown traversability option 'banana'"), std::string::npos) << ini;
+    EXPECT_NE(errorOf(writeTemp("unknown2.ini", "[gseg]\nbanana = 1\n")).find("unknown parameter 'banana'"), std::string::npos);
+    EXPECT_NE(errorOf(writeTemp("sensor.yaml", "sensorHeight:\n  minRang: 1\n")).find("unknown sensorHeight option 'minRang'"),
+              std::string::npos);
+    const std::string section = errorOf(writeTemp("section.ini", "[gseg]\n[sensorHeigth]\nminRange = 1\n"));
+    EXPECT_NE(section.find("unknown section [sensorHeigth]"), std::string::npos) << section;
+    const std::string map = errorOf(writeTemp("map.yaml", "sensorHeigth:\n  minRange: 1\n"));
+    EXPECT_NE(map.find("map.yaml:1:"), std::string::npos) << map;
+    const std::string twice = errorOf(writeTemp("map2.yaml", "traversability:\n  resolution: 0.1\ntraversability:\n  maxRange: 9\n"));
+    EXPECT_NE(twice.find("map2.yaml:3: a second 'traversability:' map (also on line 1)"), std::string::npos) << twice;
+}
+
+// #17 item 5: every field of SensorHeightOptions and TraversabilityOptions from YAML and INI,
+// through their key tables, validated with the key named.
+TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) {
+    std::string yaml = "gseg:\n  distToGround: auto\nsensorHeight:\n", ini = "[gseg]\ndistToGround = auto\n[sensorHeight]\n";
+    gseg::SensorHeightOptions h;
+    gseg::map::TraversabilityOptions t;
+    // A valid value different from each default.
+    const std::map<std::string, std::string> heightValues = {
+        {"minRange", "1"},        {"maxRange", "25"},       {"columnSize", "1.5"},       {"minColumnPoints", "7"},
+        {"floorThickness", "0.3"}, {"minColumns", "6"},     {"maxTiltDegrees", "12"},    {"planeTolerance", "0.15"},
+        {"minLevelTiltDegrees", "2"}, {"maxLevelTiltDegrees", "9"}};
+    const std::map<std::string, std::string> mapValues = {
+        {"resolution", "0.1"}, {"maxRange", "40"},  {"probHit", "0.8"},  {"probMiss", "0.3"},
+        {"clampMin", "0.1"},   {"clampMax", "0.95"}, {"occupancyThreshold", "0.6"}, {"clearance", "2.5"}};
+    ASSERT_EQ(heightValues.size(), gseg::SensorHeightOptions::keys().size());
+    ASSERT_EQ(mapValues.size(), gseg::map::TraversabilityOptions::keys().size());
+    for (const auto& key : gseg::SensorHeightOptions::keys()) {
+        yaml += "  " + key + ": " + heightValues.at(key) + "\n", ini += key + " = " + heightValues.at(key) + "\n";
+        h.set(key, heightValues.at(key));
+        EXPECT_NE(h.get(key), gseg::SensorHeightOptions().get(key)) << key << ": pick a value other than the default";
+        EXPECT_FALSE(gseg::SensorHeightOptions::describe(key).first.empty()) << key << " has no unit";
+    }
+    yaml += "traversability:\n", ini += "[traversability]\n";
+    for (const auto& key : gseg::map::TraversabilityOptions::keys()) {
+        yaml += "  " + key + ": " + mapValues.at(key) + "\n", ini += key + " = " + mapValues.at(key) + "\n";
+        EXPECT_FALSE(gseg::map::TraversabilityOptions::describe(key).second.empty()) << key << " has no meaning";
+        t.set(key, mapValues.at(key));
+        EXPECT_NE(t.get(key), gseg::map::TraversabilityOptions().get(key)) << key << ": pick a value other than the default";
+    }
+    const auto a = gseg::mrpt::loadConfig(writeTemp("all.yaml", yaml)), b = gseg::mrpt::loadConfig(writeTemp("all.ini", ini));
+    EXPECT_TRUE(a.distToGroundAuto && b.distToGroundAuto);
+    for (const auto& [key, value] : heightValues) {
+        EXPECT_DOUBLE_EQ(std::stod(a.sensorHeight.get(key)), std::stod(value)) << key;
+        EXPECT_EQ(a.sensorHeight.get(key), b.sensorHeight.get(key)) << key;
+    }
+    for (const auto& [key, value] : mapValues) {
+        EXPECT_DOUBLE_EQ(std::stod(a.traversability.get(key)), std::stod(value)) << key;
+        EXPECT_EQ(a.traversability.get(key), b.traversability.get(key)) << key;
+    }
+    // toYaml writes both maps, and reads back to the same configuration.
+    const auto c = gseg::mrpt::loadConfigFromText(gseg::mrpt::toYaml(a), gseg::mrpt::ConfigFormat::Yaml, "round trip");
+    EXPECT_EQ(gseg::mrpt::toYaml(c), gseg::mrpt::toYaml(a));
+    // The same maps through an already parsed document.
+    const auto doc = mrpt::containers::yaml::FromText(
+        "gseg:\n  heightGate: 0.2\nsensorHeight:\n  maxRange: 25\ntraversability:\n  resolution: 0.1\n");
+    const auto d = gseg::mrpt::loadConfigFromYaml(doc, "doc");
+    EXPECT_EQ(d.params.heightGate, 0.2);
+    EXPECT_EQ(d.sensorHeight.maxRange, 25);
+    EXPECT_EQ(d.traversability.resolution, 0.1);
+    EXPECT_THROW(gseg::mrpt::loadConfigFromYaml(mrpt::containers::yaml::FromText("traversability:\n  banana: 1\n"), "doc"),
+                 std::runtime_error);
+    // Invalid values are refused with the file, line and key.
+    EXPECT_NE(errorOf(writeTemp("bad.yaml", "traversability:\n  resolution: 0\n")).find("resolution"), std::string::npos);
+    EXPECT_NE(errorOf(writeTemp("bad2.yaml", "traversability:\n  probHit: 1.5\n")).find("probHit"), std::string::npos);
+    EXPECT_NE(errorOf(writeTemp("bad3.yaml", "sensorHeight:\n  maxRange: 1\n")).find("sensorHeight option 'maxRange'"),
+              std::string::npos);
+    const std::string word = errorOf(writeTemp("bad4.ini", "[gseg]\n[sensorHeight]\nminColumns = many\n"));
+    EXPECT_NE(word.find("bad4.ini:3: [sensorHeight]: sensorHeight option 'minColumns': cannot read 'many' as a whole number"),
+              std::string::npos) << word;
 }

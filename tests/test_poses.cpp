@@ -114,4 +114,37 @@ TEST(Poses, TimesMustBeFiniteAndInOrder) {
     }
 }
 
+// #18 point 6: a time MRPT's 100 ns time stamps cannot hold (1e13 s wraps to 1970) is refused
+// with its file and line, as are negative times.
+TEST(Poses, TimesBeyondWhatATimeStampHoldsOrNegativeAreRefused) {
+    EXPECT_EQ(readKittiTimes(writeTemp("times_max.txt", "0\n1e9\n")).back(), kMaxKittiTime);
+    for (const char* text : {"0.0\n1e13\n", "0.0\n1e18\n", "0.0\n1e30\n", "0.0\n1000000001\n", "-0.1\n0.0\n"}) {
+        const auto path = writeTemp("times_range.txt", text);
+        const std::string e = errorOf([&] { readKittiTimes(path); });
+        EXPECT_NE(e.find(path + (text[0] == '-' ? ":1: time -0.1" : ":2: time 1")), std::string::npos) << text << " -> " << e;
+        EXPECT_NE(e.find("is outside 0 to 1000000000 s"), std::string::npos) << e;
+    }
+}
+
+// #18 point 10: a number that does not parse is named as such, not as a wrong count.
+TEST(Poses, ATokenThatIsNotAFiniteNumberIsNamedWithItsLine) {
+    const std::string row = "1 0 0 0 0 1 0 0 0 0 1 0\n";
+    struct Case {
+        std::string text, expected;
+    };
+    for (const Case& c : {Case{row + "1 0 0 nan 0 1 0 0 0 0 1 0\n", ":2: 'nan' is not a finite number"},
+                          Case{row + "1 0 0 inf 0 1 0 0 0 0 1 0\n", ":2: 'inf' is not a finite number"},
+                          Case{"1 0 0 0 0 1 0 0 0 0 1 0x\n", ":1: '0x' is not a number"},
+                          Case{"1 0 0 0 0 1 0 0 0 0 1 1e999\n", ":1: '1e999' is not a finite number"},
+                          Case{"1 0 0 0 0 1 0 0 0 0 1\n", ":1: expected 12 numbers (row-major 3x4 KITTI pose), found 11"}}) {
+        const auto path = writeTemp("poses_nan.txt", c.text);
+        const std::string e = errorOf([&] { readKittiPoses(path); });
+        EXPECT_NE(e.find(path + c.expected), std::string::npos) << c.text << " -> " << e;
+    }
+    const auto tum = writeTemp("nan.tum", "1.0 1 2 NaN 0 0 0 1\n");
+    EXPECT_NE(errorOf([&] { readTumTrajectory(tum); }).find(":1: 'NaN' is not a finite number"), std::string::npos);
+    const auto calib = writeTemp("calib_nan.txt", "Tr: 1 0 0 0 0 1 0 0 0 0 1 nan\n");
+    EXPECT_NE(errorOf([&] { readKittiCalibTr(calib); }).find(":1: 'nan' is not a finite number"), std::string::npos);
+}
+
 }  // namespace

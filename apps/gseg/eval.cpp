@@ -38,39 +38,85 @@ struct FrameResult {
 struct Setup {
     Params params;
     bool autoHeight = false;  ///< distToGround: auto, estimated per frame
+    SensorHeightOptions sensorHeight;  ///< how (the config's sensorHeight:)
     std::string predDir;      ///< write each frame's predictions here ("" = not)
     bool breakdown = false;   ///< count where the errors are
     std::string pictureDir;   ///< breakdown picture per frame here ("" = none)
 };
 
-std::vector<Frame> findFrames(const fs::path& root, const std::vector<std::string>& only) {
+/// The frames found, and one line per sequence that gave none although asked for (or could not be
+/// listed): such a sequence is named, the others are evaluated.
+struct FrameList {
+    std::vector<Frame> frames;
+    std::vector<std::string> problems;
+};
+
+/// The scans of one sequence folder; throws std::runtime_error naming the folder where it cannot
+/// be listed (a symbolic link loop, no permission).
+std::vector<Frame> sequenceFrames(const fs::path& seq) {
+    const std::string name = seq.filename().string();
+    const fs::path velodyne = seq / "velodyne";
+    std::vector<Frame> frames;
+    try {
+        for (const auto& bin : fs::directory_iterator(velodyne))
+            if (bin.path().extension() == ".bin")
+                frames.push_back({name, bin.path().stem().string(), bin.path().string(),
+                                  (seq / "labels" / (bin.path().stem().string() + ".label")).string()});
+    } catch (const fs::filesystem_error& e) {
+        throw std::runtime_error(velodyne.string() + ": cannot list the scans (" + e.code().message() + ")");
+    }
+    return frames;
+}
+
+FrameList findFrames(const fs::path& root, const std::vector<std::string>& only) {
     const fs::path seqDir = root / "sequences";
     if (!fs::is_directory(seqDir))
         throw std::runtime_error(root.string() + ": no sequences/ folder (SemanticKITTI layout expected)");
-    std::vector<Frame> frames;
-    for (const auto& seq : fs::directory_iterator(seqDir)) {
-        const std::string name = seq.path().filename().string();
-        if (!only.empty() && std::find(only.begin(), only.end(), name) == only.end()) continue;
-        if (!fs::is_directory(seq.path() / "velodyne")) continue;
-        for (const auto& bin : fs::directory_iterator(seq.path() / "velodyne"))
-            if (bin.path().extension() == ".bin")
-                frames.push_back({name, bin.path().stem().string(), bin.path().string(),
-                                  (seq.path() / "labels" / (bin.path().stem().string() + ".label")).string()});
+    FrameList out;
+    std::vector<std::string> names = only;  // the sequences asked for, or every folder
+    if (names.empty()) {
+        try {
+            for (const auto& seq : fs::directory_iterator(seqDir)) names.push_back(seq.path().filename().string());
+        } catch (const fs::filesystem_error& e) {
+            throw std::runtime_error(seqDir.string() + ": cannot list the sequences (" + e.code().message() + ")");
+        }
+        std::sort(names.begin(), names.end());
     }
-    std::sort(frames.begin(), frames.end(), [](const Frame& a, const Frame& b) {
+    for (const std::string& name : names) {
+        const fs::path seq = seqDir / name;
+        std::error_code ec;
+        if (!fs::is_directory(seq / "velodyne", ec)) {
+            if (!only.empty() || fs::exists(seq / "velodyne", ec) || ec)
+                out.problems.push_back("sequence " + name + ": no folder " + (seq / "velodyne").string() +
+                                       (ec ? " (" + ec.message() + ")" : ""));
+            continue;
+        }
+        try {
+            std::vector<Frame> frames = sequenceFrames(seq);
+            if (frames.empty()) out.problems.push_back("sequence " + name + ": no scans (*.bin) in " + (seq / "velodyne").string());
+            out.frames.insert(out.frames.end(), frames.begin(), frames.end());
+        } catch (const std::runtime_error& e) {
+            out.problems.push_back("sequence " + name + ": " + e.what());
+        }
+    }
+    std::sort(out.frames.begin(), out.frames.end(), [](const Frame& a, const Frame& b) {
         return std::tie(a.sequence, a.name) < std::tie(b.sequence, b.name);
     });
-    if (frames.empty())
+    if (out.frames.empty()) {
+        std::string why;
+        for (const std::string& p : out.problems) why += "; " + p;
         throw std::runtime_error(root.string() + ": no scans under sequences/*/velodyne/*.bin" +
-                                 (only.empty() ? "" : " for the sequences asked for"));
-    return frames;
+                                 (only.empty() ? "" : " for the sequences asked for") + why);
+    }
+    return out;
 }
 
 /// A worker's segmenter: the one height policy (gseg::mrpt::ScanSegmenter; with `distToGround:
 /// auto` each frame gets its own estimate, or the configured height where it gives none, so any
 /// thread count agrees). `note` says when the fallback was used.
 struct FrameSegmenter {
-    explicit FrameSegmenter(const Setup& setup) : seg(::gseg::mrpt::LoadedConfig{setup.params, setup.autoHeight}) {}
+    explicit FrameSegmenter(const Setup& setup)
+        : seg(::gseg::mrpt::LoadedConfig{setup.params, setup.autoHeight, setup.sensorHeight, {}}) {}
     Result segment(const PointCloudView& cloud, std::string& note) {
         if (cloud.empty()) throw std::invalid_argument("gseg: the point cloud is empty");
         ::gseg::mrpt::ScanSegmentation s = seg.segment(cloud, false, ::gseg::mrpt::HeightCheck::Never);
@@ -201,7 +247,7 @@ Setup makeSetup(const Cli& cli) {
     } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
         throw std::runtime_error(e.what());
     }
-    setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto;
+    setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto, setup.sensorHeight = cfg.sensorHeight;
     tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
     setup.predDir = cli.predDir;
@@ -231,6 +277,7 @@ void checkEvalOutputs(const Cli& cli, const Setup& setup, const std::vector<Fram
 int run(const Cli& cli, tools::Ranks& ranks) {
     Setup setup;
     std::vector<Frame> frames;
+    std::vector<std::string> sequenceProblems;  // sequences asked for that gave no frame: named, exit 3
     std::string error;  // every rank finds the frames; any rank's failure stops all alike
     int code = tools::kBadInput;
     try {
@@ -239,7 +286,8 @@ int run(const Cli& cli, tools::Ranks& ranks) {
             if (cli.labels.empty()) throw std::invalid_argument("--scan needs --labels");
             frames.push_back({"scan", fs::path(cli.scan).stem().string(), cli.scan, cli.labels});
         } else {
-            frames = findFrames(cli.root, cli.sequences);
+            FrameList found = findFrames(cli.root, cli.sequences);
+            frames = std::move(found.frames), sequenceProblems = std::move(found.problems);
         }
         if (ranks.root()) checkEvalOutputs(cli, setup, frames);  // rank 0 writes the reports
         if (ranks.root() && !cli.predDir.empty()) fs::create_directories(cli.predDir);
@@ -253,6 +301,8 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         std::fprintf(stderr, "gseg eval: %s\n", first.c_str());
         return code;
     }
+    if (ranks.root())
+        for (const std::string& p : sequenceProblems) std::fprintf(stderr, "gseg eval: %s\n", p.c_str());
     const auto results = evaluateOnRanks(frames, setup, cli.threads, ranks);
     if (!ranks.root()) return 0;
 
@@ -272,6 +322,7 @@ int run(const Cli& cli, tools::Ranks& ranks) {
                      results[i].skipped.c_str());
     }
     tools::say("%zu frames evaluated, %zu skipped", rows.size(), frames.size() - rows.size());
+    if (!sequenceProblems.empty()) tools::say(", %zu sequence(s) without frames (named above)", sequenceProblems.size());
     if (setup.autoHeight) tools::say(", %zu without a height estimate (fallback used)", fallbacks);
     tools::say("\n");
     if (rows.empty()) throw std::runtime_error("no frame could be scored (see the skipped frames above)");
@@ -297,7 +348,7 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         if (cli.breakdown)
             tools::say("wrote %s_breakdown.csv and a picture per frame in %s/\n", cli.report.c_str(), setup.pictureDir.c_str());
     }
-    return 0;
+    return sequenceProblems.empty() ? int(tools::kDone) : int(tools::kPartlyDone);
 }
 
 std::vector<std::string> splitCommas(const std::string& s) {
@@ -315,7 +366,8 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
     tools::CommandLine line(
         "gseg eval",
         "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
-        "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped. Without "
+        "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped; a sequence that gives no frame (none asked "
+        "for, an empty or unreadable velodyne/ folder) is named and the others are evaluated (exit 3). Without "
         "--config: the library defaults, which are exactly config/kitti_hdl64.yaml. The root may also be given "
         "without -i (old form: gseg eval ROOT). Under mpirun or srun the frames are split over the processes by their "
         "points (--threads workers in each) and rank 0 writes the reports.",

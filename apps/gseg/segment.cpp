@@ -108,6 +108,9 @@ int runSegment(int argc, char** argv) {
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     if (input.getValue().empty() == scan.getValue().empty())
         return line.usageError("give the scan once: -i SCAN (or the old form, gseg segment SCAN)");
+    if (index.isSet() && index.getValue() < 0)
+        return line.usageError("--index needs N >= 0 (the N-th LiDAR observation of a rawlog, 0-based), got " +
+                               std::to_string(index.getValue()));
     cli = {input.getValue().empty() ? scan.getValue() : input.getValue(), config.getValue(), labels.getValue(),
            ply.getValue(), png.getValue(), scene.getValue(), index.getValue()};
     try {

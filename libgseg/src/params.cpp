@@ -1,25 +1,16 @@
+#include <gseg/option_table.hpp>
 #include <gseg/params.hpp>
 
-#include <charconv>
 #include <cmath>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <type_traits>
-#include <variant>
 
 namespace gseg {
 namespace {
 
-using Field = std::variant<double Params::*, int Params::*, std::uint64_t Params::*, bool Params::*>;
-struct Entry {
-    const char* name;
-    Field field;
-};
-
 // One row per key, in declaration order: the single place that maps names to fields.
-const std::vector<Entry>& table() {
-    static const std::vector<Entry> t = {
+const OptionTable<Params>& table() {
+    static const OptionTable<Params> t("parameter", {
         {"distToGround", &Params::distToGround},
         {"robotRadius", &Params::robotRadius},
         {"cellSizeX", &Params::cellSizeX},
@@ -48,81 +39,19 @@ const std::vector<Entry>& table() {
         {"sparsityMedium", &Params::sparsityMedium},
         {"maxGroundHeightDeviation", &Params::maxGroundHeightDeviation},
         {"belowGroundMargin", &Params::belowGroundMargin},
-    };
+    });
     return t;
 }
 
-const Entry& find(const std::string& key) {
-    for (const auto& e : table())
-        if (key == e.name) return e;
-    throw std::invalid_argument("unknown parameter '" + key + "'");
-}
-
-template <typename T>
-T parse(const std::string& key, const std::string& text) {
-    // Surrounding blanks are allowed; anything else after the number is not.
-    const std::size_t b = text.find_first_not_of(" \t");
-    const std::size_t e = text.find_last_not_of(" \t");
-    T v{};
-    bool ok = b != std::string::npos;
-    if (ok) {
-        const char* first = text.data() + b;
-        const char* last = text.data() + e + 1;
-        const auto [ptr, ec] = std::from_chars(first, last, v);
-        ok = ec == std::errc() && ptr == last;
-    }
-    if (!ok)
-        throw std::invalid_argument("parameter '" + key + "': cannot read '" + text + "' as a " +
-                                    (std::is_floating_point_v<T> ? "number" : "whole number"));
-    return v;
-}
-
-template <>
-bool parse<bool>(const std::string& key, const std::string& text) {
-    const std::size_t b = text.find_first_not_of(" \t");
-    const std::size_t e = text.find_last_not_of(" \t");
-    const std::string t = b == std::string::npos ? "" : text.substr(b, e - b + 1);
-    if (t == "true" || t == "1") return true;
-    if (t == "false" || t == "0") return false;
-    throw std::invalid_argument("parameter '" + key + "': cannot read '" + text + "' as true or false");
-}
-
-void require(bool ok, const char* key, double value, const char* what) {
-    if (ok) return;
-    std::ostringstream msg;
-    msg << "parameter '" << key << "' = " << value << " is invalid: " << what;
-    throw std::invalid_argument(msg.str());
-}
+void require(bool ok, const char* key, double value, const char* what) { requireOption(ok, "parameter", key, value, what); }
 
 }  // namespace
 
-const std::vector<std::string>& Params::keys() {
-    static const std::vector<std::string> k = [] {
-        std::vector<std::string> out;
-        for (const auto& e : table()) out.emplace_back(e.name);
-        return out;
-    }();
-    return k;
-}
+const std::vector<std::string>& Params::keys() { return table().names(); }
 
-void Params::set(const std::string& key, const std::string& value) {
-    const Entry& e = find(key);
-    std::visit(
-        [&](auto member) {
-            using T = std::remove_reference_t<decltype(this->*member)>;
-            this->*member = parse<T>(key, value);
-        },
-        e.field);
-}
+void Params::set(const std::string& key, const std::string& value) { table().set(*this, key, value); }
 
-std::string Params::get(const std::string& key) const {
-    const Entry& e = find(key);
-    std::ostringstream out;
-    out.imbue(std::locale::classic());
-    out.precision(std::numeric_limits<double>::max_digits10);
-    std::visit([&](auto member) { out << std::boolalpha << this->*member; }, e.field);
-    return out.str();
-}
+std::string Params::get(const std::string& key) const { return table().get(*this, key); }
 
 void Params::validate() const {
     auto finite = [](double v) { return std::isfinite(v); };

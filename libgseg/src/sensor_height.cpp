@@ -1,4 +1,5 @@
 #include <gseg/grid.hpp>
+#include <gseg/option_table.hpp>
 #include <gseg/plane_fit.hpp>
 #include <gseg/sensor_height.hpp>
 
@@ -9,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
 #include <vector>
 
 namespace gseg {
@@ -207,6 +210,66 @@ Result AutoHeightSegmenter::segment(const PointCloudView& cloud, bool keepCellDi
         out = R * Eigen::Vector3f(p[0], p[1], p[2]);
     }
     return segmenter_.segment(PointCloudView(levelled_.data(), cloud.size()), d.height, keepCellDiagnostics);
+}
+
+namespace {
+
+const OptionTable<SensorHeightOptions>& heightTable() {
+    using O = SensorHeightOptions;
+    static const OptionTable<O> t(
+        "sensorHeight option",
+        {
+            {"minRange", &O::minRange, "m", "ignore points closer than this horizontally (the vehicle itself)"},
+            {"maxRange", &O::maxRange, "m", "and farther than this"},
+            {"columnSize", &O::columnSize, "m", "side of the square columns that each vote for the ground level"},
+            {"minColumnPoints", &O::minColumnPoints, "points",
+             "a column's floor is the lowest run of this many points within floorThickness"},
+            {"floorThickness", &O::floorThickness, "m", "thickness of that run (sparse points below it are skipped)"},
+            {"minColumns", &O::minColumns, "columns", "fewer columns with a floor: no estimate"},
+            {"maxTiltDegrees", &O::maxTiltDegrees, "deg", "steepest ground plane (sensor tilt plus slope) considered"},
+            {"planeTolerance", &O::planeTolerance, "m", "a column floor within this of the plane supports it"},
+            {"minLevelTiltDegrees", &O::minLevelTiltDegrees, "deg", "distToGround auto levels out tilts from this ..."},
+            {"maxLevelTiltDegrees", &O::maxLevelTiltDegrees, "deg",
+             "... up to this; beyond, it keeps the frame and uses the ground's height under the sensor"},
+        });
+    return t;
+}
+
+void requireHeightOption(bool ok, const char* key, double value, const char* what) {
+    requireOption(ok, "sensorHeight option", key, value, what);
+}
+
+}  // namespace
+
+void SensorHeightOptions::validate() const {
+    const auto finite = [](double v) { return std::isfinite(v); };
+    requireHeightOption(finite(minRange) && minRange >= 0 && minRange <= 1000, "minRange", minRange, "must be between 0 and 1000 m");
+    requireHeightOption(finite(maxRange) && maxRange > minRange && maxRange <= 1000, "maxRange", maxRange,
+                        "must be above minRange and at most 1000 m");
+    requireHeightOption(finite(columnSize) && columnSize >= 0.05 && columnSize <= 100, "columnSize", columnSize,
+                        "must be between 0.05 and 100 m");
+    requireHeightOption(minColumnPoints >= 1 && minColumnPoints <= 1000000, "minColumnPoints", minColumnPoints,
+                        "must be between 1 and 10^6 points");
+    requireHeightOption(finite(floorThickness) && floorThickness > 0, "floorThickness", floorThickness, "must be > 0 m");
+    requireHeightOption(minColumns >= 3 && minColumns <= 1000000, "minColumns", minColumns,
+                        "must be between 3 (a plane) and 10^6 columns");
+    requireHeightOption(finite(maxTiltDegrees) && maxTiltDegrees >= 0 && maxTiltDegrees < 90, "maxTiltDegrees",
+                        maxTiltDegrees, "must be in [0, 90) degrees");
+    requireHeightOption(finite(planeTolerance) && planeTolerance > 0, "planeTolerance", planeTolerance, "must be > 0 m");
+    requireHeightOption(finite(minLevelTiltDegrees) && minLevelTiltDegrees >= 0 && minLevelTiltDegrees < 90,
+                        "minLevelTiltDegrees", minLevelTiltDegrees, "must be in [0, 90) degrees");
+    requireHeightOption(finite(maxLevelTiltDegrees) && maxLevelTiltDegrees >= minLevelTiltDegrees && maxLevelTiltDegrees < 90,
+                        "maxLevelTiltDegrees", maxLevelTiltDegrees, "must be in [minLevelTiltDegrees, 90) degrees");
+}
+
+const std::vector<std::string>& SensorHeightOptions::keys() { return heightTable().names(); }
+
+void SensorHeightOptions::set(const std::string& key, const std::string& value) { heightTable().set(*this, key, value); }
+
+std::string SensorHeightOptions::get(const std::string& key) const { return heightTable().get(*this, key); }
+
+std::pair<std::string, std::string> SensorHeightOptions::describe(const std::string& key) {
+    return heightTable().describe(key);
 }
 
 }  // namespace gseg

@@ -260,6 +260,17 @@ struct Repeater {
     }
 };
 
+/// The last frame's time stamp (--start-time plus `lastTime` seconds) must be a date MRPT's time
+/// stamps hold and print (up to 9999-12-31): beyond, they wrap to 1970 without a word.
+void checkLastTimeStamp(const Cli& c, double lastTime, bool fromTimesTxt) {
+    constexpr double kLastSecond = 253402300799.0;  // 9999-12-31T23:59:59Z since the UNIX epoch
+    if (c.start + lastTime <= kLastSecond) return;
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "the last frame's time stamp (--start-time + %.17g s%s) is after 9999-12-31, the last date a time stamp holds",
+                  lastTime, c.repeat > 1 ? ", with --repeat" : "");
+    throw std::runtime_error((fromTimesTxt ? (fs::path(c.sequence) / "times.txt").string() + ": " : std::string()) + buf);
+}
+
 void run(const Cli& c) {
     const auto scans = listScans(c);
     const std::vector<double> times = readTimes(c.sequence);
@@ -284,6 +295,7 @@ void run(const Cli& c) {
     std::vector<double> frameTimes;
     for (const auto& s : scans) frameTimes.push_back(times.empty() ? 0.1 * double(s.first) : times[std::size_t(s.first)]);
     const Repeater repeater(poses ? &*poses : nullptr, frameTimes);
+    checkLastTimeStamp(c, frameTimes.back() + double(c.repeat - 1) * repeater.period, !times.empty());
     gseg::io::AtomicFileSet files(outputs);  // the rawlog and the simple map appear together or not at all
     mrpt::maps::CSimpleMap simplemap;
     gseg::mrpt::RawlogWriter out(files[0]);

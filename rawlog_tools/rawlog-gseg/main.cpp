@@ -29,6 +29,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <unistd.h>
 
@@ -97,7 +98,21 @@ struct FileResult {
     std::string message;               ///< the summary, or why it failed
     std::vector<std::string> skipped;  ///< the lines naming the scans passed through unsegmented
     std::vector<std::string> warnings; ///< remarks that are no error (a distToGround the scan contradicts)
+    std::string unmatched;             ///< a --sensor that matched no observation, and the labels the rawlog has
 };
+
+/// "--sensor X matched no observation; the rawlog has: VELODYNE (6), ..." for the first --sensor
+/// label without a LiDAR observation in the input, or "" when every one matched (or none was given).
+std::string unmatchedSensor(const std::vector<std::string>& sensors, const std::map<std::string, std::size_t>& seen) {
+    for (const std::string& label : sensors) {
+        if (seen.count(label)) continue;
+        std::string has;
+        for (const auto& [name, n] : seen) has += (has.empty() ? "" : ", ") + (name.empty() ? "(no label)" : name) + " (" + std::to_string(n) + ")";
+        return "--sensor " + label + " matched no observation; the rawlog has " +
+               (has.empty() ? "no LiDAR observation" : "LiDAR observations from: " + has);
+    }
+    return "";
+}
 
 /// Segments the rawlog `in` into `outPath`: what rawlog-gseg does to one input, whole. `name`: the
 /// input in the progress lines of a batch ("" for one input). Throws naming the entry on a bad
@@ -135,7 +150,8 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
     if (t.alreadySplit) result.message += ", " + std::to_string(t.alreadySplit) + " already split (passed through)";
     if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";
     result.message += "; wrote " + outPath;
-    result.code = t.skipped.empty() ? kDone : kPartlyDone;
+    result.unmatched = unmatchedSensor(cli.sensors, t.lidarScans);
+    result.code = t.skipped.empty() && result.unmatched.empty() ? kDone : kPartlyDone;
     return result;
 }
 
@@ -187,6 +203,8 @@ int report(const std::vector<std::pair<std::string, std::string>>& jobs, const s
         if (owner[i] != 0)  // errors: printed whatever the verbosity
             for (const std::string& line : results[i].skipped) std::fprintf(stderr, "rawlog-gseg: %s\n", line.c_str());
         for (const std::string& line : results[i].warnings) gseg::tools::note("rawlog-gseg: %s\n", line.c_str());
+        if (!results[i].unmatched.empty())  // what the user asked for is not there: printed whatever the verbosity
+            std::fprintf(stderr, "rawlog-gseg: %s%s\n", what.c_str(), results[i].unmatched.c_str());
         if (results[i].code == kBadInput) {
             const bool named = results[i].message.rfind(in, 0) == 0;  // reader errors start with the file
             std::fprintf(stderr, "%srawlog-gseg: %s%s\n", !batch && ::isatty(::fileno(stderr)) ? "\n" : "",
@@ -253,6 +271,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
             for (const std::string& line : r.skipped) out.str(line);
             out.u64(r.warnings.size());
             for (const std::string& line : r.warnings) out.str(line);
+            out.str(r.unmatched);
             done.push_back(out.bytes());
         }
         return done;
@@ -266,6 +285,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
         r.code = int(in.u64()), r.message = in.str();
         for (std::uint64_t n = in.u64(); n > 0; --n) r.skipped.push_back(in.str());
         for (std::uint64_t n = in.u64(); n > 0; --n) r.warnings.push_back(in.str());
+        r.unmatched = in.str();
     }
     return ranks.root() ? report(jobs, results, batch, owner, ranks.size()) : kDone;
 }
@@ -278,7 +298,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         "failing input is named and leaves no output, the others are written. An output that exists is refused unless "
         "-w. Under mpirun or srun the inputs are split over the processes. Exit code: 0 done, 1 bad input (nothing "
         "written for it), 2 bad usage, 3 done but some scans could not be segmented (passed through unchanged and named "
-        "on stderr).",
+        "on stderr) or a --sensor label matched no observation (named with the labels the rawlog has).",
         true, ranks.root());
     TCLAP::CmdLine& cmd = line.cmd();
     TCLAP::MultiArg<std::string> in("i", "input", "input rawlog (plain or gzip, either layout); repeatable", false, "IN",

@@ -14,6 +14,7 @@
 #include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 
@@ -100,6 +101,13 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
             if (a.isSet()) to = parseNumber("--" + a.getName(), a.getValue());
         };
         number(tolerance, c.poses.poseTolerance);
+        // The configuration file's traversability options, then the command line's.
+        if (!c.config.empty()) try {
+                c.options = gseg::mrpt::loadConfig(c.config).traversability;
+            } catch (const std::runtime_error& e) {
+                if (printing) std::cerr << "rawlog-octomap: " << e.what() << "\n";
+                return 1;
+            }
         number(resolution, c.options.resolution);
         number(maxRange, c.options.maxRange);
         number(clearance, c.options.clearance);

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace gseg {
 
@@ -25,6 +27,17 @@ struct SensorHeightOptions {
     double planeTolerance = 0.2; ///< [m] a column floor within this of the plane supports it
     double minLevelTiltDegrees = 3;   ///< [deg] AutoHeightSegmenter levels out tilts from this (a mounting tilt) ...
     double maxLevelTiltDegrees = 10;  ///< [deg] ... up to this; otherwise it keeps the frame and only uses the ground's height under the sensor
+
+    /// Throws std::invalid_argument naming the first invalid field.
+    void validate() const;
+    /// The keys (the field names, in declaration order), as in YAML `sensorHeight:` and the INI
+    /// `[sensorHeight]` section (the plugin's `<prefix>_sensorHeight`).
+    static const std::vector<std::string>& keys();
+    /// Sets a field from text; throws std::invalid_argument on an unknown key or an unreadable value.
+    void set(const std::string& key, const std::string& value);
+    std::string get(const std::string& key) const;  ///< the field as text (set() reads it back)
+    /// {unit, meaning} of a key.
+    static std::pair<std::string, std::string> describe(const std::string& key);
 };
 
 /// Result of estimateSensorHeight().

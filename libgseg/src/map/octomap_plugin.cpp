@@ -29,30 +29,22 @@ CTraversabilityOctoMap::TMapDefinition::TMapDefinition() = default;
 
 void CTraversabilityOctoMap::TMapDefinition::loadFromConfigFile_map_specific(const ::mrpt::config::CConfigFileBase& source,
                                                                             const std::string& prefix) {
-    const std::string s = prefix + "_creationOpts";
-    auto read = [&](const char* key, double& v) { v = source.read_double(s, key, v); };
-    read("resolution", options.resolution);
-    read("maxRange", options.maxRange);
-    read("clearance", options.clearance);
-    read("probHit", options.probHit);
-    read("probMiss", options.probMiss);
-    read("clampMin", options.clampMin);
-    read("clampMax", options.clampMax);
-    read("occupancyThreshold", options.occupancyThreshold);
-    options.validate();
-    params = gseg::mrpt::loadConfigFromIni(source, prefix + "_gseg", "[" + prefix + "_gseg]").params;
+    // The tools' loader, so the INI refuses what a YAML file refuses (unknown and repeated keys).
+    gseg::mrpt::IniSections sections;
+    sections.params = prefix + "_gseg";
+    sections.sensorHeight = prefix + "_sensorHeight";
+    sections.traversability = prefix + "_creationOpts";
+    config = gseg::mrpt::loadConfigFromIni(source, sections);
 }
 
 void CTraversabilityOctoMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
-    out << "resolution = " << options.resolution << " m, maxRange = " << options.maxRange
-        << " m, clearance = " << options.clearance << " m\n";
-    for (const std::string& key : gseg::Params::keys()) out << key << " = " << params.get(key) << "\n";
+    out << gseg::mrpt::toYaml(config);
 }
 
 ::mrpt::maps::CMetricMap* CTraversabilityOctoMap::internal_CreateFromMapDefinition(
     const ::mrpt::maps::TMetricMapInitializer& def) {
     const auto& d = dynamic_cast<const CTraversabilityOctoMap::TMapDefinition&>(def);
-    return new CTraversabilityOctoMap(d.options, d.params);
+    return new CTraversabilityOctoMap(d.config.traversability, d.config);  // the whole configuration: distToGround auto included
 }
 
 namespace {

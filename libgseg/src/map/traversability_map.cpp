@@ -25,17 +25,6 @@ namespace gseg::map {
 
 namespace {
 
-/// lo < v < hi (or lo <= v <= hi with `inclusive`).
-void requireInRange(double v, const char* name, double lo, double hi, bool inclusive = false) {
-    const bool ok = inclusive ? (v >= lo && v <= hi) : (v > lo && v < hi);
-    if (!ok) {
-        std::ostringstream s;
-        s << "TraversabilityOptions." << name << " = " << v << ": must lie in " << (inclusive ? "[" : "(") << lo << ", "
-          << hi << (inclusive ? "]" : ")");
-        throw std::invalid_argument(s.str());
-    }
-}
-
 std::unique_ptr<detail::MapTree> makeTree(const TraversabilityOptions& o) {
     auto t = std::make_unique<detail::MapTree>(o.resolution);
     t->setProbHit(o.probHit);
@@ -105,21 +94,6 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
 }
 
 }  // namespace
-
-void TraversabilityOptions::validate() const {
-    requireInRange(resolution, "resolution [m]", 0.01, 10.0, true);
-    if (!(maxRange > 0)) throw std::invalid_argument("TraversabilityOptions.maxRange = " + std::to_string(maxRange) + ": must be > 0 m");
-    if (maxRange / resolution > kMaxRayVoxels)
-        throw std::invalid_argument("TraversabilityOptions: maxRange / resolution = " + std::to_string(maxRange) + " / " +
-                                    std::to_string(resolution) + " gives rays of " + std::to_string(long(maxRange / resolution)) +
-                                    " voxels: at most " + std::to_string(long(kMaxRayVoxels)));
-    requireInRange(probHit, "probHit", 0.5, 1.0);
-    requireInRange(probMiss, "probMiss", 0.0, 0.5);
-    requireInRange(clampMin, "clampMin", 0.0, 0.5);
-    requireInRange(clampMax, "clampMax", 0.5, 1.0);
-    requireInRange(occupancyThreshold, "occupancyThreshold", 0.0, 1.0);
-    if (!(clearance > 0)) throw std::invalid_argument("TraversabilityOptions.clearance = " + std::to_string(clearance) + ": must be > 0 m");
-}
 
 Rgb colourOf(CellClass c) {
     switch (c) {

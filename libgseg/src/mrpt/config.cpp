@@ -2,6 +2,7 @@
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
 
+#include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/containers/yaml.h>
 
@@ -30,9 +31,21 @@ std::string trim(const std::string& s) {
     return s.substr(b, s.find_last_not_of(" \t") - b + 1);
 }
 
-// Applies one key = value pair; the single place both formats go through.
-void apply(LoadedConfig& cfg, const std::string& key, const std::string& value, const std::string& where) {
+// The options structs a configuration holds, by their YAML map and default INI section names.
+enum class Section { Params, SensorHeight, Traversability };
+
+struct SectionName {
+    Section section;
+    const char* name;
+};
+constexpr SectionName kSectionMaps[] = {
+    {Section::Params, "gseg"}, {Section::SensorHeight, "sensorHeight"}, {Section::Traversability, "traversability"}};
+
+// Applies one key = value pair; the single place every format and route goes through.
+void apply(LoadedConfig& cfg, Section section, const std::string& key, const std::string& value, const std::string& where) {
     try {
+        if (section == Section::SensorHeight) return cfg.sensorHeight.set(key, value);
+        if (section == Section::Traversability) return cfg.traversability.set(key, value);
         if (key == "distToGround" && lower(value) == "auto") {
             cfg.distToGroundAuto = true;
             return;
@@ -59,6 +72,8 @@ void finish(LoadedConfig& cfg, const std::string& where) {
     try {
         cfg.params.validate();
         checkLimits(cfg.params);
+        cfg.sensorHeight.validate();
+        cfg.traversability.validate();
     } catch (const std::exception& e) {
         throw std::runtime_error(where + ": " + e.what());
     }
@@ -70,6 +85,7 @@ void finish(LoadedConfig& cfg, const std::string& where) {
 // line number, before any YAML library sees the text (libfyaml hangs on some `%` directives and
 // accepts unclosed brackets, duplicate keys and text after a NUL byte with a warning on stderr).
 struct YamlEntry {
+    Section section = Section::Params;
     std::string key, value;
     int line = 0;
 };
@@ -106,11 +122,19 @@ std::string yamlValue(std::string v, const std::string& where) {
     return v;
 }
 
+const SectionName* sectionMap(const std::string& key) {
+    for (const SectionName& s : kSectionMaps)
+        if (key == s.name) return &s;
+    return nullptr;
+}
+
 std::vector<YamlEntry> parseFlatYaml(const std::string& text, const std::string& path) {
     std::vector<YamlEntry> entries;
-    std::map<std::string, int> seen;
-    int gsegLine = 0, topLevelLine = 0;  // where `gseg:` and the first top-level parameter are
-    std::size_t indent = 0;              // of the lines under `gseg:` (0: none yet)
+    std::map<std::pair<Section, std::string>, int> seen;
+    std::map<Section, int> mapLine;      // where each `name:` map starts
+    const SectionName* open = nullptr;   // the map the indented lines belong to
+    int topLevelLine = 0;                // the first top-level parameter
+    std::size_t indent = 0;              // of the lines under `open` (0: none yet)
     bool contentSeen = false, ended = false;
     std::size_t pos = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;  // UTF-8 byte order mark
     for (int number = 1; pos <= text.size(); ++number) {
@@ -141,41 +165,52 @@ std::vector<YamlEntry> parseFlatYaml(const std::string& text, const std::string&
         if (k == lead || k >= line.size() || line[k] != ':' || (k + 1 < line.size() && line[k + 1] != ' ' && line[k + 1] != '\t'))
             throw std::runtime_error(where + ": expected 'key: value', found '" + trim(line) + "'");
         const std::string key = line.substr(lead, k - lead), rest = line.substr(k + 1);
-        if (lead == 0 && key == "gseg" && trim(rest).empty()) {
-            if (gsegLine) throw std::runtime_error(where + ": a second 'gseg:' map");
-            gsegLine = number, indent = 0;
+        if (lead == 0 && trim(rest).empty() && sectionMap(key)) {
+            open = sectionMap(key), indent = 0;
+            if (auto [it, fresh] = mapLine.emplace(open->section, number); !fresh)
+                throw std::runtime_error(where + ": a second '" + key + ":' map (also on line " + std::to_string(it->second) + ")");
             continue;
         }
+        Section section = Section::Params;
         if (lead > 0) {
-            if (!gsegLine || (indent && lead != indent))
-                throw std::runtime_error(where + ": unexpected indentation (only the keys under 'gseg:' are indented, "
-                                                 "all by the same amount)");
+            if (!open || (indent && lead != indent))
+                throw std::runtime_error(where + ": unexpected indentation (only the keys under 'gseg:', 'sensorHeight:' or "
+                                                 "'traversability:' are indented, each map's all by the same amount)");
             indent = lead;
-        } else if (!topLevelLine) {
-            topLevelLine = number;
+            section = open->section;
+        } else {
+            open = nullptr;
+            if (!topLevelLine) topLevelLine = number;
         }
-        if (auto [it, fresh] = seen.emplace(key, number); !fresh)
+        if (auto [it, fresh] = seen.emplace(std::pair{section, key}, number); !fresh)
             throw std::runtime_error(where + ": '" + key + "' given twice (also on line " + std::to_string(it->second) + ")");
-        entries.push_back({key, yamlValue(rest, where + ": '" + key + "'"), number});
+        entries.push_back({section, key, yamlValue(rest, where + ": '" + key + "'"), number});
     }
-    if (gsegLine && topLevelLine)
+    if (const auto g = mapLine.find(Section::Params); g != mapLine.end() && topLevelLine)
         throw std::runtime_error(path + ":" + std::to_string(topLevelLine) +
-                                 ": a parameter beside the 'gseg:' map (line " + std::to_string(gsegLine) +
+                                 ": a parameter beside the 'gseg:' map (line " + std::to_string(g->second) +
                                  "): put every parameter inside it, or drop 'gseg:'");
     return entries;
 }
 
 // --- INI ---------------------------------------------------------------------------------------------
-// MRPT's INI preprocessor evaluates `$eval{...}` with exprtk, which has loops, and expands
-// `$env{VAR}` repeatedly: `$eval{var x:=0; while(x<1e12)(x+=1); 1}` or a variable whose value holds
-// `$env{...}` again would run forever. Both are refused before the preprocessor runs.
-void refuseUnboundedIni(const std::string& text, const std::string& path) {
+// Calls f(number, line) for each line of an INI text (numbered from 1, without its '\n').
+template <class F>
+void forEachIniLine(const std::string& text, F&& f) {
     int number = 1;
     for (std::size_t pos = 0; pos < text.size(); ++number) {
         std::size_t end = text.find('\n', pos);
         if (end == std::string::npos) end = text.size();
-        const std::string line = text.substr(pos, end - pos);
+        f(number, text.substr(pos, end - pos));
         pos = end + 1;
+    }
+}
+
+// MRPT's INI preprocessor evaluates `$eval{...}` with exprtk, which has loops, and expands
+// `$env{VAR}` repeatedly: `$eval{var x:=0; while(x<1e12)(x+=1); 1}` or a variable whose value holds
+// `$env{...}` again would run forever. Both are refused before the preprocessor runs.
+void refuseUnboundedIni(const std::string& text, const std::string& path) {
+    forEachIniLine(text, [&](int number, const std::string& line) {
         const std::string where = path + ":" + std::to_string(number);
         if (line.find("$eval{") != std::string::npos || line.find("@define") != std::string::npos) {
             for (std::size_t i = 0; i < line.size();) {
@@ -200,7 +235,76 @@ void refuseUnboundedIni(const std::string& text, const std::string& path) {
                 throw std::runtime_error(where + ": the environment variable " + line.substr(at + 5, close - at - 5) +
                                          " holds $env{} or $eval{} itself (it would expand forever)");
         }
+    });
+}
+
+
+// One `key = value` line of an INI text.
+struct IniKey {
+    std::string section, key;  // as written
+    int line = 0;
+};
+
+// The keys of every section of an INI text as written (MRPT's syntax: `[section]`, `key = value`,
+// comments from `;`, `#` or `//`). MRPT's CConfigFile keeps the last of a repeated key without a
+// word, so gseg reads the text once more to refuse one: the one INI scanner of both routes (the
+// tools' files and the plugin's).
+std::vector<IniKey> scanIniKeys(const std::string& text) {
+    std::vector<IniKey> keys;
+    std::string section;
+    forEachIniLine(text, [&](int number, std::string t) {
+        if (!t.empty() && t.back() == '\r') t.pop_back();
+        t = trim(t);
+        if (t.empty() || t[0] == ';' || t[0] == '#' || t.rfind("//", 0) == 0 || t[0] == '@') return;
+        if (t[0] == '[') {
+            const std::size_t close = t.find(']');
+            if (close != std::string::npos) section = trim(t.substr(1, close - 1));
+            return;
+        }
+        const std::size_t eq = t.find('=');
+        if (eq == std::string::npos || eq == 0) return;  // MRPT's syntax, not ours to judge
+        keys.push_back({section, trim(t.substr(0, eq)), number});
+    });
+    return keys;
+}
+
+// `[section]` of an INI read from `ini` (with its text, when known) into `section` of `cfg`.
+void loadIniSection(LoadedConfig& cfg, const ::mrpt::config::CConfigFileBase& ini, Section section,
+                    const std::string& name, const std::vector<IniKey>& scanned, const std::string& where) {
+    std::map<std::string, int> lineOf;  // lower-case key -> line (MRPT's INI keys ignore case)
+    for (const IniKey& k : scanned) {
+        if (lower(k.section) != lower(name)) continue;
+        if (auto [it, fresh] = lineOf.emplace(lower(k.key), k.line); !fresh)
+            throw std::runtime_error(where + ":" + std::to_string(k.line) + ": [" + name + "] '" + k.key +
+                                     "' given twice (also on line " + std::to_string(it->second) + ")");
     }
+    if (!ini.sectionExists(name)) return;
+    std::vector<std::string> keys;
+    ini.getAllKeys(name, keys);
+    for (const std::string& key : keys) {
+        const auto line = lineOf.find(lower(key));
+        const std::string at = where + (line == lineOf.end() ? "" : ":" + std::to_string(line->second)) + ": [" + name + "]";
+        std::string value;
+        try {
+            value = ini.read_string(name, key, "", true);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(at + " " + key + ": " + errorReason(e));
+        }
+        value = value.substr(0, value.find_first_of(";#"));  // inline comment
+        value.erase(value.find_last_not_of(" \t") + 1);
+        apply(cfg, section, key, value, at);
+    }
+}
+
+LoadedConfig loadIni(const ::mrpt::config::CConfigFileBase& ini, const IniSections& names, const std::string& where,
+                     const std::string* text) {
+    LoadedConfig cfg;
+    const std::vector<IniKey> scanned = text ? scanIniKeys(*text) : std::vector<IniKey>();
+    loadIniSection(cfg, ini, Section::Params, names.params, scanned, where);
+    loadIniSection(cfg, ini, Section::SensorHeight, names.sensorHeight, scanned, where);
+    loadIniSection(cfg, ini, Section::Traversability, names.traversability, scanned, where);
+    finish(cfg, where);
+    return cfg;
 }
 
 }  // namespace
@@ -227,42 +331,49 @@ LoadedConfig loadConfigFromYaml(const ::mrpt::containers::yaml& root, const std:
         return cfg;
     }
     if (!root.isMap()) throw std::runtime_error(where + ": expected a map of 'key: value' lines");
-    const ::mrpt::containers::yaml::map_t* map = &root.asMap();
-    const auto nested = map->find(::mrpt::containers::yaml::node_t(std::string("gseg")));
-    if (nested != map->end() && nested->second.isMap()) {
-        for (const auto& [k, v] : *map)
-            if (k.as<std::string>() != "gseg")
+    const auto& top = root.asMap();
+    const auto sectionOf = [](const std::string& key) {
+        const SectionName* s = sectionMap(key);
+        return s && s->section != Section::Params ? s : nullptr;
+    };
+    const ::mrpt::containers::yaml::map_t* params = &top;
+    const auto nested = top.find(::mrpt::containers::yaml::node_t(std::string("gseg")));
+    if (nested != top.end() && nested->second.isMap()) {
+        for (const auto& [k, v] : top)
+            if (k.as<std::string>() != "gseg" && !sectionOf(k.as<std::string>()))
                 throw std::runtime_error(where + ": '" + k.as<std::string>() +
                                          "' beside the 'gseg:' map: put every parameter inside it, or drop 'gseg:'");
-        map = &nested->second.asMap();
+        params = &nested->second.asMap();
     }
-    for (const auto& [k, v] : *map) {
-        const std::string key = k.as<std::string>();
-        if (!v.isScalar()) throw std::runtime_error(where + ": parameter '" + key + "' must be a single value");
-        apply(cfg, key, v.as<std::string>(), where);
-    }
+    const auto applyMap = [&](const ::mrpt::containers::yaml::map_t& map, Section section) {
+        const bool isTop = &map == &top;  // the top level also holds the maps, read on their own
+        for (const auto& [k, v] : map) {
+            const std::string key = k.as<std::string>();
+            if (isTop && (key == "gseg" || sectionOf(key)) && v.isMap()) continue;
+            if (!v.isScalar()) throw std::runtime_error(where + ": parameter '" + key + "' must be a single value");
+            apply(cfg, section, key, v.as<std::string>(), where);
+        }
+    };
+    applyMap(*params, Section::Params);
+    for (const auto& [k, v] : top)
+        if (const SectionName* s = sectionOf(k.as<std::string>()); s && v.isMap()) applyMap(v.asMap(), s->section);
     finish(cfg, where);
     return cfg;
 }
 
-LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const std::string& section,
+LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const IniSections& sections,
                                const std::string& where) {
-    LoadedConfig cfg;
-    std::vector<std::string> keys;
-    ini.getAllKeys(section, keys);
-    for (const std::string& key : keys) {
-        std::string value;
+    std::string text, name = where;
+    bool haveText = false;
+    if (const auto* file = dynamic_cast<const ::mrpt::config::CConfigFile*>(&ini)) {
+        if (name.empty()) name = file->getAssociatedFile();
         try {
-            value = ini.read_string(section, key, "", true);
-        } catch (const std::exception& e) {
-            throw std::runtime_error(where + ": " + key + ": " + errorReason(e));
+            const std::vector<std::uint8_t> bytes = gseg::io::readFileBytes(file->getAssociatedFile());
+            text.assign(bytes.begin(), bytes.end()), haveText = true;
+        } catch (const std::exception&) {  // MRPT read it: go on without the repeated-key check
         }
-        value = value.substr(0, value.find_first_of(";#"));  // inline comment
-        value.erase(value.find_last_not_of(" \t") + 1);
-        apply(cfg, key, value, where);
-    }
-    finish(cfg, where);
-    return cfg;
+    }  // a CConfigFileMemory's content has repeated keys merged already: nothing to scan
+    return loadIni(ini, sections, name.empty() ? "INI" : name, haveText ? &text : nullptr);
 }
 
 LoadedConfig loadConfigFromText(const std::string& text, ConfigFormat format, const std::string& where) {
@@ -271,7 +382,8 @@ LoadedConfig loadConfigFromText(const std::string& text, ConfigFormat format, co
                                  ": not a text configuration file");
     if (format == ConfigFormat::Yaml) {
         LoadedConfig cfg;
-        for (const YamlEntry& e : parseFlatYaml(text, where)) apply(cfg, e.key, e.value, where + ":" + std::to_string(e.line));
+        for (const YamlEntry& e : parseFlatYaml(text, where))
+            apply(cfg, e.section, e.key, e.value, where + ":" + std::to_string(e.line));
         finish(cfg, where);
         return cfg;
     }
@@ -283,7 +395,12 @@ LoadedConfig loadConfigFromText(const std::string& text, ConfigFormat format, co
         throw std::runtime_error(where + ": " + errorReason(e));
     }
     if (!ini.sectionExists("gseg")) throw std::runtime_error(where + ": no [gseg] section");
-    return loadConfigFromIni(ini, "gseg", where);
+    std::vector<std::string> sections;
+    ini.getAllSections(sections);
+    for (const std::string& name : sections)
+        if (std::none_of(std::begin(kSectionMaps), std::end(kSectionMaps), [&](const SectionName& s) { return name == s.name; }))
+            throw std::runtime_error(where + ": unknown section [" + name + "] (gseg reads [gseg], [sensorHeight] and [traversability])");
+    return loadIni(ini, IniSections(), where, &text);
 }
 
 LoadedConfig loadConfig(const std::string& path) {
@@ -307,6 +424,15 @@ std::string toYaml(const LoadedConfig& config) {
     std::string out;
     for (const std::string& key : gseg::Params::keys())
         out += key + ": " + (key == "distToGround" && config.distToGroundAuto ? "auto" : config.params.get(key)) + "\n";
+    const auto section = [&out](const char* name, const auto& options) {
+        out += std::string(name) + ":\n";
+        for (const std::string& key : options.keys()) {
+            const auto [unit, meaning] = options.describe(key);
+            out += "  " + key + ": " + options.get(key) + "  # [" + unit + "] " + meaning + "\n";
+        }
+    };
+    section("sensorHeight", config.sensorHeight);
+    section("traversability", config.traversability);
     return out;
 }
 

@@ -92,6 +92,10 @@ void RawlogSegmenter::flushPending(const ::mrpt::obs::CObservation* next) {
 void RawlogSegmenter::push(std::size_t entry, const std::shared_ptr<::mrpt::serialization::CSerializable>& object) {
     ++totals_.entries;
     const auto obs = std::dynamic_pointer_cast<::mrpt::obs::CObservation>(object);
+    const auto count = [this](const ::mrpt::obs::CObservation* o) {
+        if (o && isLidarObservation(*o) && !isSegmentedHalf(*o)) ++totals_.lidarScans[o->sensorLabel];
+    };
+    count(obs.get());
     flushPending(obs.get());
     if (obs && wanted(*obs)) {
         pending_ = std::make_unique<Pending>(Pending{entry, obs});
@@ -104,6 +108,7 @@ void RawlogSegmenter::push(std::size_t entry, const std::shared_ptr<::mrpt::seri
     }
     ::mrpt::obs::CSensoryFrame result;
     for (const auto& o : *sf) {
+        count(o.get());
         const bool split = o && std::any_of(sf->begin(), sf->end(), [&](const auto& h) { return h && isGroundHalfOf(*h, *o); });
         if (!o || !wanted(*o) || split) {
             totals_.alreadySplit += o && wanted(*o) ? 1 : 0;

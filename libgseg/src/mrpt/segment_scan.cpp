@@ -3,7 +3,7 @@
 namespace gseg::mrpt {
 
 ScanSegmenter::ScanSegmenter(const LoadedConfig& config)
-    : config_(config), fixed_(config.params), auto_(config.params) {}
+    : config_(config), fixed_(config.params), auto_(config.params, config.sensorHeight) {}
 
 ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics, HeightCheck check) {
     ScanSegmentation out;
@@ -21,7 +21,8 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
         const bool hasPoints = out.result.numNonFinite < cloud.size();
         const bool checkNow = check == HeightCheck::Now || (check == HeightCheck::FirstScan && !heightChecked_);
         if (checkNow && hasPoints)
-            out.heightWarning = checkDistToGround(cloud, config_.params.distToGround, config_.params.seedHeightTolerance);
+            out.heightWarning = checkDistToGround(cloud, config_.params.distToGround, config_.params.seedHeightTolerance,
+                                                 config_.sensorHeight);
         heightChecked_ = heightChecked_ || hasPoints;
     }
     out.nonFinitePoints = out.result.numNonFinite;

@@ -9,9 +9,11 @@
 /// [MappingApplication]
 /// gsegTraversabilityMap_count = 1
 /// [MappingApplication_gsegTraversabilityMap_00_creationOpts]
-/// resolution = 0.2      ; and maxRange, clearance, probHit, probMiss, clampMin, clampMax, occupancyThreshold
+/// resolution = 0.2      ; any gseg::map::TraversabilityOptions key (gseg/traversability_options.hpp)
 /// [MappingApplication_gsegTraversabilityMap_00_gseg]
-/// distToGround = 1.73   ; any gseg::Params key (see gseg/params.hpp)
+/// distToGround = 1.73   ; any gseg::Params key (see gseg/params.hpp), or auto
+/// [MappingApplication_gsegTraversabilityMap_00_sensorHeight]
+/// maxRange = 30         ; any gseg::SensorHeightOptions key (gseg/sensor_height.hpp), for distToGround = auto
 /// \endcode
 /// Saving (CMultiMetricMap names it `<prefix>_gseg_maps__CTraversabilityOctoMap_<NN>` (MRPT turns "::" into "__")) writes the
 /// four files of TraversabilityMap::write() with that prefix.
@@ -51,8 +53,10 @@ public:
     std::string asString() const override;
 
     MAP_DEFINITION_START(CTraversabilityOctoMap)
-    gseg::map::TraversabilityOptions options;  ///< from `<prefix>_creationOpts`
-    gseg::Params params;                  ///< from `<prefix>_gseg`
+    /// The whole configuration, as gseg::mrpt::loadConfigFromIni() reads it: params (and
+    /// distToGroundAuto) from `<prefix>_gseg`, sensorHeight from `<prefix>_sensorHeight`,
+    /// traversability from `<prefix>_creationOpts`. Unknown and repeated keys are refused.
+    gseg::mrpt::LoadedConfig config;
     MAP_DEFINITION_END(CTraversabilityOctoMap)
 
 protected:

@@ -25,13 +25,14 @@ struct StampedPose {
 enum class PoseFileFormat { Tum, Kitti };
 
 /// Reads a TUM trajectory: one `t x y z qx qy qz qw` per line; `#` comments and blank lines are
-/// skipped. Throws std::runtime_error naming the file and line on a missing file, a line without
-/// 8 numbers, a zero quaternion, or time stamps that are not increasing.
+/// skipped. Throws std::runtime_error naming the file and line on a missing file, a token that is
+/// not a finite number (named: "'nan' is not a finite number"), a line without 8 numbers, a zero
+/// quaternion, or time stamps that are not increasing.
 std::vector<StampedPose> readTumTrajectory(const std::string& path);
 
 /// Reads a KITTI poses file: 12 numbers per line (row-major 3x4 [R | t]). Throws
-/// std::runtime_error naming the file and line on a missing file, a line without 12 finite
-/// numbers, or an R that is not a rotation (R^T R != I or det R != 1, within kRotationTolerance).
+/// std::runtime_error naming the file and line on a missing file, a token that is not a finite
+/// number (named), a line without 12 numbers, or an R that is not a rotation (R^T R != I or det R != 1, within kRotationTolerance).
 std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path);
 
 /// Reads `Tr:` (velodyne to camera-0, 12 numbers) from a KITTI `calib.txt`. Throws
@@ -39,8 +40,13 @@ std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path);
 /// rotation is not one (an all-zero Tr, a scaled rotation).
 Eigen::Isometry3d readKittiCalibTr(const std::string& path);
 
+/// Largest time accepted in a KITTI `times.txt` [s since the drive started]: about 31.7 years.
+/// (MRPT time stamps count 100 ns ticks in 64 bits: 1e13 s would wrap to 1970.)
+constexpr double kMaxKittiTime = 1e9;
+
 /// Reads a KITTI `times.txt`: one time [s] per line. Throws std::runtime_error naming the file and
-/// line on anything but one finite number per line, or a time before the previous one.
+/// line on anything but one finite number per line, a time outside 0 to kMaxKittiTime, or a time
+/// before the previous one.
 std::vector<double> readKittiTimes(const std::string& path);
 
 /// Largest |R^T R - I| entry and |det R - 1| accepted for a rotation read from a file (the files

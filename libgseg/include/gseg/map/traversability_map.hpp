@@ -9,6 +9,7 @@
 
 #include <gseg/mrpt/picture.hpp>
 #include <gseg/point_cloud.hpp>
+#include <gseg/traversability_options.hpp>
 
 #include <Eigen/Core>
 
@@ -33,25 +34,6 @@ class BrickMap;    // the voxels while a drive is integrated (implementation det
 }
 
 struct ScanUpdate;
-
-/// How scans are fused. Probabilities are OctoMap's (log-odds update per scan and voxel).
-struct TraversabilityOptions {
-    double resolution = 0.2;          ///< [m] voxel edge (also the top-down grid cell), 0.01 to 10
-    double maxRange = 50.0;           ///< [m] longer rays clear free space up to this range and add no hit
-    double probHit = 0.7;             ///< [-] occupancy probability of a hit
-    double probMiss = 0.4;            ///< [-] occupancy probability of a ray passing through
-    double clampMin = 0.12;           ///< [-] lower clamping of the occupancy probability
-    double clampMax = 0.97;           ///< [-] upper clamping (lower: quicker clearing of moved obstacles)
-    double occupancyThreshold = 0.5;  ///< [-] a voxel is occupied above this probability
-    double clearance = 2.0;           ///< [m] obstacle voxels higher than this above the column's ground do not block it (branches, bridges)
-    /// Throws std::invalid_argument naming the first invalid field (also a ray longer than
-    /// kMaxRayVoxels voxels: maxRange / resolution).
-    void validate() const;
-    /// [m] the maps span -extent() .. +extent() on each axis (OctoMap's 16-bit keys: 32768 voxels
-    /// each side of the origin); points outside are skipped, a sensor outside is an error.
-    double extent() const { return 32768.0 * resolution; }
-    static constexpr double kMaxRayVoxels = 5000;  ///< longest ray, in voxels
-};
 
 /// What the top-down grid says about one column of voxels.
 enum class CellClass : std::uint8_t { Unknown = 0, Traversable = 1, Obstacle = 2 };

@@ -1,10 +1,14 @@
 #pragma once
 /// \file config.hpp
-/// gseg parameters from YAML or MRPT INI files. The keys are the field names of gseg::Params
-/// (documented in <gseg/params.hpp>); both formats go through Params::set(), so they accept the
-/// same keys and values.
+/// gseg's options from YAML or MRPT INI files: gseg::Params (<gseg/params.hpp>), the
+/// `distToGround: auto` estimator's gseg::SensorHeightOptions (<gseg/sensor_height.hpp>) and the
+/// maps' gseg::map::TraversabilityOptions (<gseg/traversability_options.hpp>). The keys are the
+/// field names; every format goes through each struct's key table (set()), and every route
+/// refuses an unknown or repeated key the same way.
 
 #include <gseg/params.hpp>
+#include <gseg/sensor_height.hpp>
+#include <gseg/traversability_options.hpp>
 
 #include <string>
 #include <vector>
@@ -22,6 +26,8 @@ namespace gseg::mrpt {
 struct LoadedConfig {
     gseg::Params params;            ///< every key not given keeps its default; validated
     bool distToGroundAuto = false;  ///< the file said `distToGround: auto` (estimate it per scan)
+    gseg::SensorHeightOptions sensorHeight;           ///< YAML `sensorHeight:`, INI `[sensorHeight]`; validated
+    gseg::map::TraversabilityOptions traversability;  ///< YAML `traversability:`, INI `[traversability]`; validated
 };
 
 /// Reads a YAML (`.yaml`, `.yml`) or INI (`.ini`, `.cfg`, section `[gseg]`) file. Throws
@@ -30,11 +36,15 @@ struct LoadedConfig {
 /// value, or a value beyond configLimits().
 ///
 /// YAML: gseg reads flat files itself (no YAML library sees them): `key: value` lines, `#`
-/// comments, blank lines, an optional leading `---`, and either every key at the top level or
-/// every key indented under one top-level `gseg:` (then nothing beside it). Values are plain or
-/// quoted scalars. Anything else (directives, flow collections, anchors, nested maps) is refused.
-/// INI: MRPT's CConfigFile syntax and preprocessor (`@define`, `${VAR}`, `$eval{}`, `$env{}`), except
-/// loops in `$eval{}` and self-expanding environment variables, which could run forever.
+/// comments, blank lines, an optional leading `---`. The gseg::Params keys either all at the top
+/// level or all indented under one top-level `gseg:` (then no parameter beside it); beside them,
+/// at most one `sensorHeight:` and one `traversability:` map, their keys indented under them.
+/// Values are plain or quoted scalars. Anything else (directives, flow collections, anchors, other
+/// nested maps) is refused.
+/// INI: sections `[gseg]` (required), `[sensorHeight]` and `[traversability]` (optional), no other;
+/// MRPT's CConfigFile syntax and preprocessor (`@define`, `${VAR}`, `$eval{}`, `$env{}`), except
+/// loops in `$eval{}` and self-expanding environment variables, which could run forever. A key
+/// given twice in a section is refused (MRPT itself would keep the last silently).
 LoadedConfig loadConfig(const std::string& path);
 
 /// The two configuration formats.
@@ -56,11 +66,23 @@ const std::vector<ConfigLimit>& configLimits();
 /// names the source in errors.
 LoadedConfig loadConfigFromYaml(const ::mrpt::containers::yaml& map, const std::string& where = "YAML");
 
-/// From the section `section` of an MRPT INI configuration.
-LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const std::string& section = "gseg",
-                               const std::string& where = "INI");
+/// The INI sections that hold each options struct (an absent section leaves its defaults).
+struct IniSections {
+    std::string params = "gseg";
+    std::string sensorHeight = "sensorHeight";
+    std::string traversability = "traversability";
+};
 
-/// The configuration as YAML text (every key, with `auto` for an automatic distToGround).
+/// From the sections `sections` of an MRPT INI configuration (the plugin: `<prefix>_gseg`,
+/// `<prefix>_sensorHeight`, `<prefix>_creationOpts`). Unknown keys are refused; repeated keys too
+/// where the text can be read again (a CConfigFile's file: MRPT itself keeps the last silently, and
+/// a CConfigFileMemory holds them merged already), and messages then name the line. `where` names
+/// the source (the file when none is given).
+LoadedConfig loadConfigFromIni(const ::mrpt::config::CConfigFileBase& ini, const IniSections& sections = IniSections(),
+                               const std::string& where = "");
+
+/// The configuration as YAML text (every key, with `auto` for an automatic distToGround; the
+/// sensorHeight and traversability options as maps with their unit and meaning in comments).
 std::string toYaml(const LoadedConfig& config);
 
 }  // namespace gseg::mrpt

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,7 @@ struct RawlogTotals {
     std::size_t alreadySplit = 0;  ///< scans passed through because their pair was already there
     double ms = 0;                 ///< segmentation time of all scans
     std::vector<ScanReport> skipped;  ///< scans that could not be segmented (passed through)
+    std::map<std::string, std::size_t> lidarScans;  ///< LiDAR observations seen per sensorLabel (selected by `sensors` or not)
 };
 
 /// Turns input entries into output entries. Output order is input order; an observation-layout

@@ -1,0 +1,40 @@
+#pragma once
+/// \file traversability_options.hpp
+/// How scans are fused into gseg's traversability maps (gseg::map::TraversabilityMap). A plain
+/// options struct with a key table (gseg/option_table.hpp), in the core so that every configuration
+/// loader can read and check it.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace gseg::map {
+
+/// How scans are fused. Probabilities are OctoMap's (log-odds update per scan and voxel).
+struct TraversabilityOptions {
+    double resolution = 0.2;          ///< [m] voxel edge (also the top-down grid cell), 0.01 to 10
+    double maxRange = 50.0;           ///< [m] longer rays clear free space up to this range and add no hit
+    double probHit = 0.7;             ///< [-] occupancy probability of a hit
+    double probMiss = 0.4;            ///< [-] occupancy probability of a ray passing through
+    double clampMin = 0.12;           ///< [-] lower clamping of the occupancy probability
+    double clampMax = 0.97;           ///< [-] upper clamping (lower: quicker clearing of moved obstacles)
+    double occupancyThreshold = 0.5;  ///< [-] a voxel is occupied above this probability
+    double clearance = 2.0;           ///< [m] obstacle voxels higher than this above the column's ground do not block it (branches, bridges)
+    /// Throws std::invalid_argument naming the first invalid field (also a ray longer than
+    /// kMaxRayVoxels voxels: maxRange / resolution).
+    void validate() const;
+    /// The keys (the field names, in declaration order), as in YAML `traversability:` and the
+    /// plugin's `_creationOpts` INI section.
+    static const std::vector<std::string>& keys();
+    /// Sets a field from text; throws std::invalid_argument on an unknown key or an unreadable value.
+    void set(const std::string& key, const std::string& value);
+    std::string get(const std::string& key) const;  ///< the field as text (set() reads it back)
+    /// [unit, meaning] of a key (for --help and the README), e.g. {"m", "voxel edge ..."}.
+    static std::pair<std::string, std::string> describe(const std::string& key);
+    /// [m] the maps span -extent() .. +extent() on each axis (OctoMap's 16-bit keys: 32768 voxels
+    /// each side of the origin); points outside are skipped, a sensor outside is an error.
+    double extent() const { return 32768.0 * resolution; }
+    static constexpr double kMaxRayVoxels = 5000;  ///< longest ray, in voxels
+};
+
+}  // namespace gseg::map
