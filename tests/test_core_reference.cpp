@@ -91,7 +91,7 @@ TEST(PlaneFitReference, TheInliersAreThoseOfTheBestPlaneThroughAnyThreePoints) {
     params.ransacMaxIterations = 1000;
     const double threshold = params.groundInlierThreshold;
     for (std::uint64_t seed = 1; seed <= 60; ++seed) {
-        std::mt19937 rng(std::uint32_t(seed));
+        std::mt19937 rng{std::uint32_t(seed)};
         std::uniform_real_distribution<float> u(-1.f, 1.f), noise(-0.03f, 0.03f), tilt(-0.15f, 0.15f);
         const float a = tilt(rng), b = tilt(rng), c0 = -1.7f;  // z = a x + b y + c0 (up to 8.5 deg)
         std::vector<Eigen::Vector3f> pts;
