@@ -53,16 +53,10 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
     out.ground.reserve(3 * r.numGround);
     out.obstacles.reserve(3 * r.numNonGround);
     // Points without a return, and reflections below the ground, are neither ground nor obstacles.
-    std::size_t next = 0;  // into r.belowGround (ascending)
-    for (std::size_t i = 0; i < r.labels.size(); ++i) {
-        if (next < r.belowGround.size() && r.belowGround[next] == i) {
-            ++next, ++out.reflections;
-            continue;
-        }
-        const float* p = &levelled[4 * i];
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
-        pushWorld(levelledToWorld, p, r.labels[i] ? out.ground : out.obstacles);
-    }
+    out.reflections = r.belowGround.size();
+    gseg::mrpt::forEachSplitPoint(cloud, r, [&](std::size_t i, bool ground) {
+        pushWorld(levelledToWorld, &levelled[4 * i], ground ? out.ground : out.obstacles);
+    });
     out.sensorOrigin = originOf(obs, robotPose);
     if (times) {
         times->segmentation += std::chrono::duration<double>(t1 - t0).count();

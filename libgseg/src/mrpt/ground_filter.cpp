@@ -68,21 +68,14 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     ground->reserve(out.result.numGround);
     out.reflections = out.result.belowGround.size();
     obstacles->reserve(out.result.numNonGround - out.nonFinitePoints - out.reflections);
-    std::size_t next = 0;  // into result.belowGround (ascending)
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (next < out.result.belowGround.size() && out.result.belowGround[next] == i) {
-            ++next;  // a reflection: labelled 0, kept out
-            continue;
-        }
-        const float* q = cloud.point(i);
-        if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) continue;  // labelled 0, kept out
+    gm::forEachSplitPoint(cloud, out.result, [&](std::size_t i, bool isGround) {  // reflections and NaN points: neither
         const float* p = &sensorXyzi[4 * i];
         double x = p[0], y = p[1], z = p[2];
         if (vehicle) sensorPose.composePoint(p[0], p[1], p[2], x, y, z);
-        auto& dst = out.result.labels[i] ? *ground : *obstacles;
+        auto& dst = isGround ? *ground : *obstacles;
         dst.insertPointFast(gseg::io::toFloat(x), gseg::io::toFloat(y), gseg::io::toFloat(z));
         dst.setPointIntensity(dst.size() - 1, p[3]);
-    }
+    });
     auto make = [&](const ::mrpt::maps::CPointsMapXYZI::Ptr& pts, gm::ScanPart part) {
         auto obs = ::mrpt::obs::CObservationPointCloud::Create();
         obs->pointcloud = pts;

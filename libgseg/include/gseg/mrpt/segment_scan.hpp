@@ -20,6 +20,7 @@
 #include <gseg/point_cloud.hpp>
 #include <gseg/sensor_height.hpp>
 
+#include <cmath>
 #include <cstddef>
 #include <string>
 
@@ -41,6 +42,24 @@ struct ScanSegmentation {
     /// `distToGround: auto` and this scan gave no estimate: the fallback height was used.
     bool heightFallback() const { return autoHeight && !distToGroundEstimated; }
 };
+
+/// The ground / obstacle split of a segmented scan, the one rule every output follows: calls
+/// `f(i, ground)` for each point i of `cloud` (in input order) that goes into one of the two
+/// classes, `ground` its label; points with a NaN or infinite coordinate and reflections below the
+/// ground (Result::belowGround) go into neither.
+template <class F>
+void forEachSplitPoint(const PointCloudView& cloud, const gseg::Result& result, F&& f) {
+    std::size_t next = 0;  // into result.belowGround (ascending)
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (next < result.belowGround.size() && result.belowGround[next] == i) {
+            ++next;
+            continue;
+        }
+        const float* p = cloud.point(i);
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
+        f(i, result.labels[i] != 0);
+    }
+}
 
 /// When a fixed distToGround is checked against the scan (costs about one segmentation).
 enum class HeightCheck {
