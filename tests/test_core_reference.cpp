@@ -5,6 +5,7 @@
 #include <gseg/plane_fit.hpp>
 #include <gseg/region_growing.hpp>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,7 +19,7 @@
 namespace {
 
 std::vector<Eigen::Vector3f> randomCentroids(std::mt19937& rng, std::size_t n) {
-    std::uniform_real_distribution<float> xy(-30.f, 30.f), z(-2.2f, -1.2f);
+    std::uniform_real_distribution<float> xy(-20.f, 20.f), z(-1.95f, -1.5f);
     std::vector<Eigen::Vector3f> c(n);
     for (auto& p : c) p = {xy(rng), xy(rng), z(rng)};
     return c;
@@ -92,15 +93,18 @@ TEST(PlaneFitReference, TheInliersAreThoseOfTheBestPlaneThroughAnyThreePoints) {
     const double threshold = params.groundInlierThreshold;
     for (std::uint64_t seed = 1; seed <= 60; ++seed) {
         std::mt19937 rng{std::uint32_t(seed)};
-        std::uniform_real_distribution<float> u(-1.f, 1.f), noise(-0.03f, 0.03f), tilt(-0.15f, 0.15f);
-        const float a = tilt(rng), b = tilt(rng), c0 = -1.7f;  // z = a x + b y + c0 (up to 8.5 deg)
+        std::uniform_real_distribution<float> u(-1.f, 1.f), noise(-0.03f, 0.03f), tilt(-0.08f, 0.08f);
+        const float a = tilt(rng), b = tilt(rng), c0 = -1.7f;  // z = a x + b y + c0 (up to 6.5 deg)
         std::vector<Eigen::Vector3f> pts;
         const int onPlane = 7 + int(seed % 5), off = 2 + int(seed % 4);
         for (int i = 0; i < onPlane; ++i) {
             const float x = 2 * u(rng), y = 2 * u(rng);
             pts.emplace_back(x, y, a * x + b * y + c0 + noise(rng));
         }
-        for (int i = 0; i < off; ++i) pts.emplace_back(2 * u(rng), 2 * u(rng), c0 + 0.5f + std::abs(u(rng)));  // clutter above
+        for (int i = 0; i < off; ++i) {  // clutter 0.6 to 1.6 m above the plane
+            const float x = 2 * u(rng), y = 2 * u(rng);
+            pts.emplace_back(x, y, a * x + b * y + c0 + 0.6f + std::abs(u(rng)));
+        }
         // Exhaustive: the plane through each triple, and its inliers; the largest set wins.
         std::size_t best = 0;
         std::vector<std::uint8_t> bestSet;

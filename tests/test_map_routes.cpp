@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <iterator>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -47,15 +48,15 @@ std::string tempDir(const std::string& name) {
 
 /// A KITTI odometry sequence of four HDL-64 scans 2 m apart on a street with a wall and a box:
 /// velodyne/*.bin, poses.txt (camera 0), calib.txt (Tr) and times.txt.
-std::string simulatedSequence(const std::string& dir) {
+std::string simulatedSequence(const std::string& dir, double height = 1.723) {
     fs::create_directories(dir + "/velodyne");
     std::ofstream poses(dir + "/poses.txt"), times(dir + "/times.txt");
     for (int k = 0; k < 4; ++k) {
         const double x = 2.0 * k;  // the sensor moves along velodyne x = camera z
         gseg::test::Scene scene;
-        scene.addFlatGround(1.723);
-        scene.addBox(12 - x, 4, -1.723, 13 - x, 5, -0.2);      // a box ahead on the left
-        scene.addBox(-10 - x, -6.2, -1.723, 30 - x, -6, 1.5);  // a wall on the right
+        scene.addFlatGround(height);
+        scene.addBox(12 - x, 4, -height, 13 - x, 5, -0.2);      // a box ahead on the left
+        scene.addBox(-10 - x, -6.2, -height, 30 - x, -6, 1.5);  // a wall on the right
         gseg::test::Lidar lidar;
         lidar.seed = 11u + unsigned(k);
         const gseg::test::SimScan s = gseg::test::simulate(scene, lidar);
@@ -74,20 +75,50 @@ std::string simulatedSequence(const std::string& dir) {
 const char* const kSuffixes[] = {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png",
                                  "_traversability.ply", "_traversability.3Dscene"};
 
-/// Runs both routes on `sequence` and compares every file.
-void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string& dir) {
+/// The YAML that says what an observations2map INI (one gsegTraversabilityMap) says: its `_gseg`
+/// keys at the top level, `_sensorHeight` as `sensorHeight:`, `_creationOpts` as `traversability:`.
+std::string yamlOfIni(const std::string& ini) {
+    std::istringstream in(ini);
+    std::string line, yaml, map;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == ';' || line[0] == '#') continue;
+        if (line[0] == '[') {
+            map = line.find("_sensorHeight]") != std::string::npos   ? "sensorHeight"
+                  : line.find("_creationOpts]") != std::string::npos ? "traversability"
+                  : line.find("_gseg]") != std::string::npos         ? ""
+                                                                     : "-";
+            if (map != "-" && !map.empty()) yaml += map + ":\n";
+            continue;
+        }
+        const std::size_t eq = line.find('=');
+        if (map == "-" || eq == std::string::npos) continue;
+        auto trim = [](std::string t) {
+            t.erase(0, t.find_first_not_of(" \t"));
+            t.erase(t.find_last_not_of(" \t") + 1);
+            return t;
+        };
+        yaml += (map.empty() ? "" : "  ") + trim(line.substr(0, eq)) + ": " + trim(line.substr(eq + 1)) + "\n";
+    }
+    return yaml;
+}
+
+/// Runs both routes on `sequence` and compares every file: rawlog-octomap with `yaml` (relative to
+/// the source folder, or absolute), observations2map and the wrapper with `ini`.
+void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string& dir,
+                                  const std::string& yaml = "config/kitti_hdl64.yaml",
+                                  const std::string& ini = "config/octomap_maps.ini") {
     ASSERT_EQ(gseg::map::TraversabilityMap::outputPaths("x").size(), std::size(kSuffixes));
     auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + sequence + "' -o " + dir + "/seq.rawlog --simplemap " +
                         dir + "/seq.simplemap");
     ASSERT_EQ(r.status, 0) << r.output;
     r = runCommand("cd '" + kSource + "' && '" + gseg::test::tool("rawlog-octomap") + "' -i " + dir + "/seq.rawlog -o " +
-                   dir + "/r -c config/kitti_hdl64.yaml");
+                   dir + "/r -c " + yaml);
     ASSERT_EQ(r.status, 0) << r.output;
     if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps): route 2 not run";
-    r = runCommand("cd '" + kSource + "' && " + (kAsan.empty() ? "" : "ASAN_OPTIONS=detect_leaks=0 ") + "LD_PRELOAD='" + kPreload + kBuild + "/lib/libgseg_map.so' observations2map config/octomap_maps.ini " +
+    r = runCommand("cd '" + kSource + "' && " + (kAsan.empty() ? "" : "ASAN_OPTIONS=detect_leaks=0 ") + "LD_PRELOAD='" + kPreload + kBuild + "/lib/libgseg_map.so' observations2map " + ini + " " +
                    dir + "/seq.simplemap " + dir + "/o2m < /dev/null");
     ASSERT_EQ(r.status, 0) << r.output;
-    r = runCommand("cd '" + kSource + "' && " + kHostEnv + "'" + gseg::test::tool("gseg-observations2map") + "' config/octomap_maps.ini " + dir +
+    r = runCommand("cd '" + kSource + "' && " + kHostEnv + "'" + gseg::test::tool("gseg-observations2map") + "' " + ini + " " + dir +
                    "/seq.simplemap " + dir + "/w");
     ASSERT_EQ(r.status, 0) << r.output;
     for (const char* s : kSuffixes) {
@@ -103,6 +134,28 @@ void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string
 TEST(MapRoutes, RawlogOctomapAndObservations2mapGiveByteIdenticalFilesOnASimulatedDrive) {
     const std::string dir = tempDir("sim");
     expectSameMapsFromBothRoutes(simulatedSequence(dir + "/seq"), dir);
+    fs::remove_all(dir);
+}
+
+TEST(MapRoutes, AnIniThatSaysDistToGroundAutoMapsAsTheToolWithAutoHeight) {
+    // #17: the plugin kept only the parameters of its configuration, so `distToGround = auto`
+    // mapped with the default height and said nothing.
+    const std::string dir = tempDir("auto");
+    std::string ini = gseg::test::readText(kSource + "/config/octomap_maps.ini");
+    const std::size_t at = ini.find("distToGround = 1.723");
+    ASSERT_NE(at, std::string::npos) << "config/octomap_maps.ini changed: adapt the test";
+    ini.replace(at, std::string("distToGround = 1.723").size(), "distToGround = auto");
+    std::ofstream(dir + "/auto.ini") << ini;
+    std::ofstream(dir + "/auto.yaml") << yamlOfIni(ini);
+    ASSERT_NE(yamlOfIni(ini).find("distToGround: auto\n"), std::string::npos) << yamlOfIni(ini);
+    // The sensor 2.2 m up instead of the configured 1.723 m: the estimated height maps otherwise.
+    const std::string sequence = simulatedSequence(dir + "/seq", 2.2);
+    expectSameMapsFromBothRoutes(sequence, dir, dir + "/auto.yaml", dir + "/auto.ini");
+    const auto fixedHeight = runCommand("cd '" + kSource + "' && '" + gseg::test::tool("rawlog-octomap") + "' -i " + dir +
+                                        "/seq.rawlog -o " + dir + "/fixed -c config/kitti_hdl64.yaml");
+    ASSERT_EQ(fixedHeight.status, 0) << fixedHeight.output;
+    EXPECT_FALSE(gseg::test::readText(dir + "/fixed_ground.bt") == gseg::test::readText(dir + "/r_ground.bt"))
+        << "auto and fixed height gave the same map: the test shows nothing";
     fs::remove_all(dir);
 }
 
