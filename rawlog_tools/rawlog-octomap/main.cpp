@@ -14,12 +14,18 @@
 #include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/map/memory_estimate.hpp>
 #include <gseg/map/ordered_pipeline.hpp>
 #include <gseg/map/output_files.hpp>
+#include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 
 #include <chrono>
+#include <cmath>
+#include <deque>
+#include <new>
+#include <optional>
 #include <malloc.h>
 #include <sys/resource.h>
 #include <cstdio>
@@ -90,6 +96,10 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
                                          cmd);
     TCLAP::SwitchArg rank0MapsOnly("", "rank0-maps-only", "under mpirun/srun rank 0 reads, maps and writes but works on "
                                    "no scan (a rank 0 on a node of its own, or a slow disk)", cmd);
+    TCLAP::ValueArg<std::string> maxMemory("", "max-memory", "refuse to start (exit 1) if the maps and ray casting are "
+                                           "estimated to need more (from the first scan; MB, or 2G; default: the "
+                                           "memory available, or ulimit -v / -d if lower)", false, "", "SIZE", cmd);
+    line.addMpiTimeout();
     TCLAP::ValueArg<std::string> bench("", "bench", "time plain OctoMap (insertPointCloud, discretized) and "
                                        "rawlog-octomap alternately, N rounds each, on the same rawlog; maps go to "
                                        "PREFIX_bench*", false, "", "N", cmd);
@@ -109,6 +119,8 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         c.rank0MapsOnly = rank0MapsOnly.getValue();
         if (bench.isSet()) c.benchRounds = int(std::max(1u, parseCount("--bench", bench.getValue(), 100)));
         c.overwrite = line.overwrite();
+        if (maxMemory.isSet()) c.maxMemory = gseg::tools::parseMemorySize("--max-memory", maxMemory.getValue());
+        c.mpiTimeout = line.mpiTimeout();
         c.poses.input = c.input;
         c.options.validate();
     } catch (const std::invalid_argument& e) {
@@ -168,6 +180,54 @@ void printReport(const RunReport& r, double resolution) {
     for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
 }
 
+/// " (at --resolution 0.01 m, --max-range 50 m)": the options memory follows, for messages.
+std::string memoryOptions(const Cli& cli) {
+    char text[120];
+    std::snprintf(text, sizeof text, " (at --resolution %g m, --max-range %g m)", cli.options.resolution, cli.options.maxRange);
+    return text;
+}
+
+/// Memory, before any work (#18): the maps and the scans in flight, estimated from the first
+/// scan's rays at these options, against the limit (--max-memory, else what the machine and the
+/// process's limits leave). Throws std::runtime_error naming the options and the estimate.
+void checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, std::size_t inFlight) {
+    std::vector<float> points;
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    for (const auto* part : {&first.raw, &first.ground, &first.obstacles})
+        if (*part && (part != &first.raw || !first.presegmented())) origin = gseg::map::appendWorldPoints(**part, first.robotPose, points);
+    const gseg::map::RayFootprint f =
+        gseg::map::rayFootprint(gseg::PointCloudView(points.data(), points.size() / 3), origin, cli.options);
+    // The scans of the drive, from the bytes of the rawlog the second scan took.
+    const double step = second ? second->fraction - first.fraction : 0;
+    const std::size_t scans = !second ? 1 : step > 0 ? std::size_t(std::lround(std::min(1e9, 2 + (1 - second->fraction) / step))) : 2;
+    const double need = gseg::map::estimateMemory(f).peak(inFlight, std::max<std::size_t>(1, scans));
+    gseg::map::MemoryLimit limit = gseg::map::memoryLimit();
+    if (cli.maxMemory > 0 && (cli.maxMemory < limit.bytes || limit.machine))  // the user's word, within ulimit's
+        limit = {cli.maxMemory, "--max-memory", false};
+    gseg::tools::detail("rawlog-octomap: memory estimated from %s: %s for about %zu scans%s; limit %s (%s)\n",
+                        first.describe().c_str(), gseg::map::formatBytes(need).c_str(), scans, memoryOptions(cli).c_str(),
+                        gseg::map::formatBytes(limit.bytes).c_str(), limit.what.c_str());
+    if (need > limit.bytes) {
+        char text[400];
+        std::snprintf(text, sizeof text, "--resolution %g m needs about %s for the maps and ray casting (estimated from "
+                      "%s: %zu points, rays up to --max-range %g m, about %zu scans), more than %s (%s); use a coarser "
+                      "--resolution or a shorter --max-range%s", cli.options.resolution, gseg::map::formatBytes(need).c_str(),
+                      first.describe().c_str(), f.rays, cli.options.maxRange, scans, limit.what.c_str(),
+                      gseg::map::formatBytes(limit.bytes).c_str(), limit.what == "--max-memory" ? "" : ", or give --max-memory");
+        throw std::runtime_error(text);
+    }
+}
+
+/// Runs `f`, turning an allocation failure into an error that says what was being done.
+template <class F>
+auto phase(const std::string& what, const Cli& cli, F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const std::bad_alloc&) {
+        throw std::runtime_error("out of memory while " + what + memoryOptions(cli) + "; nothing written");
+    }
+}
+
 }  // namespace
 
 RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
@@ -192,7 +252,25 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     report.workers = local + remoteWorkers;
     report.scansByProcess.assign(std::size_t(remote ? remote->processes() : 1), 0);
     auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the other ranks' (if any)
-        return w < local || remoteWorkers == 0 ? workers[w](job) : (*remote)(w - local, job);
+        return phase("segmenting and ray casting " + job.describe(), cli, [&] {
+            return w < local || remoteWorkers == 0 ? workers[w](job) : (*remote)(w - local, job);
+        });
+    };
+    const std::size_t inFlight = 2 * std::size_t(std::max(1u, report.workers)) + 2;
+    std::deque<ScanJob> ahead;  // the first two scans, read before any work for the memory estimate
+    phase("reading the first scans", cli, [&] {
+        for (ScanJob job; ahead.size() < 2 && stream.next(job);) ahead.push_back(std::move(job));
+    });
+    if (!ahead.empty()) checkMemory(cli, ahead[0], ahead.size() > 1 ? &ahead[1] : nullptr, inFlight);
+    std::size_t read = 0;
+    auto produce = [&](ScanJob& job) {
+        return phase("reading scan " + std::to_string(read), cli, [&] {
+            ++read;
+            if (ahead.empty()) return stream.next(job);
+            job = std::move(ahead.front());
+            ahead.pop_front();
+            return true;
+        });
     };
     auto consume = [&](std::size_t k, ScanResult& r) {
         report.times += r.times;
@@ -204,7 +282,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
                 std::fprintf(stderr, "rawlog-octomap: skipped %s\n", report.skipped.back().c_str());
         } else {
             const auto t0 = std::chrono::steady_clock::now();
-            map.apply(r.update);
+            phase("adding " + r.describe + " to the maps", cli, [&] { map.apply(r.update); });
             report.times.mapUpdate += secondsSince(t0);
             report.presegmented += r.presegmented;
             report.reflections += r.reflections;
@@ -218,8 +296,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         if (!quiet) progress.update(k + 1, r.fraction);
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
-    gseg::map::runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
-                                               {report.workers, 2 * std::size_t(std::max(1u, report.workers)) + 2});
+    gseg::map::runOrdered<ScanJob, ScanResult>(produce, work, consume, {report.workers, inFlight});
     const std::size_t total = map.path().size() + report.skipped.size();
     if (!quiet) progress.finish(total);
     if (total == 0)
@@ -232,7 +309,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     report.poseSource = stream.poseSource();
     report.peakMbBeforeWriting = peakResidentMb();
     const auto t0 = std::chrono::steady_clock::now();
-    report.written = map.write(cli.prefix);
+    report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix); });
     report.times.writing = secondsSince(t0);
     report.stats = map.stats();
     report.wallSeconds = secondsSince(start);
@@ -249,6 +326,7 @@ namespace {
 int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     Cli cli;  // every rank parses the same arguments and stops alike; rank 0 prints
     if (const int code = parseCli(argc, argv, ranks.root(), cli); code >= 0) return code;
+    ranks.setTimeout("rawlog-octomap", cli.mpiTimeout);
     if (cli.benchRounds > 0 && ranks.size() > 1) {
         std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
         return 2;
