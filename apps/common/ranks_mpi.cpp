@@ -12,6 +12,7 @@
 #include <chrono>
 #include <climits>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fcntl.h>
@@ -198,7 +199,9 @@ private:
         std::unique_lock<std::mutex> lock(m_);
         while (!stop_) {
             const double timeout = timeout_;
-            const auto tick = std::chrono::duration<double>(timeout > 0 ? std::clamp(timeout / 10, 0.02, 0.25) : 0.25);
+            // While saying goodbye, listen closely: the ranks end together (a rank that ends with
+            // a non-zero code before the others makes the launcher kill them).
+            const auto tick = std::chrono::duration<double>(wantBye_ ? 0.001 : timeout > 0 ? std::clamp(timeout / 10, 0.02, 0.25) : 0.25);
             const bool bye = wantBye_ && !byeSent_;
             lock.unlock();
             exchange(bye ? kBye : byeSent_ ? 0 : kBeat);
@@ -259,6 +262,7 @@ private:
     [[noreturn]] void endJob(const std::string& why) {
         say(why);
         for (const std::string& t : gseg::io::registeredTemporaries()) ::unlink(t.c_str());
+        std::signal(SIGTERM, SIG_DFL);  // the launcher's SIGTERM after MPI_Abort: nothing more to clean or say
         std::unique_lock<std::mutex> mpi(mpiLock(), std::defer_lock);
         for (int i = 0; i < 100 && !mpi.try_lock(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
         MPI_Abort(MPI_COMM_WORLD, 1);

@@ -48,6 +48,8 @@ ScanResult ScanWorker::operator()(const ScanJob& job) {
         r.update = gseg::map::castScan(world.groundView(), world.obstaclesView(), world.sensorOrigin, options_);
     } catch (const std::out_of_range& e) {
         throw std::runtime_error(r.describe + ": " + e.what() + "; for poses in UTM or other large coordinates use --origin first");
+    } catch (const std::bad_alloc&) {
+        throw;  // the tool says what it was doing, with the options memory follows
     } catch (const std::exception& e) {
         throw std::runtime_error(r.describe + ": " + e.what());
     }

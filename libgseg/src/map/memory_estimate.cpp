@@ -120,15 +120,17 @@ double procKilobytes(const char* file, const std::string& key) {
 MemoryLimit memoryLimit() {
     MemoryLimit m{std::numeric_limits<double>::infinity(), "the available memory", true};
     if (const double avail = procKilobytes("/proc/meminfo", "MemAvailable"); avail >= 0) m.bytes = avail;
-    auto limit = [&](int resource, const char* inUseKey, const char* what) {
+    // Address space goes faster than memory: malloc reserves 64 MB per thread's arena, threads
+    // their stacks (measured: 1.3 GB of address space for 1.0 GB resident at 0.05 m).
+    auto limit = [&](int resource, const char* inUseKey, const char* what, double overhead) {
         rlimit l{};
         if (::getrlimit(resource, &l) != 0 || l.rlim_cur == RLIM_INFINITY) return;
         const double used = std::max(0.0, procKilobytes("/proc/self/status", inUseKey));
-        const double left = std::max(0.0, double(l.rlim_cur) - used);
+        const double left = std::max(0.0, double(l.rlim_cur) - used) / overhead;
         if (left < m.bytes) m = {left, what, false};
     };
-    limit(RLIMIT_AS, "VmSize", "the address-space limit (ulimit -v)");
-    limit(RLIMIT_DATA, "VmData", "the data limit (ulimit -d)");
+    limit(RLIMIT_AS, "VmSize", "the address-space limit (ulimit -v)", 1.3);
+    limit(RLIMIT_DATA, "VmData", "the data limit (ulimit -d)", 1.3);
     return m;
 }
 

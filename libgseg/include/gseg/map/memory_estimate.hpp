@@ -57,7 +57,8 @@ MemoryEstimate estimateMemory(const RayFootprint& footprint);
 
 /// [bytes] What this process may still allocate: the smallest of the machine's available memory
 /// (MemAvailable of /proc/meminfo), RLIMIT_AS less the address space in use and RLIMIT_DATA less
-/// the data in use. `what` says which one it is ("the available memory", "the address-space limit
+/// the data in use (those two divided by 1.3: malloc's per-thread arenas and the threads' stacks
+/// take address space beyond the memory used). `what` says which one it is ("the available memory", "the address-space limit
 /// (ulimit -v)", "the data limit (ulimit -d)").
 struct MemoryLimit {
     double bytes = 0;
