@@ -65,14 +65,20 @@ unsigned usableCores() {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
-double parseMemorySize(const std::string& flag, const std::string& value) {
+/// The number at the start of `text` into `n`; the characters it took (0: none).
+static std::size_t leadingNumber(const std::string& text, double& n) {
     std::size_t used = 0;
-    double n = -1;
     try {
-        n = std::stod(value, &used);
+        n = std::stod(text, &used);
     } catch (const std::exception&) {
         used = 0;
     }
+    return used;
+}
+
+double parseMemorySize(const std::string& flag, const std::string& value) {
+    double n = -1;
+    const std::size_t used = leadingNumber(value, n);
     std::string unit = used ? value.substr(used) : "";
     if (!unit.empty() && (unit.back() == 'B' || unit.back() == 'b')) unit.pop_back();
     double scale = 0;
@@ -152,14 +158,8 @@ int CommandLine::parse(int argc, char** argv) {
     setVerbosity(quiet_.getValue() ? Verbosity::Quiet : verbose_.getValue() ? Verbosity::Verbose : Verbosity::Normal);
     if (mpiTimeout_ && mpiTimeout_->isSet()) {
         const std::string& v = mpiTimeout_->getValue();
-        std::size_t used = 0;
         double s = -1;
-        try {
-            s = std::stod(v, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used != v.size() || !(s >= 0) || !std::isfinite(s))
+        if (leadingNumber(v, s) != v.size() || !(s >= 0) || !std::isfinite(s))
             return usageError("--mpi-timeout needs a number of seconds >= 0 (0: none), got '" + v + "'");
         mpiTimeoutSeconds_ = s;
     }
