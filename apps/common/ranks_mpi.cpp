@@ -12,7 +12,6 @@
 #include <chrono>
 #include <climits>
 #include <condition_variable>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fcntl.h>
@@ -257,12 +256,13 @@ private:
         }
     }
 
-    /// Says why, removes this process's temporaries (the other ranks are ended by the launcher,
-    /// with SIGTERM, which removes theirs) and ends every rank.
+    /// Says why, removes this process's temporaries (the launcher then ends every rank with
+    /// SIGTERM, whose handler removes the rest) and ends every rank.
     [[noreturn]] void endJob(const std::string& why) {
         say(why);
+        // The temporaries being written now; the launcher's SIGTERM after MPI_Abort then runs the
+        // output layer's own cleanup (gseg::io::installTemporaryCleanup()) for whatever is left.
         for (const std::string& t : gseg::io::registeredTemporaries()) ::unlink(t.c_str());
-        std::signal(SIGTERM, SIG_DFL);  // the launcher's SIGTERM after MPI_Abort: nothing more to clean or say
         std::unique_lock<std::mutex> mpi(mpiLock(), std::defer_lock);
         for (int i = 0; i < 100 && !mpi.try_lock(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
         MPI_Abort(MPI_COMM_WORLD, 1);
