@@ -1,8 +1,10 @@
 #include "common/cli.hpp"
+#include "common/ranks.hpp"
 
 #include <gseg/version.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdarg>
 #include <iostream>
 #include <thread>
@@ -63,6 +65,37 @@ unsigned usableCores() {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
+/// The number at the start of `text` into `n`; the characters it took (0: none).
+static std::size_t leadingNumber(const std::string& text, double& n) {
+    std::size_t used = 0;
+    try {
+        n = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    return used;
+}
+
+double parseMemorySize(const std::string& flag, const std::string& value) {
+    double n = -1;
+    const std::size_t used = leadingNumber(value, n);
+    std::string unit = used ? value.substr(used) : "";
+    if (!unit.empty() && (unit.back() == 'B' || unit.back() == 'b')) unit.pop_back();
+    double scale = 0;
+    if (unit.empty()) scale = 1e6;
+    else if (unit.size() == 1)
+        switch (unit[0]) {
+            case 'k': case 'K': scale = 1e3; break;
+            case 'm': case 'M': scale = 1e6; break;
+            case 'g': case 'G': scale = 1e9; break;
+            case 't': case 'T': scale = 1e12; break;
+            default: break;
+        }
+    if (used == 0 || scale == 0 || !(n > 0) || !std::isfinite(n))
+        throw std::invalid_argument(flag + " needs a size > 0 in MB, or with a unit (K, M, G, T: 2G), got '" + value + "'");
+    return n * scale;
+}
+
 std::FILE* progressOut() { return g_verbosity == Verbosity::Quiet ? nullptr : stderr; }
 
 /// TCLAP's output with gseg's conventions: the version in --help and --version, a usage error as
@@ -99,7 +132,8 @@ CommandLine::CommandLine(std::string name, const std::string& description, bool 
     : name_(std::move(name)), printing_(printing), cmd_(description, ' ', GSEG_VERSION),
       output_(std::make_unique<Output>(name_, printing)),
       quiet_("q", "quiet", "print errors only (no progress, no summary)", cmd_, false),
-      verbose_("v", "verbose", "print more detail (the parameters in effect, one line per item)", cmd_, false) {
+      verbose_("v", "verbose", "print more detail (the parameters in effect, one line per item)", cmd_, false),
+      mpiTimeoutSeconds_(Ranks::kDefaultTimeout) {
     delete cmd_.getOutput();  // TCLAP's default output, not deleted once replaced
     cmd_.setOutput(output_.get());
     if (writesFiles)
@@ -108,6 +142,13 @@ CommandLine::CommandLine(std::string name, const std::string& description, bool 
 }
 
 CommandLine::~CommandLine() = default;
+
+void CommandLine::addMpiTimeout() {
+    char text[200];
+    std::snprintf(text, sizeof text, "[s] under mpirun/srun: a rank silent this long (stopped, or its machine gone) "
+                  "ends the job, naming it (default %g; 0: wait for ever)", Ranks::kDefaultTimeout);
+    mpiTimeout_ = std::make_unique<TCLAP::ValueArg<std::string>>("", "mpi-timeout", text, false, "", "SECONDS", cmd_);
+}
 
 int CommandLine::parse(int argc, char** argv) {
     std::vector<const char*> args(argv, argv + argc);
@@ -122,6 +163,13 @@ int CommandLine::parse(int argc, char** argv) {
                                   : (arg->getFlag().empty() ? "--" + arg->getName() : "-" + arg->getFlag()) + " is empty");
     }
     setVerbosity(quiet_.getValue() ? Verbosity::Quiet : verbose_.getValue() ? Verbosity::Verbose : Verbosity::Normal);
+    if (mpiTimeout_ && mpiTimeout_->isSet()) {
+        const std::string& v = mpiTimeout_->getValue();
+        double s = -1;
+        if (leadingNumber(v, s) != v.size() || !(s >= 0) || !std::isfinite(s))
+            return usageError("--mpi-timeout needs a number of seconds >= 0 (0: none), got '" + v + "'");
+        mpiTimeoutSeconds_ = s;
+    }
     return -1;
 }
 

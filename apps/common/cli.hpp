@@ -40,6 +40,10 @@ std::string versionLine(const std::string& toolName);
 /// and threads beyond the process's own only take turns on them.
 unsigned usableCores();
 
+/// [bytes] A memory size given as `flag` (e.g. --max-memory): a number of MB ("500"), or with a
+/// unit K, M, G or T (powers of 1000, "2G", "1.5GB"). Throws std::invalid_argument naming `flag`.
+double parseMemorySize(const std::string& flag, const std::string& value);
+
 /// Where gseg::Progress writes: stderr, or nowhere (null) with --quiet.
 std::FILE* progressOut();
 
@@ -63,6 +67,12 @@ public:
     /// -w / --overwrite was given (false for a tool that writes no file).
     bool overwrite() const { return overwrite_ && overwrite_->getValue(); }
 
+    /// Adds `--mpi-timeout SECONDS` (before parse()), for the tools that run under mpirun/srun:
+    /// how long a rank may stay silent before the job is ended (Ranks::setTimeout()).
+    void addMpiTimeout();
+    /// [s] The value of --mpi-timeout (Ranks::kDefaultTimeout if not given; 0: none).
+    double mpiTimeout() const { return mpiTimeoutSeconds_; }
+
     /// A usage error found after parsing: prints "<name>: <what>; see <name> --help" (when
     /// printing) and returns kBadUsage.
     int usageError(const std::string& what) const;
@@ -75,6 +85,8 @@ private:
     std::unique_ptr<Output> output_;
     TCLAP::SwitchArg quiet_, verbose_;
     std::unique_ptr<TCLAP::SwitchArg> overwrite_;
+    std::unique_ptr<TCLAP::ValueArg<std::string>> mpiTimeout_;
+    double mpiTimeoutSeconds_;
 };
 
 }  // namespace gseg::tools

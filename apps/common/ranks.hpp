@@ -11,10 +11,21 @@
 ///
 /// Only rank 0 prints: the other ranks' stdout and stderr go to /dev/null, everything they have to
 /// say (results, errors naming the item) is sent to rank 0.
+///
+/// A rank that stops answering (stopped, swapped out, its node gone silent) would otherwise hang
+/// the job, since MPI only notices processes that end. So every rank sends a heartbeat several
+/// times a second from a thread of its own, whatever its other threads do (rank 0 to every rank,
+/// the others to rank 0), and watches those it hears from: one silent for the time-out
+/// (`--mpi-timeout`, setTimeout(); default kDefaultTimeout) has the watching rank print
+/// "<tool>: rank N has not answered for T s (time-out --mpi-timeout); ending the job", remove
+/// its registered temporaries (gseg::io::AtomicFile) and end the whole job (MPI_Abort, exit 1).
+/// At the end every rank says goodbye to those it watches and waits for theirs, so no heartbeat
+/// is left in flight at MPI_Finalize, and MPI_Finalize itself is bounded by the time-out.
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,9 +64,18 @@ public:
     /// that is 0, the first non-zero code of another rank), so the launcher's exit status is the tool's.
     int exitCode(int mine);
 
+    /// [s] How long a rank may stay silent before the job is ended (see above), unless set.
+    static constexpr double kDefaultTimeout = 60;
+    /// Sets the time-out (`seconds` > 0; 0: none) and the tool's name for the time-out message.
+    /// Every rank sets the same (they parse the same command line); until then kDefaultTimeout.
+    /// Without MPI: nothing to watch.
+    void setTimeout(const std::string& tool, double seconds);
+
 private:
     int rank_ = 0, size_ = 1;
     bool mpi_ = false;  ///< MPI initialised by this object
+    class Watch;
+    std::unique_ptr<Watch> watch_;  ///< heartbeats and the time-out (MPI with more than one rank)
 };
 
 /// Has the ranks share items 0..n-1: split by `work` (splitByWork()), each rank does its own with

@@ -372,6 +372,7 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
         "without -i (old form: gseg eval ROOT). Under mpirun or srun the frames are split over the processes by their "
         "points (--threads workers in each) and rank 0 writes the reports.",
         true, ranks.root());
+    line.addMpiTimeout();
     TCLAP::CmdLine& cmd = line.cmd();
     TCLAP::ValueArg<std::string> input("i", "input", "SemanticKITTI root (sequences/NN/velodyne, labels)", false, "",
                                        "ROOT", cmd);
@@ -393,6 +394,7 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
                                "sequence; with --report also PREFIX_breakdown.csv and a top-down PNG per frame "
                                "(true / false / missed ground) in PREFIX_breakdown/", cmd, false);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
+    ranks.setTimeout("gseg eval", line.mpiTimeout());
     if (!input.getValue().empty() && !root.getValue().empty())
         return line.usageError("give the root once: -i ROOT (or the old form, gseg eval ROOT)");
     cli = {input.getValue().empty() ? root.getValue() : input.getValue(), scan.getValue(), labels.getValue(),

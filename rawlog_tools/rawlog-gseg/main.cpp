@@ -300,6 +300,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         "written for it), 2 bad usage, 3 done but some scans could not be segmented (passed through unchanged and named "
         "on stderr) or a --sensor label matched no observation (named with the labels the rawlog has).",
         true, ranks.root());
+    line.addMpiTimeout();
     TCLAP::CmdLine& cmd = line.cmd();
     TCLAP::MultiArg<std::string> in("i", "input", "input rawlog (plain or gzip, either layout); repeatable", false, "IN",
                                     cmd);
@@ -315,6 +316,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     TCLAP::ValueArg<std::string> frame("", "frame", "output points in the sensor frame (default) or the vehicle "
                                        "frame", false, "sensor", "sensor|vehicle", cmd);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
+    ranks.setTimeout("rawlog-gseg", line.mpiTimeout());
     const Cli cli = {in.getValue(),       list.getValue(),   outArg.getValue(), cfg.getValue(),
                      frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite()};
     gseg::io::installTemporaryCleanup("rawlog-gseg");

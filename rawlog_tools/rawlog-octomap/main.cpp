@@ -14,11 +14,17 @@
 #include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/map/memory_estimate.hpp>
+#include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 
 #include <chrono>
+#include <cmath>
+#include <deque>
+#include <new>
+#include <optional>
 #include <malloc.h>
 #include <sys/resource.h>
 #include <cstdio>
@@ -89,6 +95,10 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
                                          cmd);
     TCLAP::SwitchArg rank0MapsOnly("", "rank0-maps-only", "under mpirun/srun rank 0 reads, maps and writes but works on "
                                    "no scan (a rank 0 on a node of its own, or a slow disk)", cmd);
+    TCLAP::ValueArg<std::string> maxMemory("", "max-memory", "refuse to start (exit 1) if the maps and ray casting are "
+                                           "estimated to need more (from the first scan; MB, or 2G; default: the "
+                                           "memory available, or ulimit -v / -d if lower)", false, "", "SIZE", cmd);
+    line.addMpiTimeout();
     TCLAP::ValueArg<std::string> bench("", "bench", "time plain OctoMap (insertPointCloud, discretized) and "
                                        "rawlog-octomap alternately, N rounds each, on the same rawlog; maps go to "
                                        "PREFIX_bench*", false, "", "N", cmd);
@@ -115,6 +125,8 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         c.rank0MapsOnly = rank0MapsOnly.getValue();
         if (bench.isSet()) c.benchRounds = int(std::max(1u, parseCount("--bench", bench.getValue(), 100)));
         c.overwrite = line.overwrite();
+        if (maxMemory.isSet()) c.maxMemory = gseg::tools::parseMemorySize("--max-memory", maxMemory.getValue());
+        c.mpiTimeout = line.mpiTimeout();
         c.poses.input = c.input;
         c.options.validate();
     } catch (const std::invalid_argument& e) {
@@ -174,6 +186,54 @@ void printReport(const RunReport& r, double resolution) {
     for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
 }
 
+/// " (at --resolution 0.01 m, --max-range 50 m)": the options memory follows, for messages.
+std::string memoryOptions(const Cli& cli) {
+    char text[120];
+    std::snprintf(text, sizeof text, " (at --resolution %g m, --max-range %g m)", cli.options.resolution, cli.options.maxRange);
+    return text;
+}
+
+/// Memory, before any work (#18): the maps and the scans in flight, estimated from the first
+/// scan's rays at these options, against the limit (--max-memory, else what the machine and the
+/// process's limits leave). Throws std::runtime_error naming the options and the estimate.
+void checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, std::size_t inFlight) {
+    std::vector<float> points;
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    for (const auto* part : {&first.raw, &first.ground, &first.obstacles})
+        if (*part && (part != &first.raw || !first.presegmented())) origin = gseg::map::appendWorldPoints(**part, first.robotPose, points);
+    const gseg::map::RayFootprint f =
+        gseg::map::rayFootprint(gseg::PointCloudView(points.data(), points.size() / 3), origin, cli.options);
+    // The scans of the drive, from the bytes of the rawlog the second scan took.
+    const double step = second ? second->fraction - first.fraction : 0;
+    const std::size_t scans = !second ? 1 : step > 0 ? std::size_t(std::lround(std::min(1e9, 2 + (1 - second->fraction) / step))) : 2;
+    const double need = gseg::map::estimateMemory(f).peak(inFlight, std::max<std::size_t>(1, scans));
+    gseg::map::MemoryLimit limit = gseg::map::memoryLimit();
+    if (cli.maxMemory > 0 && (cli.maxMemory < limit.bytes || limit.machine))  // the user's word, within ulimit's
+        limit = {cli.maxMemory, "--max-memory", false};
+    gseg::tools::detail("rawlog-octomap: memory estimated from %s: %s for about %zu scans%s; limit %s (%s)\n",
+                        first.describe().c_str(), gseg::map::formatBytes(need).c_str(), scans, memoryOptions(cli).c_str(),
+                        gseg::map::formatBytes(limit.bytes).c_str(), limit.what.c_str());
+    if (need > limit.bytes) {
+        char text[400];
+        std::snprintf(text, sizeof text, "--resolution %g m needs about %s for the maps and ray casting (estimated from "
+                      "%s: %zu points, rays up to --max-range %g m, about %zu scans), more than %s (%s); use a coarser "
+                      "--resolution or a shorter --max-range%s", cli.options.resolution, gseg::map::formatBytes(need).c_str(),
+                      first.describe().c_str(), f.rays, cli.options.maxRange, scans, limit.what.c_str(),
+                      gseg::map::formatBytes(limit.bytes).c_str(), limit.what == "--max-memory" ? "" : ", or give --max-memory");
+        throw std::runtime_error(text);
+    }
+}
+
+/// Runs `f`, turning an allocation failure into an error that says what was being done.
+template <class F>
+auto phase(const std::string& what, const Cli& cli, F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const std::bad_alloc&) {
+        throw std::runtime_error("out of memory while " + what + memoryOptions(cli) + "; nothing written");
+    }
+}
+
 }  // namespace
 
 RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
@@ -195,6 +255,9 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     if (remote) how.remoteWork = [remote](unsigned slot, const ScanJob& job) { return (*remote)(slot, job); };
     how.ranks = std::size_t(remote ? remote->processes() : 1);
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
+    // Memory, before any work: the first two scans (the second gives the rawlog's bytes per scan).
+    const std::deque<ScanJob>& first = phase("reading the first scans", cli, [&]() -> const std::deque<ScanJob>& { return stream.prefetch(2); });
+    if (!first.empty()) checkMemory(cli, first[0], first.size() > 1 ? &first[1] : nullptr, gseg::map::MapBuilder::inFlight(how));
     how.onScan = [&](std::size_t k, const ScanResult& r) {
         if (!r.skipped.empty()) {
             const std::string& skipped = builder.tally().skipped.back();
@@ -209,7 +272,11 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         if (!quiet) progress.update(k + 1, r.fraction);
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
-    builder.run(stream, how);
+    try {
+        builder.run(stream, how);
+    } catch (const gseg::map::OutOfMemory& e) {
+        throw std::runtime_error(e.what() + memoryOptions(cli) + "; nothing written");
+    }
     const gseg::map::TraversabilityMap& map = builder.map();
     const gseg::map::BuildTally& tally = builder.tally();
     const std::size_t total = map.path().size() + tally.skipped.size();
@@ -229,7 +296,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     report.poseSource = stream.poseSource();
     report.peakMbBeforeWriting = peakResidentMb();
     const auto t0 = std::chrono::steady_clock::now();
-    report.written = map.write(cli.prefix);
+    report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix); });
     report.times.writing = secondsSince(t0);
     report.stats = map.stats();
     report.wallSeconds = secondsSince(start);
@@ -246,6 +313,7 @@ namespace {
 int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     Cli cli;  // every rank parses the same arguments and stops alike; rank 0 prints
     if (const int code = parseCli(argc, argv, ranks.root(), cli); code >= 0) return code;
+    ranks.setTimeout("rawlog-octomap", cli.mpiTimeout);
     if (cli.benchRounds > 0 && ranks.size() > 1) {
         std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
         return gseg::tools::kBadUsage;

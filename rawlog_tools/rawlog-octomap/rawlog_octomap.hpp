@@ -27,6 +27,8 @@ struct Cli {
     bool rank0MapsOnly = false;  ///< under MPI, rank 0 works on no scan (it reads, maps and writes)
     int benchRounds = 0;   ///< --bench N
     bool overwrite = false;  ///< -w: replace map files that exist
+    double maxMemory = 0;    ///< [bytes] --max-memory (0: the machine's available memory)
+    double mpiTimeout = 0;   ///< [s] --mpi-timeout (gseg::tools::Ranks::setTimeout())
 };
 
 class RemoteWorkers;

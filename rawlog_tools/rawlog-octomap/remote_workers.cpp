@@ -9,7 +9,9 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
+#include <new>
 #include <stdexcept>
 #include <thread>
 
@@ -89,6 +91,12 @@ mrpt::obs::CObservation::Ptr readObservation(ByteReader& in) {
     if (!obs) throw std::runtime_error("a scan sent between processes holds no observation");
     obs->setSensorPose(readPose(in));
     return obs;
+}
+
+std::string number(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    return text;
 }
 
 }  // namespace
@@ -185,6 +193,10 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
                 ScanResult r = workers[thread](job);
                 r.rank = ranks.rank();
                 reply = encodeResult(r);
+            } catch (const std::bad_alloc&) {
+                reply = encodeError("out of memory while segmenting and ray casting " + scan + " on rank " +
+                                    std::to_string(ranks.rank()) + " (at --resolution " + number(cli.options.resolution) +
+                                    " m, --max-range " + number(cli.options.maxRange) + " m); nothing written");
             } catch (const std::exception& e) {  // the worker's errors name the scan
                 const std::string reason = gseg::mrpt::errorReason(e);
                 reply = encodeError(reason.rfind(scan, 0) == 0 ? reason : scan + " on rank " + std::to_string(ranks.rank()) + ": " + reason);

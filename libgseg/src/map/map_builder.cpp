@@ -65,6 +65,8 @@ ScanResult ScanWorker::operator()(const ScanParts& parts, const ::mrpt::poses::C
         r.update = castScan(world.groundView(), world.obstaclesView(), world.sensorOrigin, options_);
     } catch (const std::out_of_range& e) {
         throw std::runtime_error(r.describe + ": " + e.what() + "; for poses in UTM or other large coordinates use --origin first");
+    } catch (const std::bad_alloc&) {
+        throw;  // MapBuilder::run() names the phase; the tool adds the options memory follows
     } catch (const std::exception& e) {
         throw std::runtime_error(r.describe + ": " + e.what());
     }
@@ -94,22 +96,34 @@ void MapBuilder::integrate(const ScanResult& r) {
     if (!r.heightNote.empty()) tally_.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
 }
 
+std::size_t MapBuilder::inFlight(const BuildOptions& o) { return 2 * std::size_t(std::max(1u, o.threads + o.remoteWorkers)) + 2; }
+
 void MapBuilder::run(ScanStream& stream, const BuildOptions& o) {
     if (o.remoteWorkers > 0 && !o.remoteWork) throw std::invalid_argument("MapBuilder::run: remote workers without remoteWork");
     const unsigned local = o.threads, workers = o.threads + o.remoteWorkers;
     workers_.clear();
     for (unsigned i = 0; i < std::max(1u, local); ++i) workers_.emplace_back(config_, map_.options());
     if (tally_.scansByRank.size() < o.ranks) tally_.scansByRank.resize(o.ranks, 0);
+    auto guarded = [](const std::string& what, auto&& f) -> decltype(f()) {
+        try {
+            return f();
+        } catch (const std::bad_alloc&) {
+            throw OutOfMemory("out of memory while " + what);
+        }
+    };
     auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the remote ones (if any)
-        return w < local || o.remoteWorkers == 0 ? workers_[w](job) : o.remoteWork(w - local, job);
+        return guarded("segmenting and ray casting " + job.describe(), [&] {
+            return w < local || o.remoteWorkers == 0 ? workers_[w](job) : o.remoteWork(w - local, job);
+        });
     };
     auto consume = [&](std::size_t k, ScanResult& r) {
-        integrate(r);
+        guarded("adding " + r.describe + " to the maps", [&] { integrate(r); });
         if (o.onScan) o.onScan(k, r);
     };
+    std::size_t read = 0;
+    auto produce = [&](ScanJob& job) { return guarded("reading scan " + std::to_string(read++), [&] { return stream.next(job); }); };
     const double readBefore = stream.readSeconds();
-    runOrdered<ScanJob, ScanResult>([&](ScanJob& job) { return stream.next(job); }, work, consume,
-                                    {workers, 2 * std::size_t(std::max(1u, workers)) + 2});
+    runOrdered<ScanJob, ScanResult>(produce, work, consume, {workers, inFlight(o)});
     tally_.times.read += stream.readSeconds() - readBefore;
 }
 

@@ -65,9 +65,9 @@ ScanStream::ScanStream(const PoseConfig& config) : config_(config), reader_(conf
 
 std::string ScanStream::poseSource() const { return config_.poses.empty() ? "the rawlog" : config_.poses; }
 
-bool ScanStream::next(ScanJob& job) {
+void ScanStream::fill(std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
-    while (ready_.empty() && !eof_) {
+    while (ready_.size() < n && !eof_) {
         const auto obj = reader_.next();
         if (!obj) {
             eof_ = true;
@@ -77,6 +77,15 @@ bool ScanStream::next(ScanJob& job) {
         visit(reader_.index(), obj);
     }
     readSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+const std::deque<ScanJob>& ScanStream::prefetch(std::size_t n) {
+    fill(n);
+    return ready_;
+}
+
+bool ScanStream::next(ScanJob& job) {
+    fill(1);
     if (ready_.empty()) return false;
     job = std::move(ready_.front());
     ready_.pop_front();

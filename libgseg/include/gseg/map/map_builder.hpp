@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -94,6 +95,12 @@ struct BuildOptions {
     std::function<void(std::size_t k, const ScanResult& result)> onScan;
 };
 
+/// An allocation failed while building: what() says what was being done ("out of memory while
+/// segmenting and ray casting scan 5 (...)"), for a message that adds the options memory follows.
+struct OutOfMemory : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
 /// Builds a TraversabilityMap scan by scan: the ordered integration of ScanWorker results.
 class MapBuilder {
 public:
@@ -104,7 +111,11 @@ public:
     /// workers and the remote ones, integrated in scan order with at most 2 N + 2 scans in flight
     /// (N workers). An error of any scan is rethrown once every thread has ended (that of the
     /// earliest scan); the scans before it are integrated.
+    /// An allocation failure throws OutOfMemory naming the scan and the phase (reading, segmenting
+    /// and ray casting, adding to the maps).
     void run(ScanStream& stream, const BuildOptions& options);
+    /// The scans run() holds at once with these options (read, being worked on, waiting to be integrated).
+    static std::size_t inFlight(const BuildOptions& options);
     /// Integrates the next scan's result (results in scan order): applies its update or, if it was
     /// skipped, counts it.
     void integrate(const ScanResult& result);

@@ -61,6 +61,9 @@ public:
     /// The next scan; false at the end of the rawlog. Throws std::runtime_error naming the scan
     /// when it has no pose, and the entry when the rawlog is corrupt.
     bool next(ScanJob& job);
+    /// Reads ahead until `n` scans are waiting (fewer at the end of the rawlog) and returns them;
+    /// next() hands them out first (e.g. the first scans, for an estimate before any work).
+    const std::deque<ScanJob>& prefetch(std::size_t n);
 
     std::size_t rawScansSeenWithTheirPair() const { return rawWithPair_; }  ///< raw scans not segmented again
     /// The world shift subtracted from every position (--origin), if any.
@@ -78,6 +81,7 @@ private:
 
     std::optional<ScanJob> open_;      ///< the scan being completed
     std::optional<::mrpt::poses::CPose3D> openPose_;  ///< rawlog pose when it was opened
+    void fill(std::size_t n);  ///< reads until `n` scans are ready or the rawlog ends
     std::deque<ScanJob> ready_;
     std::size_t emitted_ = 0, rawWithPair_ = 0;
     bool eof_ = false;

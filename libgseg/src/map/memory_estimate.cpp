@@ -1,0 +1,145 @@
+#include <gseg/map/memory_estimate.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <sys/resource.h>
+
+namespace gseg::map {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Voxels a ray crosses per cell of its length (OctoMap's traversal steps one axis at a time:
+/// |dx| + |dy| + |dz| over the length, 4 / pi for level rays in every direction).
+constexpr double kStepsPerCell = 1.3;
+
+// Bytes per unit, from the data structures (brick_map.hpp, voxel_keys.hpp), times what the
+// calibration on the sequence-00 scans added (allocator slack, vectors at twice their size).
+constexpr double kBytesPerListedVoxel = 8 * 1.5;   // a scan's sorted voxel codes (free list), grown by doubling
+constexpr double kBytesPerCastBrick = 110 * 1.5;   // a ray caster's brick set: code, 512 bits, hash slot
+constexpr double kBytesPerMapBrick = 390;          // a map brick: two maps' words, the ever-obstacle bits, code, index
+constexpr double kBytesPerMapWord = 2 * 256;       // a word of 64 values in each of the two maps
+constexpr double kProcessBytes = 100e6;            // the process before any scan (MRPT's libraries, segmenters), measured
+// Calibration (peak RSS of rawlog-octomap, six sequence-00 scans, 2 workers, 0.2 to 0.04 m):
+constexpr double kInFlightShare = 0.35;   // at the peak about a third of the scans in flight hold full voxel lists
+constexpr double kSparseGrowth = 0.06;    // of a scan's sparse cells, new in the next one (scans 0.7 m apart)
+constexpr double kMapGrowth = 0.02;       // of the first map, new with every further scan (driving on)
+
+/// Cells crossed, in all and where rays are sparse, for cells of edge `cell`, from the ray
+/// lengths' histogram `longer` (longer[k]: rays of length >= k * resolution).
+/// `angle[k]`: the solid angle of the directions with a ray of length >= k * resolution.
+void countCells(const std::vector<double>& longer, const std::vector<double>& angle, int cellVoxels, double& all,
+                double& sparse) {
+    all = sparse = 0;
+    for (std::size_t j = 0;; ++j) {
+        const std::size_t k = j * std::size_t(cellVoxels);
+        if (k >= longer.size() || longer[k] <= 0) break;
+        const double rays = longer[k];
+        const double shell = std::max(1.0, angle[k] * (double(j) + 0.5) * (double(j) + 0.5));
+        if (rays * kStepsPerCell >= shell) {
+            all += shell;
+        } else {
+            all += rays * kStepsPerCell;
+            sparse += rays * kStepsPerCell;
+        }
+    }
+}
+
+}  // namespace
+
+RayFootprint rayFootprint(const PointCloudView& points, const Eigen::Vector3d& sensorOrigin, const TraversabilityOptions& options) {
+    options.validate();
+    const double res = options.resolution;
+    const std::size_t bins = std::size_t(std::ceil(options.maxRange / res)) + 2;
+    std::vector<double> ending(bins, 0.0);  // rays ending in each voxel-thick shell
+    std::vector<double> reach(360 * 180, -1.0);  // [m] the longest ray of each direction bin
+    RayFootprint f;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const float* p = points.point(i);
+        const Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - sensorOrigin;
+        const double r = d.norm();
+        if (!std::isfinite(r) || r <= 0) continue;
+        ++f.rays;
+        const int az = std::clamp(int(std::floor((std::atan2(d.y(), d.x()) + kPi) * 180 / kPi)), 0, 359);
+        const int el = std::clamp(int(std::floor((std::asin(std::clamp(d.z() / r, -1.0, 1.0)) + kPi / 2) * 180 / kPi)), 0, 179);
+        double& longest = reach[std::size_t(el * 360 + az)];
+        longest = std::max(longest, std::min(r, options.maxRange));
+        ending[std::min(bins - 1, std::size_t(std::min(r, options.maxRange) / res))] += 1;
+    }
+    // The solid angle still reached at each distance: rays to the road end early, so far away
+    // only the level directions are left.
+    std::vector<double> angleEnding(bins, 0.0);
+    const double bin = (kPi / 180) * (kPi / 180);
+    for (int el = 0; el < 180; ++el)
+        for (int az = 0; az < 360; ++az)
+            if (const double longest = reach[std::size_t(el * 360 + az)]; longest >= 0) {
+                const double a = bin * std::cos((el + 0.5) * kPi / 180 - kPi / 2);
+                f.solidAngle += a;
+                angleEnding[std::min(bins - 1, std::size_t(longest / res))] += a;
+            }
+    std::vector<double> longer(bins, 0.0), angle(bins, 0.0);
+    double rays = 0, solid = 0;
+    for (std::size_t k = bins; k-- > 0;) longer[k] = (rays += ending[k]), angle[k] = (solid += angleEnding[k]);
+    countCells(longer, angle, 1, f.voxels, f.sparseVoxels);
+    countCells(longer, angle, 4, f.words, f.sparseWords);
+    countCells(longer, angle, 8, f.bricks, f.sparseBricks);
+    return f;
+}
+
+MemoryEstimate estimateMemory(const RayFootprint& f) {
+    MemoryEstimate e;
+    e.process = kProcessBytes;
+    e.perScan = kInFlightShare * (kBytesPerListedVoxel * f.voxels + kBytesPerCastBrick * f.bricks);
+    e.firstMap = kBytesPerMapBrick * f.bricks + kBytesPerMapWord * f.words;
+    e.growthPerScan = kSparseGrowth * (kBytesPerMapBrick * f.sparseBricks + kBytesPerMapWord * f.sparseWords) + kMapGrowth * e.firstMap;
+    return e;
+}
+
+namespace {
+
+/// A "Key:   123 kB" line of a /proc file, in bytes; -1 if absent.
+double procKilobytes(const char* file, const std::string& key) {
+    std::ifstream in(file);
+    for (std::string line; std::getline(in, line);)
+        if (line.compare(0, key.size(), key) == 0 && line.size() > key.size() && line[key.size()] == ':') {
+            std::istringstream v(line.substr(key.size() + 1));
+            double kb = -1;
+            if (v >> kb) return kb * 1024;
+        }
+    return -1;
+}
+
+}  // namespace
+
+MemoryLimit memoryLimit() {
+    MemoryLimit m{std::numeric_limits<double>::infinity(), "the available memory", true};
+    if (const double avail = procKilobytes("/proc/meminfo", "MemAvailable"); avail >= 0) m.bytes = avail;
+    // Address space goes faster than memory: malloc reserves 64 MB per thread's arena, threads
+    // their stacks (measured: 1.3 GB of address space for 1.0 GB resident at 0.05 m).
+    auto limit = [&](int resource, const char* inUseKey, const char* what, double overhead) {
+        rlimit l{};
+        if (::getrlimit(resource, &l) != 0 || l.rlim_cur == RLIM_INFINITY) return;
+        const double used = std::max(0.0, procKilobytes("/proc/self/status", inUseKey));
+        const double left = std::max(0.0, double(l.rlim_cur) - used) / overhead;
+        if (left < m.bytes) m = {left, what, false};
+    };
+    limit(RLIMIT_AS, "VmSize", "the address-space limit (ulimit -v)", 1.3);
+    limit(RLIMIT_DATA, "VmData", "the data limit (ulimit -d)", 1.3);
+    return m;
+}
+
+std::string formatBytes(double bytes) {
+    char text[32];
+    if (bytes >= 10e9) std::snprintf(text, sizeof text, "%.0f GB", bytes / 1e9);
+    else if (bytes >= 1e9) std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
+    else std::snprintf(text, sizeof text, "%.0f MB", bytes / 1e6);
+    return text;
+}
+
+}  // namespace gseg::map
