@@ -199,8 +199,13 @@ std::string memoryOptions(const Cli& cli) {
 void checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, std::size_t inFlight) {
     std::vector<float> points;
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-    for (const auto* part : {&first.raw, &first.ground, &first.obstacles})
-        if (*part && (part != &first.raw || !first.presegmented())) origin = gseg::map::appendWorldPoints(**part, first.robotPose, points);
+    try {
+        for (const auto* part : {&first.raw, &first.ground, &first.obstacles})
+            if (*part && (part != &first.raw || !first.presegmented()))
+                origin = gseg::map::appendWorldPoints(**part, first.robotPose, points);
+    } catch (const std::invalid_argument&) {
+        return;  // a scan the builder will skip and name (e.g. a 2D scan): nothing to estimate from
+    }
     const gseg::map::RayFootprint f =
         gseg::map::rayFootprint(gseg::PointCloudView(points.data(), points.size() / 3), origin, cli.options);
     // The scans of the drive, from the bytes of the rawlog the second scan took.
