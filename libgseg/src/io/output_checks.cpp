@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -26,19 +27,26 @@ bool isDirectory(const std::string& path) {
     return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
 }
 
+// The paths a chain of symbolic links passes, `path` first; at most 41 (more: a loop). The last
+// one is no link: an existing file, a missing one, or a "pipe:[N]" that /proc/self/fd/N names.
+std::vector<std::string> linkChain(const std::string& path) {
+    std::vector<std::string> chain = {path};
+    for (int hop = 0; hop < 40; ++hop) {
+        char buf[4096];
+        const ssize_t n = ::readlink(chain.back().c_str(), buf, sizeof buf - 1);
+        if (n <= 0) break;
+        const std::string next(buf, std::size_t(n));
+        chain.push_back(next[0] == '/' ? next : (fs::path(chain.back()).parent_path() / next).string());
+    }
+    return chain;
+}
+
 // Paths that reach a process's own descriptors (/dev/stdout -> /proc/self/fd/1 -> pipe:[N]):
 // written in place, whatever they lead to.
 bool viaDescriptor(const std::string& path) {
-    std::string p = path;
-    for (int hop = 0; hop < 40; ++hop) {
+    for (const std::string& p : linkChain(path))
         if (p.rfind("/proc/", 0) == 0 || p.rfind("/dev/fd/", 0) == 0 || p == "/dev/stdout" || p == "/dev/stderr")
             return true;
-        char buf[4096];
-        const ssize_t n = ::readlink(p.c_str(), buf, sizeof buf - 1);
-        if (n <= 0) return false;
-        const std::string next(buf, std::size_t(n));
-        p = next[0] == '/' ? next : (fs::path(p).parent_path() / next).string();
-    }
     return false;
 }
 
@@ -74,17 +82,9 @@ OutputTarget resolveOutput(const std::string& given) {
     if (err == ELOOP) throw std::invalid_argument(given + " is a loop of symbolic links");
     if (err != ENOENT) throw std::invalid_argument(given + ": " + std::strerror(err));
     // Missing, or a dangling symbolic link: the file its last link names is created.
-    std::string p = given;
-    for (int hop = 0;; ++hop) {
-        if (hop == 40) throw std::invalid_argument(given + " is a loop of symbolic links");
-        struct stat lst {};
-        if (::lstat(p.c_str(), &lst) != 0 || !S_ISLNK(lst.st_mode)) break;
-        char buf[4096];
-        const ssize_t n = ::readlink(p.c_str(), buf, sizeof buf - 1);
-        if (n <= 0) break;
-        const std::string next(buf, std::size_t(n));
-        p = next[0] == '/' ? next : (fs::path(p).parent_path() / next).string();
-    }
+    const std::vector<std::string> chain = linkChain(given);
+    if (chain.size() > 40) throw std::invalid_argument(given + " is a loop of symbolic links");
+    const std::string& p = chain.back();
     t.file = p;
     if (!isDirectory(folderOf(p)))
         throw std::invalid_argument(given + ": the folder " + folderOf(p) + " does not exist" +

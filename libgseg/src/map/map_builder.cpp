@@ -104,24 +104,28 @@ void MapBuilder::run(ScanStream& stream, const BuildOptions& o) {
     workers_.clear();
     for (unsigned i = 0; i < std::max(1u, local); ++i) workers_.emplace_back(config_, map_.options());
     if (tally_.scansByRank.size() < o.ranks) tally_.scansByRank.resize(o.ranks, 0);
-    auto guarded = [](const std::string& what, auto&& f) -> decltype(f()) {
+    // `what()` names the phase, built only when an allocation failed.
+    auto guarded = [](const auto& what, auto&& f) -> decltype(f()) {
         try {
             return f();
         } catch (const std::bad_alloc&) {
-            throw OutOfMemory("out of memory while " + what);
+            throw OutOfMemory("out of memory while " + what());
         }
     };
     auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the remote ones (if any)
-        return guarded("segmenting and ray casting " + job.describe(), [&] {
+        return guarded([&] { return "segmenting and ray casting " + job.describe(); }, [&] {
             return w < local || o.remoteWorkers == 0 ? workers_[w](job) : o.remoteWork(w - local, job);
         });
     };
     auto consume = [&](std::size_t k, ScanResult& r) {
-        guarded("adding " + r.describe + " to the maps", [&] { integrate(r); });
+        guarded([&] { return "adding " + r.describe + " to the maps"; }, [&] { integrate(r); });
         if (o.onScan) o.onScan(k, r);
     };
     std::size_t read = 0;
-    auto produce = [&](ScanJob& job) { return guarded("reading scan " + std::to_string(read++), [&] { return stream.next(job); }); };
+    auto produce = [&](ScanJob& job) {
+        const std::size_t k = read++;
+        return guarded([k] { return "reading scan " + std::to_string(k); }, [&] { return stream.next(job); });
+    };
     const double readBefore = stream.readSeconds();
     runOrdered<ScanJob, ScanResult>(produce, work, consume, {workers, inFlight(o)});
     tally_.times.read += stream.readSeconds() - readBefore;
