@@ -20,6 +20,7 @@ struct Command {
 const Command kCommands[] = {
     {"segment", gseg::app::runSegment, nullptr, "label one scan (KITTI .bin, PLY or rawlog) as ground / non-ground"},
     {"eval", nullptr, gseg::app::runEval, "precision / recall on SemanticKITTI (Ground Segmentation Benchmark protocol)"},
+    {"eval-map", gseg::app::runEvalMap, nullptr, "score a 2D map (map_server YAML) against a labelled KITTI drive"},
     {"bench", gseg::app::runBench, nullptr, "time the segmentation per scan, phase and step"},
 };
 

@@ -298,7 +298,7 @@ std::string encodeMapScorePng(const DriveTruth& truth, const CellOutcomes& outco
     const long long top = hiX + margin, left = hiY + margin;  // x up, y to the left
     const long long high = hiX - loX + 1 + 2 * margin, wide = hiY - loY + 1 + 2 * margin, side = std::max(high, wide);
     const long long cellsPerPixel = (side + 1999) / 2000;
-    const int pixelsPerCell = cellsPerPixel > 1 ? 1 : int(std::clamp(900 / side, 1LL, 8LL));
+    const int pixelsPerCell = cellsPerPixel > 1 ? 1 : int(std::clamp(1200 / side, 1LL, 8LL));
     const int mapW = int((wide + cellsPerPixel - 1) / cellsPerPixel) * pixelsPerCell;
     const int mapH = int((high + cellsPerPixel - 1) / cellsPerPixel) * pixelsPerCell;
     constexpr int kTitleBand = 56, kMargin = 12, kMinWidth = 760;
@@ -308,7 +308,8 @@ std::string encodeMapScorePng(const DriveTruth& truth, const CellOutcomes& outco
         legend.push_back({{st.r, st.g, st.b}, st.text});
     }
     legend.push_back({{}, "page: cells not scored (no truth)", false});
-    legend.push_back({{}, std::string(gseg::mrpt::kTopViewOrientation) + " (kitti drives: x = forward at the start)", false});
+    legend.push_back({{}, gseg::mrpt::kTopViewOrientation, false});
+    legend.push_back({{}, "(KITTI drives: x = forward at the first scan)", false});
     const int width = std::max(mapW + 2 * kMargin, kMinWidth);
     const int height = kTitleBand + mapH + kMargin + Picture::legendHeight(legend.size()) + kMargin;
     Picture pic(width, height, backgroundColour());
