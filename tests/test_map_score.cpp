@@ -1,6 +1,7 @@
 // The map scorer (gseg/map/map_score.hpp) and `gseg eval-map`: hand-placed drives with known
 // answers, bad input, and the same figures as ../shared/tools/score_map.py on the shared drives.
 #include <gseg/io/ros_map.hpp>
+#include <gseg/map/layer_file.hpp>
 #include <gseg/map/map_score.hpp>
 
 #include <support/child.hpp>
@@ -500,7 +501,29 @@ TEST_P(SharedDrive, SameFiguresAsScoreMapPy) {
     std::vector<TestMap> maps = testMaps(drive);
     std::string args;
     double clearance = 2.0;
+    // The perturbed truth again, with an elevation layer: the labelled ground height plus seeded
+    // errors away from the 0.1 m border, NaN and cells off the ground, on a grid a quarter cell off.
+    maps.push_back(maps[1]);
+    maps.back().name = "perturbed_truth_elevation";
+    const std::string layersPath = (dir / "layers.tif").string();
+    {
+        const RosMap& m = maps[1].map;
+        const DriveTruth t = gseg::map::computeTruth(drive, gseg::map::gridOf(m));
+        gseg::map::LayerGrid layers(m.width, m.height, m.resolution, m.originX + 0.05, m.originY - 0.05);
+        auto& e = layers.add("elevation", "m", "ground height");
+        std::mt19937 rng(5);
+        const float errors[6] = {0.f, 0.03f, -0.06f, 0.15f, -0.3f, 1.f};
+        for (int cy = 0; cy < layers.height(); ++cy)
+            for (int cx = 0; cx < layers.width(); ++cx) {
+                const auto it = t.groundHeight.find(DriveTruth::cellKey(t.grid.cellX(layers.centreX(cx)), t.grid.cellY(layers.centreY(cy))));
+                const unsigned k = rng() % 8;
+                if (it != t.groundHeight.end() && k < 6) e.values[layers.index(cx, cy)] = float(it->second) + errors[k];
+                else if (k == 6) e.values[layers.index(cx, cy)] = -1.7f;  // over cells without labelled ground
+            }
+        gseg::map::writeLayersGeoTiff(layersPath, layers);
+    }
     for (TestMap& m : maps) {
+        if (m.name == "perturbed_truth_elevation") args += " --elevation '" + layersPath + "'";
         gseg::io::writeRosMap((dir / m.name).string(), m.map);
         m.map = gseg::io::readRosMap((dir / (m.name + ".yaml")).string());  // what score_map.py reads
         if (m.clearance != clearance) args += " --clearance " + std::to_string(m.clearance), clearance = m.clearance;
@@ -523,18 +546,35 @@ TEST_P(SharedDrive, SameFiguresAsScoreMapPy) {
         anyBeyond |= s.outcomes[int(CellOutcome::FalseTraversableBeyond)] > 0;
         anyUnknown |= s.outcomes[int(CellOutcome::TraversableUnknown)] > 0 && s.outcomes[int(CellOutcome::ObstacleUnknown)] > 0;
         anyBlocked |= s.outcomes[int(CellOutcome::TraversableBlocked)] > 0;
+        if (maps[i].name == "perturbed_truth_elevation") {
+            const auto e = gseg::map::elevationError(gseg::map::readLayersGeoTiff(layersPath), t);
+            EXPECT_NEAR(e.rmse, jsonValue(lines[i], "map", "elev_rmse"), 1e-4) << lines[i];
+            EXPECT_NEAR(e.within10cm, jsonValue(lines[i], "map", "elev_within_10cm"), 0.01) << lines[i];
+            EXPECT_EQ(double(e.cells), jsonValue(lines[i], "map", "elev_cells")) << lines[i];
+            EXPECT_GT(e.cells, 1000u);
+        }
         if (maps[i].name == "perturbed_truth") {
             EXPECT_GT(s.cellsScored, s.cellsSeen) << "cells outside the map";
         }
     }
     EXPECT_TRUE(anyBeyond && anyUnknown && anyBlocked) << "every branch exercised";
     // The tool end to end on one map: its CSV against score_map.py's figures.
-    const auto tool = evalMap("'" + seq + "' '" + (dir / "perturbed_truth.yaml").string() + "' -q --report '" + (dir / "r").string() + "'");
+    const auto tool = evalMap("'" + seq + "' '" + (dir / "perturbed_truth.yaml").string() + "' -q --elevation '" + layersPath +
+                              "' --report '" + (dir / "r").string() + "'");
     ASSERT_EQ(tool.status, 0) << tool.output;
     const std::string csv = gseg::test::readText((dir / "r_map_score.csv").string());
     const auto row = csv.find("\nmap,");
     ASSERT_NE(row, std::string::npos) << csv;
-    EXPECT_NEAR(std::strtod(csv.c_str() + row + 5, nullptr), jsonValue(lines[1], "map", "trav_P"), 0.01) << csv;
+    std::vector<double> values;  // the map's row after its name
+    std::istringstream fields(csv.substr(row + 5, csv.find('\n', row + 1) - row - 5));
+    for (std::string f; std::getline(fields, f, ',');) values.push_back(std::strtod(f.c_str(), nullptr));
+    ASSERT_EQ(values.size(), 18u) << csv;
+    const std::string& last = lines.back();
+    const char* keys[] = {"trav_P", "trav_R", "trav_F1", "obst_R", "unsafe", "unsafe1", "cells_scored", "cells_seen"};
+    for (int k = 0; k < 8; ++k) EXPECT_NEAR(values[std::size_t(k)], jsonValue(last, "map", keys[k]), 0.01) << keys[k] << "\n" << csv;
+    EXPECT_NEAR(values[15], jsonValue(last, "map", "elev_rmse"), 1e-4) << csv;
+    EXPECT_NEAR(values[16], jsonValue(last, "map", "elev_within_10cm"), 0.01) << csv;
+    EXPECT_EQ(values[17], jsonValue(last, "map", "elev_cells")) << csv;
 }
 
 INSTANTIATE_TEST_SUITE_P(Drives, SharedDrive, ::testing::Values("00", "05", "07"));

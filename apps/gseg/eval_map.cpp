@@ -6,6 +6,7 @@
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/output_checks.hpp>
 #include <gseg/io/ros_map.hpp>
+#include <gseg/map/layer_file.hpp>
 #include <gseg/map/map_score.hpp>
 #include <gseg/mrpt/picture.hpp>
 #include <gseg/progress.hpp>
@@ -99,6 +100,15 @@ std::vector<std::string> reportPaths(const std::string& prefix) { return {prefix
 
 int run(const EvalMapCli& cli) {
     const io::RosMap rosMap = io::readRosMap(cli.map);
+    map::LayerGrid layers;
+    if (!cli.elevation.empty()) {
+        layers = map::readLayersGeoTiff(cli.elevation);
+        try {
+            map::elevationLayer(layers);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(cli.elevation + ": " + e.what());
+        }
+    }
     Progress progress(tools::progressOut(), "gseg eval-map", "scans");
     const map::LabelledDrive drive = map::readLabelledDrive(cli.drive, [&](std::size_t done, std::size_t total) {
         progress.update(done, double(done) / double(total));
@@ -109,6 +119,13 @@ int run(const EvalMapCli& cli) {
     map::CellOutcomes outcomes;
     r.map = map::scoreMap(truth, rosMap, &outcomes);
     r.band = map::scoreHeightBand(truth);
+    if (!cli.elevation.empty()) {
+        try {
+            r.elevation = map::elevationError(layers, truth), r.hasElevation = true;
+        } catch (const std::exception& e) {
+            throw std::runtime_error(cli.elevation + ": " + e.what());
+        }
+    }
     tools::say("%s against %s: %zu scans, %zu labelled points (%zu read), %.2f m cells, clearance %.2f m\n",
                mrpt::displayName(cli.map).c_str(), cli.drive.c_str(), drive.frames, drive.points.size(), drive.pointsRead,
                rosMap.resolution, cli.clearance);
@@ -146,6 +163,10 @@ int runEvalMap(int argc, char** argv) {
     TCLAP::UnlabeledMultiArg<std::string> positional("inputs", "DRIVE MAP.yaml (positional form)", false, "DRIVE MAP.yaml", cmd);
     TCLAP::ValueArg<double> clearance("", "clearance", "[m] top of the obstacle band above a cell's ground (the robot's "
                                       "height; default 2)", false, 2.0, "M", cmd);
+    TCLAP::ValueArg<std::string> elevation("", "elevation", "also the elevation error: the layer 'elevation' of this "
+                                           "GeoTIFF (rawlog-octomap's PREFIX_layers.tif) against the median height of "
+                                           "the labelled ground per cell (cells with >= 3 ground points): RMSE [m] and "
+                                           "the share within 0.1 m", false, "", "LAYERS.tif", cmd);
     TCLAP::ValueArg<std::string> report("", "report", "write PREFIX_map_score.csv (the figures, and the cells per "
                                         "outcome) and PREFIX_map_cells.png (the scored cells, top view); the folder "
                                         "is made if missing", false, "", "PREFIX", cmd);
@@ -157,14 +178,14 @@ int runEvalMap(int argc, char** argv) {
     if (cli.map.empty() && !rest.empty()) cli.map = rest.front(), rest.erase(rest.begin());
     if (cli.drive.empty() || cli.map.empty() || !rest.empty())
         return line.usageError("give the drive and the map once each: gseg eval-map DRIVE MAP.yaml (or -i DRIVE --map MAP.yaml)");
-    cli.clearance = clearance.getValue(), cli.report = report.getValue(), cli.overwrite = line.overwrite();
+    cli.clearance = clearance.getValue(), cli.report = report.getValue(), cli.elevation = elevation.getValue(), cli.overwrite = line.overwrite();
     if (!(std::isfinite(cli.clearance) && cli.clearance > 0.3 && cli.clearance <= 100))
         return line.usageError("--clearance must be above 0.3 m (the obstacle band's bottom) and at most 100 m");
     try {
         std::vector<io::NamedPath> outputs;
         if (!cli.report.empty())
             for (const std::string& p : reportPaths(cli.report)) outputs.push_back({"--report", p});
-        io::checkOutputs({{"map", cli.map}, {"drive", cli.drive}}, outputs, {cli.overwrite, true});
+        io::checkOutputs({{"map", cli.map}, {"drive", cli.drive}, {"--elevation", cli.elevation}}, outputs, {cli.overwrite, true});
     } catch (const std::invalid_argument& e) {
         std::fprintf(stderr, "gseg eval-map: %s\n", e.what());
         return tools::kBadUsage;
