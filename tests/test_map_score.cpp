@@ -403,8 +403,12 @@ TEST(EvalMapTool, BadInputIsOneLineNamingTheFileAndTheReportIsKept) {
     EXPECT_NE(labels.output.find("000000.label: 1 labels for"), std::string::npos) << labels.output;
     EXPECT_EQ(gseg::test::readText(report + "_map_score.csv"), before);
     EXPECT_EQ(gseg::test::entriesContaining(c.dir.string(), ".tmp"), "");
-    // Usage errors.
+    // Usage errors; --help and --version.
     EXPECT_EQ(evalMap("'" + c.drive.string() + "'").status, 2);
+    const auto help = evalMap("--help");
+    EXPECT_EQ(help.status, 0);
+    EXPECT_NE(help.output.find("--elevation"), std::string::npos) << help.output;
+    EXPECT_EQ(evalMap("--version").status, 0);
     EXPECT_EQ(evalMap("'" + c.drive.string() + "' '" + c.map.string() + "' --clearance 0.2").status, 2);
 }
 

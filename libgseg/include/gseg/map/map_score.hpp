@@ -58,7 +58,8 @@ bool groundClass(std::uint32_t label);
 
 /// Reads a labelled KITTI drive folder (`velodyne/*.bin`, `labels/*.label`, `poses.txt`,
 /// `calib.txt` with `Tr`): each scan's points in the map frame, in frame order (file names
-/// sorted). `progress(done, total)` is called after each frame (may be empty). Throws
+/// sorted). `progress(done, total)` is called after each frame (may be empty). Memory: 32 bytes
+/// per labelled point (computeTruth() about 40 more while it runs): ten HDL-64 scans, 40 MB. Throws
 /// std::runtime_error naming the file: no velodyne/ folder or no scans in it, a scan whose name is
 /// not a frame number, a missing `Tr`, fewer poses than the frame numbers need, a missing label
 /// file or one whose count differs from its scan, a point whose x, y or z is not finite.
