@@ -115,6 +115,8 @@ int run(const EvalMapCli& cli) {
     });
     progress.finish(drive.frames);
     const map::DriveTruth truth = map::computeTruth(drive, map::gridOf(rosMap), cli.clearance);
+    if (truth.cells.empty())
+        throw std::runtime_error(cli.drive + ": no cell of the drive has a truth (no labelled ground or obstacle)");
     EvalMapResult r;
     map::CellOutcomes outcomes;
     r.map = map::scoreMap(truth, rosMap, &outcomes);
@@ -130,7 +132,6 @@ int run(const EvalMapCli& cli) {
                mrpt::displayName(cli.map).c_str(), cli.drive.c_str(), drive.frames, drive.points.size(), drive.pointsRead,
                rosMap.resolution, cli.clearance);
     tools::say("%s", tableText(r).c_str());
-    if (truth.cells.empty()) throw std::runtime_error(cli.drive + ": no cell of the drive has a truth (no labelled ground or obstacle)");
     if (!cli.report.empty()) {
         const std::string png = map::encodeMapScorePng(
             truth, outcomes, "gseg eval-map: " + mrpt::displayName(cli.map) + " against " + fs::path(cli.drive).filename().string());
