@@ -17,6 +17,7 @@
 #include <map>
 #include <random>
 #include <sstream>
+#include <thread>
 
 namespace {
 
@@ -98,6 +99,19 @@ TEST(LayerFile, SameGridGivesTheSameBytes) {
     EXPECT_EQ(a, gseg::map::encodeLayersGeoTiff(syntheticGrid(31, 17, 0.2, -3.1, -1.7, 3)));
     EXPECT_NE(a, gseg::map::encodeLayersGeoTiff(syntheticGrid(31, 17, 0.2, -3.1, -1.7, 4)));  // the bytes carry the values
     EXPECT_EQ(a.compare(0, 4, std::string("II*\0", 4)), 0);
+}
+
+TEST(LayerFile, ThreadsEncodingAtOnceGetTheSameBytes) {
+    const LayerGrid g = syntheticGrid(57, 23, 0.2, -1.3, -9.9, 21);
+    const std::string want = gseg::map::encodeLayersGeoTiff(g);
+    std::vector<std::string> got(4);
+    std::vector<std::thread> threads;
+    for (std::size_t t = 0; t < got.size(); ++t)
+        threads.emplace_back([&, t] {
+            for (int i = 0; i < 5; ++i) got[t] = gseg::map::encodeLayersGeoTiff(g);
+        });
+    for (auto& t : threads) t.join();
+    for (const auto& bytes : got) EXPECT_EQ(bytes, want);
 }
 
 TEST(LayerFile, FirstRowIsTheLargestYAndCellsSitWhereTheGridSays) {

@@ -102,7 +102,7 @@ GDALDatasetH memoryDataset(const LayerGrid& grid) {
     GDALSetGeoTransform(ds, gt);
     GDALSetProjection(ds, kMapFrameWkt);
     GDALSetMetadataItem(ds, "GSEG_CONTENT", "gseg 2.5D map layers: one float32 band per layer, NaN = unknown", nullptr);
-    GDALSetMetadataItem(ds, "GSEG_FRAME", "map frame (the rawlog's world frame): x east, y north in metres; north-up rows", nullptr);
+    GDALSetMetadataItem(ds, "GSEG_FRAME", "map frame (the rawlog's world frame) in metres: columns along +x, rows along -y (first row: largest y)", nullptr);
     for (int b = 0; b < n; ++b) {
         const LayerGrid::Layer& layer = grid.layers()[std::size_t(b)];
         GDALRasterBandH band = GDALGetRasterBand(ds, b + 1);
@@ -128,8 +128,8 @@ GDALDatasetH memoryDataset(const LayerGrid& grid) {
 
 std::string encodeLayersGeoTiff(const LayerGrid& grid) {
     validate(grid);
+    GdalErrors errors;  // also around the registration: a plugin that fails to load must not print
     registerDrivers();
-    GdalErrors errors;
     Dataset source(memoryDataset(grid));
     if (!source.h || errors.failed()) throw std::runtime_error("layer GeoTIFF: " + errors.text("cannot build the raster in memory"));
     const std::string name = memoryFileName();
@@ -166,8 +166,8 @@ LayerGrid readLayersGeoTiff(const std::string& path) {
                                                   (std::memcmp(magic, "MM", 2) == 0 && magic[2] == 0 && (magic[3] == 42 || magic[3] == 43)));
         if (!tiff) refuse(path, "not a GeoTIFF (no TIFF header)");
     }
-    registerDrivers();
     GdalErrors errors;
+    registerDrivers();
     const char* const drivers[] = {"GTiff", nullptr};
     Dataset ds(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, drivers, nullptr, nullptr));
     if (!ds.h) refuse(path, "not a readable GeoTIFF (" + errors.text("GDAL cannot open it") + ")");

@@ -1,20 +1,70 @@
 #include "map_scene.hpp"
 
 #include <gseg/mrpt/gzip_stream.hpp>
+#include <gseg/map/layer_grid.hpp>
 #include <gseg/map/traversability_map.hpp>
 
 #include <mrpt/opengl/COctoMapVoxels.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfLines.h>
+#include <mrpt/opengl/CSetOfTriangles.h>
 #include <mrpt/opengl/stock_objects.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
 
 namespace gseg::map::detail {
+namespace {
+
+/// [m/m] the elevation's slope along one axis at a cell: central difference over the known
+/// neighbours, one-sided at an edge or beside an unknown cell, 0 without a known neighbour.
+float gradient(float before, float here, float after, float cell) {
+    const bool b = std::isfinite(before), a = std::isfinite(after);
+    if (b && a) return (after - before) / (2 * cell);
+    if (a) return (after - here) / cell;
+    if (b) return (here - before) / cell;
+    return 0;
+}
+
+}  // namespace
+
+std::shared_ptr<::mrpt::opengl::CSetOfTriangles> elevationMesh(const LayerGrid& layers) {
+    const LayerGrid::Layer& elevation = layers.layer("elevation");
+    const LayerGrid::Layer* cls = layers.find("class");
+    if (elevation.values.size() != layers.cells() || (cls && cls->values.size() != layers.cells()))
+        throw std::invalid_argument("elevation mesh: a layer without one value per cell");
+    const float nan = std::numeric_limits<float>::quiet_NaN(), res = float(layers.resolution());
+    auto z = [&](int cx, int cy) { return layers.inside(cx, cy) ? elevation.values[layers.index(cx, cy)] : nan; };
+    auto mesh = ::mrpt::opengl::CSetOfTriangles::Create();
+    mesh->setName("gseg 2.5D map: a tile per cell at its ground elevation; green traversable, red not traversable, grey no class; "
+                  "cells without elevation left out");
+    std::size_t known = 0;
+    for (float v : elevation.values) known += std::isfinite(v) ? 1 : 0;
+    mesh->reserve(2 * known);
+    for (int cy = 0; cy < layers.height(); ++cy)
+        for (int cx = 0; cx < layers.width(); ++cx) {
+            const float h = z(cx, cy);
+            if (!std::isfinite(h)) continue;
+            const float c = cls ? cls->values[layers.index(cx, cy)] : nan;
+            const Rgb rgb = colourOf(c == 1.0f ? CellClass::Traversable : c == 2.0f ? CellClass::Obstacle : CellClass::Unknown);
+            const ::mrpt::math::TVector3Df n(-gradient(z(cx - 1, cy), h, z(cx + 1, cy), res), -gradient(z(cx, cy - 1), h, z(cx, cy + 1), res), 1.0f);
+            const float x0 = float(layers.originX() + cx * layers.resolution()), y0 = float(layers.originY() + cy * layers.resolution());
+            const ::mrpt::math::TPoint3Df p00(x0, y0, h), p10(x0 + res, y0, h), p11(x0 + res, y0 + res, h), p01(x0, y0 + res, h);
+            for (const auto& tri : {::mrpt::opengl::TTriangle(p00, p10, p11, n, n, n), ::mrpt::opengl::TTriangle(p00, p11, p01, n, n, n)}) {
+                ::mrpt::opengl::TTriangle t = tri;
+                t.setColor(::mrpt::img::TColor(rgb.r, rgb.g, rgb.b));
+                mesh->insertTriangle(t);
+            }
+        }
+    return mesh;
+}
 
 void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
-                   const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path) {
+                   const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path,
+                   const LayerGrid* layers) {
     namespace gl = ::mrpt::opengl;
     auto voxels = gl::COctoMapVoxels::Create();
     voxels->setName("gseg traversability map: ground voxels green, obstacle voxels red");
@@ -60,6 +110,7 @@ void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
     axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
     if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
     scene.insert(axes);
+    if (layers && layers->find("elevation")) scene.insert(elevationMesh(*layers));
     gseg::mrpt::writeGzipObject(file, scene);
 }
 

@@ -11,7 +11,8 @@
 /// largest y (cells of row cy of the grid are image row height - 1 - cy), its first column the
 /// smallest x, so pixel (col, row) covers x in [originX + col * res, ...) and
 /// y in [originY + (height - 1 - row) * res, ...). The CRS is a local engineering one
-/// (`LOCAL_CS["gseg map frame", UNIT["metre", 1]]`): the map frame is the rawlog's world frame,
+/// (`LOCAL_CS["gseg map frame", UNIT["metre", 1], AXIS["x", EAST], AXIS["y", NORTH]]`: map x
+/// drawn to the right, y up, as GIS tools draw a north-up raster): the map frame is the rawlog's world frame,
 /// tied to no place on Earth, and a local CRS says so and that its unit is the metre, where a file
 /// without a CRS leaves viewers to guess (some assume degrees). Deflate-compressed (floating-point
 /// predictor), band-interleaved; the same grid always gives the same bytes.
