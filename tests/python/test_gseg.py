@@ -2,7 +2,9 @@
 the same counts as `gseg eval`, points read in place, and every bad input an exception."""
 import concurrent.futures
 import csv
+import os
 import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -186,3 +188,19 @@ def test_every_public_function_explains_itself():
         assert f.__doc__ and len(f.__doc__) > 60, f
     assert "[m]" in gseg.segment.__doc__ and "float32" in gseg.GroundSegmenter.segment.__doc__
     assert gseg.__version__.count(".") == 2
+
+
+def test_the_readme_example_runs_and_prints_what_the_readme_says(tmp_path):
+    if not (SHARED / "data/semantickitti/sequences/00/labels/000000.label").exists():
+        pytest.skip("the shared data is not beside this checkout")
+    readme = (SRC / "README.md").read_text()
+    section = readme[readme.index("## From Python"):]
+    code = section[section.index("```python\n") + len("```python\n"):section.index("```\n", section.index("```python"))]
+    claimed = section[section.index("It prints `") + len("It prints `"):]
+    claimed = claimed[:claimed.index("`")]
+    code = code.replace('"../shared/', f'"{SHARED}/').replace('"config/', f'"{SRC}/config/')
+    code = code.replace('"000000.ply"', f'"{tmp_path}/000000.ply"')
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env=dict(os.environ)).stdout
+    assert out.strip() == claimed
+    assert (tmp_path / "000000.ply").exists()
