@@ -4,9 +4,12 @@
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/output_checks.hpp>
 #include <gseg/io/ply.hpp>
+#include <gseg/map/map_builder.hpp>
+#include <gseg/map/scan_stream.hpp>
 #include <gseg/metrics.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
+#include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/version.hpp>
@@ -14,6 +17,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/poses/CPose3D.h>
 
 #include <cmath>
 #include <memory>
@@ -346,6 +352,154 @@ void checkNewOutput(const std::string& path, bool overwrite) {
     }
 }
 
+// --- maps -----------------------------------------------------------------------------------------
+
+/// A 4 x 4 rigid transform (numpy) as a CPose3D; ValueError unless finite with a rotation block.
+::mrpt::poses::CPose3D poseOf(const py::handle& obj, const char* name) {
+    py::array_t<double, py::array::c_style | py::array::forcecast> a;
+    try {
+        a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
+    } catch (...) {
+    }
+    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) throw py::value_error(std::string(name) + " must be a 4 x 4 matrix");
+    ::mrpt::math::CMatrixDouble44 m;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) {
+            m(r, c) = a.at(r, c);
+            if (!std::isfinite(m(r, c))) throw py::value_error(std::string(name) + " holds a NaN or an infinity");
+        }
+    Eigen::Matrix3d rot;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) rot(r, c) = m(r, c);
+    if (m(3, 0) != 0 || m(3, 1) != 0 || m(3, 2) != 0 || m(3, 3) != 1 || !(rot.transpose() * rot).isIdentity(1e-3) ||
+        rot.determinant() < 0)
+        throw py::value_error(std::string(name) + " is not a rigid transform (rotation and translation, last row 0 0 0 1)");
+    return ::mrpt::poses::CPose3D(m);
+}
+
+py::array_t<double> matrixOf(const ::mrpt::poses::CPose3D& p) {
+    py::array_t<double> out({4, 4});
+    const auto m = p.getHomogeneousMatrixVal<::mrpt::math::CMatrixDouble44>();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) out.mutable_at(r, c) = m(r, c);
+    return out;
+}
+
+/// The scans of a rawlog with their poses, as MapBuilder.insert() takes them (an iterator).
+class PyRawlogScans {
+public:
+    PyRawlogScans(const std::string& rawlog, const std::string& poses, const std::string& calib) {
+        gseg::map::PoseConfig c;
+        c.input = rawlog;
+        c.poses = poses;
+        c.calib = calib;
+        try {
+            stream_ = std::make_unique<gseg::map::ScanStream>(c);
+        } catch (const std::exception& e) {
+            throw py::value_error(gseg::mrpt::errorReason(e));
+        }
+    }
+    py::tuple next() {
+        gseg::map::ScanJob job;
+        std::vector<float> xyzi;
+        ::mrpt::poses::CPose3D sensorPose;
+        {
+            py::gil_scoped_release release;
+            try {
+                for (;;) {
+                    if (!stream_->next(job)) break;
+                    if (!job.raw) continue;  // a rawlog-gseg pair without its raw scan
+                    job.raw->getSensorPose(sensorPose);
+                    xyzi = gseg::mrpt::sensorFramePoints(*job.raw);
+                    break;
+                }
+            } catch (const std::exception& e) {
+                py::gil_scoped_acquire acquire;
+                throw py::value_error(gseg::mrpt::errorReason(e));
+            }
+        }
+        if (!job.raw) throw py::stop_iteration();
+        return py::make_tuple(rowsToNumpy(std::move(xyzi), 4), matrixOf(job.robotPose), matrixOf(sensorPose), job.describe());
+    }
+
+private:
+    std::unique_ptr<gseg::map::ScanStream> stream_;
+};
+
+py::dict statsDict(const gseg::map::MapStats& s) {
+    py::dict d;
+    d["scans"] = s.scans;
+    d["ground_points"] = s.groundPoints;
+    d["obstacle_points"] = s.obstaclePoints;
+    d["points_skipped"] = s.pointsSkipped;
+    d["rays"] = s.rays;
+    d["ground_voxels"] = s.groundVoxels;
+    d["obstacle_voxels"] = s.obstacleVoxels;
+    d["free_voxels"] = s.freeVoxels;
+    d["cells_traversable"] = s.cellsTraversable;
+    d["cells_obstacle"] = s.cellsObstacle;
+    d["path_length"] = s.pathLength;
+    return d;
+}
+
+/// The map builder of rawlog-octomap, fed scan by scan.
+class PyMapBuilder {
+public:
+    explicit PyMapBuilder(const PyParams& p) : builder_(p.config, p.config.traversability) {}
+
+    bool insert(const py::handle& points, const py::handle& pose, const py::handle& sensorPose) {
+        Points p = viewPoints(points);
+        const ::mrpt::poses::CPose3D robot = poseOf(pose, "pose");
+        const ::mrpt::poses::CPose3D mount = sensorPose.is_none() ? ::mrpt::poses::CPose3D() : poseOf(sensorPose, "sensor_pose");
+        // x, y, z, intensity as the observation holds them (intensity 0 for N x 3 input).
+        std::vector<float> xyzi(4 * p.view.size(), 0.f);
+        py::array a = py::reinterpret_borrow<py::array>(points);
+        const bool withIntensity = a.shape(1) == 4;
+        py::array_t<float, py::array::forcecast> fa(a);
+        const auto f = fa.unchecked<2>();
+        for (py::ssize_t i = 0; i < f.shape(0); ++i)
+            for (py::ssize_t c = 0; c < (withIntensity ? 4 : 3); ++c) xyzi[std::size_t(4 * i + c)] = f(i, c);
+        const auto obs = gseg::mrpt::pointCloudObservation(xyzi.data(), p.view.size(), mount, "LIDAR",
+                                                           ::mrpt::Clock::fromDouble(double(scans_)));
+        ++scans_;
+        py::gil_scoped_release release;
+        try {
+            return builder_.insert(*obs, robot);
+        } catch (const std::exception& e) {
+            py::gil_scoped_acquire acquire;
+            throw py::value_error(gseg::mrpt::errorReason(e));
+        }
+    }
+
+    std::vector<std::string> write(const std::string& prefix, bool overwrite) {
+        if (builder_.map().empty()) throw py::value_error("no scan was inserted: nothing to write");
+        std::vector<gseg::io::NamedPath> outputs;
+        for (const auto& path : gseg::map::TraversabilityMap::outputPaths(prefix)) outputs.push_back({"prefix", path});
+        try {
+            gseg::io::checkOutputs({}, outputs, gseg::io::OutputRules{overwrite, false});
+        } catch (const std::invalid_argument& e) {
+            std::string m = e.what();
+            const auto at = m.find("-w");
+            if (at != std::string::npos) m = m.substr(0, at) + "overwrite=True" + m.substr(at + 2);
+            throw py::value_error(m);
+        }
+        py::gil_scoped_release release;
+        try {
+            return builder_.map().write(prefix);
+        } catch (const std::exception& e) {
+            py::gil_scoped_acquire acquire;
+            throw py::value_error(gseg::mrpt::errorReason(e));
+        }
+    }
+
+    py::dict stats() const { return statsDict(builder_.map().stats()); }
+    std::vector<std::string> skipped() const { return builder_.tally().skipped; }
+
+private:
+    gseg::map::MapBuilder builder_;
+    std::size_t scans_ = 0;
+};
+
 }  // namespace
 
 PYBIND11_MODULE(_gseg, m) {
@@ -426,6 +580,39 @@ check_height: with a fixed distToGround, compare it with this scan's own estimat
 Returns a Result. Raises ValueError on an empty array, a wrong shape or no finite point, TypeError
 on a non-numeric dtype. Points with NaN/inf coordinates are labelled non-ground.)doc")
         .def_property_readonly("params", &PySegmenter::params);
+
+    py::class_<PyRawlogScans>(m, "RawlogScans", R"doc(
+The scans of an MRPT rawlog with their poses, in order, as rawlog-octomap reads them: iterate to
+get (points, pose, sensor_pose, description) per scan: points float32 (N, 4) x, y, z, intensity in
+the sensor frame; pose the 4 x 4 vehicle pose in the world; sensor_pose the sensor's mounting on
+the vehicle (4 x 4). Poses come from the rawlog (kitti2rawlog's CObservationRobotPose, odometry,
+actions) or from poses= (a TUM or KITTI poses file; calib= the KITTI calib.txt).)doc")
+        .def(py::init<const std::string&, const std::string&, const std::string&>(), py::arg("rawlog"),
+             py::arg("poses") = "", py::arg("calib") = "")
+        .def("__iter__", [](PyRawlogScans& s) -> PyRawlogScans& { return s; })
+        .def("__next__", &PyRawlogScans::next);
+
+    py::class_<PyMapBuilder>(m, "MapBuilder", R"doc(
+Builds gseg's traversability maps from scans with poses, as rawlog-octomap does: each scan is
+segmented with the configuration (Params: segmentation keys, distToGround or "auto", and the
+`traversability` options: resolution [m], maxRange [m], clearance [m], ...), moved into the world
+frame and ray-cast into the maps, in the order given. write() puts the same files as
+`rawlog-octomap -o PREFIX` (byte for byte for the same scans and poses).)doc")
+        .def(py::init([](const py::object& params) {
+                 return std::make_unique<PyMapBuilder>(params.is_none() ? PyParams{} : params.cast<PyParams>());
+             }),
+             py::arg("params") = py::none())
+        .def("insert", &PyMapBuilder::insert, py::arg("points"), py::arg("pose"), py::arg("sensor_pose") = py::none(), R"doc(
+Adds one scan. points: (N, 3) or (N, 4) array (x, y, z[, intensity]) [m] in the sensor frame;
+pose: 4 x 4 rigid transform of the vehicle in the world frame [m]; sensor_pose: 4 x 4 mounting of
+the sensor on the vehicle (default: identity, the sensor is the vehicle frame). Returns False when
+the scan could not be used (its reason in skipped()). Raises ValueError on bad points or poses.)doc")
+        .def("write", &PyMapBuilder::write, py::arg("prefix"), py::arg("overwrite") = false, R"doc(
+Writes PREFIX_ground.bt, PREFIX_obstacles.bt, PREFIX_traversability.ot/.png/.ply/.3Dscene (and every
+other map file rawlog-octomap writes), all or none; returns their paths. Existing files raise
+ValueError unless overwrite=True.)doc")
+        .def("stats", &PyMapBuilder::stats, "Counters of the map: scans, points, rays, voxels, cells, path length [m].")
+        .def("skipped", &PyMapBuilder::skipped, "Why scans were not used, one line each.");
 
     m.def("_view_of", [](const py::handle& points) {
         Points p = viewPoints(points);

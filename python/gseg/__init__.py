@@ -13,10 +13,10 @@ Functions: segment, evaluate, read_kitti_bin, read_kitti_labels, read_ply, read_
 Units are metres and degrees; points are in the sensor frame (x forward, y left, z up).
 """
 
-from ._gseg import (GroundSegmenter, Params, Result, __version__, evaluate, read_kitti_bin, read_kitti_labels,
+from ._gseg import (GroundSegmenter, MapBuilder, Params, RawlogScans, Result, __version__, evaluate, read_kitti_bin, read_kitti_labels,
                     read_ply, read_scan, write_ply, _view_of)
 
-__all__ = ["GroundSegmenter", "Params", "Result", "evaluate", "read_kitti_bin", "read_kitti_labels", "read_ply",
+__all__ = ["GroundSegmenter", "MapBuilder", "Params", "RawlogScans", "Result", "evaluate", "read_kitti_bin", "read_kitti_labels", "read_ply",
            "read_scan", "segment", "write_ply", "__version__"]
 
 

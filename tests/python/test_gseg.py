@@ -204,3 +204,66 @@ def test_the_readme_example_runs_and_prints_what_the_readme_says(tmp_path):
                          env=dict(os.environ)).stdout
     assert out.strip() == claimed
     assert (tmp_path / "000000.ply").exists()
+
+
+def kitti_poses(seq):
+    """The velodyne poses of a KITTI sequence in the first scan's frame (Tr^-1 P_k Tr), 4 x 4 each."""
+    tr = next(np.array([float(v) for v in line.split()[1:]]) for line in open(seq / "calib.txt") if line.startswith("Tr:"))
+    tr = np.vstack([tr.reshape(3, 4), [0, 0, 0, 1]])
+    poses = [np.vstack([np.array(line.split(), float).reshape(3, 4), [0, 0, 0, 1]]) for line in open(seq / "poses.txt")]
+    return [np.linalg.inv(tr) @ p @ tr for p in poses]
+
+
+def test_the_map_builder_writes_the_files_of_rawlog_octomap_byte_for_byte(tmp_path):
+    seq = SHARED / "data/semantickitti/sequences/00"
+    if not seq.exists():
+        pytest.skip(f"{seq} is absent")
+    rawlog = tmp_path / "seq00.rawlog"
+    subprocess.run([str(BIN / "kitti2rawlog"), "-i", str(seq), "-o", str(rawlog), "-q"], check=True, capture_output=True)
+    subprocess.run([str(BIN / "rawlog-octomap"), "-i", str(rawlog), "-o", str(tmp_path / "tool"), "-c", KITTI_CONFIG, "-q"],
+                   check=True, capture_output=True)
+    builder = gseg.MapBuilder(gseg.Params(KITTI_CONFIG))
+    scans = list(gseg.RawlogScans(str(rawlog)))
+    assert len(scans) == 6
+    for points, pose, sensor_pose, _ in scans:
+        assert builder.insert(points, pose, sensor_pose)
+    written = builder.write(str(tmp_path / "py"))
+    tool_files = sorted(tmp_path.glob("tool_*"))
+    assert len(written) == len(tool_files) >= 6
+    for tool in tool_files:
+        assert (tmp_path / ("py_" + tool.name[len("tool_"):])).read_bytes() == tool.read_bytes(), tool.name
+    # The same drive from numpy alone (KITTI's poses, no rawlog): the same path, as many scans.
+    direct = gseg.MapBuilder(gseg.Params(KITTI_CONFIG))
+    for k, pose in enumerate(kitti_poses(seq)):
+        assert direct.insert(gseg.read_kitti_bin(str(seq / "velodyne" / f"{k:06d}.bin")), pose)
+    assert direct.stats()["scans"] == 6
+    assert direct.stats()["path_length"] == pytest.approx(builder.stats()["path_length"], abs=1e-6)
+    assert direct.stats()["ground_voxels"] == pytest.approx(builder.stats()["ground_voxels"], rel=0.01)
+
+
+def test_the_map_builder_refuses_bad_poses_empty_maps_and_existing_outputs(tmp_path):
+    builder = gseg.MapBuilder()
+    points = np.zeros((100, 3), np.float32)
+    points[:, 0] = np.linspace(1, 10, 100)
+    points[:, 2] = -1.7
+    with pytest.raises(ValueError, match="nothing to write"):
+        builder.write(str(tmp_path / "m"))
+    for bad, match in ((np.eye(3), "4 x 4"), (np.full((4, 4), np.nan), "NaN"), (np.diag([2.0, 1, 1, 1]), "rigid"),
+                       (np.diag([1.0, 1, -1, 1]), "rigid")):
+        with pytest.raises(ValueError, match=match):
+            builder.insert(points, bad)
+    with pytest.raises(ValueError, match="sensor_pose"):
+        builder.insert(points, np.eye(4), sensor_pose=np.zeros((4, 4)))
+    far = np.eye(4)
+    far[0, 3] = 1e9  # outside the map's extent
+    with pytest.raises(ValueError, match="extent"):
+        builder.insert(points, far)
+    assert builder.insert(points, np.eye(4))
+    paths = builder.write(str(tmp_path / "m"))
+    before = [open(p, "rb").read() for p in paths]
+    with pytest.raises(ValueError, match="overwrite=True"):
+        builder.write(str(tmp_path / "m"))
+    assert [open(p, "rb").read() for p in paths] == before
+    assert builder.write(str(tmp_path / "m"), overwrite=True) == paths
+    with pytest.raises(ValueError, match="absent.rawlog"):
+        list(gseg.RawlogScans(str(tmp_path / "absent.rawlog")))
