@@ -17,11 +17,13 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -388,11 +390,11 @@ py::array_t<double> matrixOf(const ::mrpt::poses::CPose3D& p) {
 /// The scans of a rawlog with their poses, as MapBuilder.insert() takes them (an iterator).
 class PyRawlogScans {
 public:
-    PyRawlogScans(const std::string& rawlog, const std::string& poses, const std::string& calib) {
+    PyRawlogScans(const std::filesystem::path& rawlog, const std::filesystem::path& poses, const std::filesystem::path& calib) {
         gseg::map::PoseConfig c;
-        c.input = rawlog;
-        c.poses = poses;
-        c.calib = calib;
+        c.input = rawlog.string();
+        c.poses = poses.string();
+        c.calib = calib.string();
         try {
             stream_ = std::make_unique<gseg::map::ScanStream>(c);
         } catch (const std::exception& e) {
@@ -471,7 +473,8 @@ public:
         }
     }
 
-    std::vector<std::string> write(const std::string& prefix, bool overwrite) {
+    std::vector<std::string> write(const std::filesystem::path& prefixPath, bool overwrite) {
+        const std::string prefix = prefixPath.string();
         if (builder_.map().empty()) throw py::value_error("no scan was inserted: nothing to write");
         std::vector<gseg::io::NamedPath> outputs;
         for (const auto& path : gseg::map::TraversabilityMap::outputPaths(prefix)) outputs.push_back({"prefix", path});
@@ -587,7 +590,7 @@ get (points, pose, sensor_pose, description) per scan: points float32 (N, 4) x, 
 the sensor frame; pose the 4 x 4 vehicle pose in the world; sensor_pose the sensor's mounting on
 the vehicle (4 x 4). Poses come from the rawlog (kitti2rawlog's CObservationRobotPose, odometry,
 actions) or from poses= (a TUM or KITTI poses file; calib= the KITTI calib.txt).)doc")
-        .def(py::init<const std::string&, const std::string&, const std::string&>(), py::arg("rawlog"),
+        .def(py::init<const std::filesystem::path&, const std::filesystem::path&, const std::filesystem::path&>(), py::arg("rawlog"),
              py::arg("poses") = "", py::arg("calib") = "")
         .def("__iter__", [](PyRawlogScans& s) -> PyRawlogScans& { return s; })
         .def("__next__", &PyRawlogScans::next);
@@ -651,33 +654,33 @@ other-ground, lane marking, terrain, and vegetation below -1.2975 m; unlabelled 
 predicted ground count as true positives), 'without_vegetation' (vegetation don't-care) and
 'by_range' (the same within 10, 20, ... 100 m horizontally).)doc");
 
-    m.def("read_kitti_bin", [](const std::string& path) {
+    m.def("read_kitti_bin", [](const std::filesystem::path& path) {
         try {
-            return rowsToNumpy(gseg::io::readKittiBin(path), 4);
+            return rowsToNumpy(gseg::io::readKittiBin(path.string()), 4);
         } catch (const std::runtime_error& e) {
             throw py::value_error(e.what());
         }
     }, py::arg("path"), "Reads a KITTI velodyne .bin: float32 array (N, 4) of x, y, z, intensity.");
-    m.def("read_kitti_labels", [](const std::string& path, py::object expected) {
+    m.def("read_kitti_labels", [](const std::filesystem::path& path, py::object expected) {
         try {
-            return toNumpy(gseg::io::readKittiLabels(path, expected.is_none() ? SIZE_MAX : expected.cast<std::size_t>()));
+            return toNumpy(gseg::io::readKittiLabels(path.string(), expected.is_none() ? SIZE_MAX : expected.cast<std::size_t>()));
         } catch (const std::runtime_error& e) {
             throw py::value_error(e.what());
         }
     }, py::arg("path"), py::arg("points") = py::none(),
           "Reads a SemanticKITTI .label file: uint32 array (raw labels; class = value & 0xFFFF). With points=N, "
           "a file that does not hold N labels raises ValueError.");
-    m.def("read_ply", [](const std::string& path) {
+    m.def("read_ply", [](const std::filesystem::path& path) {
         try {
-            return rowsToNumpy(gseg::io::readPly(path), 4);
+            return rowsToNumpy(gseg::io::readPly(path.string()), 4);
         } catch (const std::runtime_error& e) {
             throw py::value_error(e.what());
         }
     }, py::arg("path"), "Reads the vertices of a PLY file: float32 array (N, 4) of x, y, z, intensity (0 where absent).");
-    m.def("read_scan", [](const std::string& path, int index) {
+    m.def("read_scan", [](const std::filesystem::path& path, int index) {
         gseg::mrpt::Scan s;
         try {
-            s = gseg::mrpt::loadScan(path, index);
+            s = gseg::mrpt::loadScan(path.string(), index);
         } catch (const std::exception& e) {
             throw py::value_error(gseg::mrpt::errorReason(e));
         }
@@ -686,14 +689,14 @@ predicted ground count as true positives), 'without_vegetation' (vegetation don'
 Reads one scan as the tools do (`gseg segment SCAN`): a KITTI .bin, a PLY, or the index-th LiDAR
 observation of an MRPT rawlog (-1: the first; in the levelled sensor frame). Returns (points,
 description): points a float32 array (N, 4).)doc");
-    m.def("write_ply", [](const std::string& path, const py::handle& points, const py::handle& labels, bool overwrite) {
+    m.def("write_ply", [](const std::filesystem::path& path, const py::handle& points, const py::handle& labels, bool overwrite) {
         Points p = viewPoints(points);
         const auto l = vectorOf<std::uint8_t>(labels, "labels", p.view.size());
         for (auto v : l)
             if (v > 1) throw py::value_error("labels must be 0 (non-ground) or 1 (ground)");
-        checkNewOutput(path, overwrite);
+        checkNewOutput(path.string(), overwrite);
         try {
-            gseg::io::writeLabelledPly(path, p.view, l);
+            gseg::io::writeLabelledPly(path.string(), p.view, l);
         } catch (const std::exception& e) {
             throw py::value_error(e.what());
         }

@@ -267,3 +267,13 @@ def test_the_map_builder_refuses_bad_poses_empty_maps_and_existing_outputs(tmp_p
     assert builder.write(str(tmp_path / "m"), overwrite=True) == paths
     with pytest.raises(ValueError, match="absent.rawlog"):
         list(gseg.RawlogScans(str(tmp_path / "absent.rawlog")))
+
+
+def test_paths_may_be_pathlib_paths_and_file_objects_are_refused(kitti_scan, tmp_path):
+    assert gseg.read_kitti_bin(kitti_scan).shape[1] == 4  # a pathlib.Path
+    with open(kitti_scan, "rb") as f:
+        pass
+    with pytest.raises(TypeError):
+        gseg.read_kitti_bin(f)  # a (closed) file object is not a path
+    with pytest.raises(TypeError):
+        gseg.write_ply(None, np.zeros((3, 3), np.float32), np.zeros(3, np.uint8))
