@@ -27,13 +27,13 @@
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/mrpt/gzip_stream.hpp>
+#include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/version.hpp>
 
-#include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationPointCloud.h>
@@ -205,19 +205,7 @@ mrpt::poses::CPose3D toPose(const Eigen::Isometry3d& p) {
 
 mrpt::obs::CObservationPointCloud::Ptr makeScan(const std::string& binPath, mrpt::Clock::time_point t) {
     const std::vector<float> xyzi = gseg::io::readKittiBin(binPath);
-    auto pc = mrpt::maps::CPointsMapXYZI::Create();
-    const std::size_t n = xyzi.size() / 4;
-    pc->reserve(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        pc->insertPointFast(xyzi[4 * i], xyzi[4 * i + 1], xyzi[4 * i + 2]);
-        pc->setPointIntensity(i, xyzi[4 * i + 3]);
-    }
-    auto obs = mrpt::obs::CObservationPointCloud::Create();
-    obs->pointcloud = pc;
-    obs->sensorLabel = "VELODYNE";
-    obs->timestamp = t;
-    obs->sensorPose = mrpt::poses::CPose3D();
-    return obs;
+    return gseg::mrpt::pointCloudObservation(xyzi.data(), xyzi.size() / 4, mrpt::poses::CPose3D(), "VELODYNE", t);
 }
 
 mrpt::obs::CObservationOdometry::Ptr makeOdometry(const Eigen::Isometry3d& p, mrpt::Clock::time_point t) {

@@ -214,4 +214,21 @@ std::vector<float> levelledPoints(const ::mrpt::obs::CObservation& obs) {
     return pts;
 }
 
+std::shared_ptr<::mrpt::obs::CObservationPointCloud> pointCloudObservation(const float* xyzi, std::size_t points,
+                                                                          const ::mrpt::poses::CPose3D& sensorPose,
+                                                                          const std::string& label, ::mrpt::Clock::time_point t) {
+    auto pc = ::mrpt::maps::CPointsMapXYZI::Create();
+    pc->reserve(points);
+    for (std::size_t i = 0; i < points; ++i) {
+        pc->insertPointFast(xyzi[4 * i], xyzi[4 * i + 1], xyzi[4 * i + 2]);
+        pc->setPointIntensity(i, xyzi[4 * i + 3]);
+    }
+    auto obs = ::mrpt::obs::CObservationPointCloud::Create();
+    obs->pointcloud = pc;
+    obs->sensorLabel = label;
+    obs->timestamp = t;
+    obs->sensorPose = sensorPose;
+    return obs;
+}
+
 }  // namespace gseg::mrpt

@@ -7,11 +7,16 @@
 /// with a level vehicle z points up and the ground lies at z = -(sensor height). That is the frame
 /// GroundSegmenter expects (Params::distToGround = sensor height above the ground).
 
+#include <mrpt/core/Clock.h>
+
+#include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace mrpt::obs {
 class CObservation;
+class CObservationPointCloud;
 }
 namespace mrpt::poses {
 class CPose3D;
@@ -37,5 +42,12 @@ void levelPoints(std::vector<float>& xyzi, const ::mrpt::poses::CPose3D& sensorP
 
 /// sensorFramePoints() then levelPoints() with the observation's own sensorPose.
 std::vector<float> levelledPoints(const ::mrpt::obs::CObservation& obs);
+
+/// The other way: x, y, z, intensity floats (4 per point, sensor frame) as an MRPT point-cloud
+/// observation (CPointsMapXYZI, the floats unchanged) mounted at `sensorPose` on the vehicle, with
+/// `label` and the time stamp `t`. kitti2rawlog's scans and the Python map builder's are made here.
+std::shared_ptr<::mrpt::obs::CObservationPointCloud> pointCloudObservation(const float* xyzi, std::size_t points,
+                                                                          const ::mrpt::poses::CPose3D& sensorPose,
+                                                                          const std::string& label, ::mrpt::Clock::time_point t);
 
 }  // namespace gseg::mrpt

@@ -1,0 +1,279 @@
+"""The Python bindings against the command-line tools (issue #23): the same labels as `gseg segment`,
+the same counts as `gseg eval`, points read in place, and every bad input an exception."""
+import concurrent.futures
+import csv
+import os
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import gseg
+from conftest import BIN, SRC, SHARED, VLP16, labelled_scans
+
+KITTI_CONFIG = str(SRC / "config/kitti_hdl64.yaml")
+VLP16_CONFIG = str(SRC / "config/vlp16.yaml")
+
+
+def tool_labels(scan, config, tmp_path, n=0):
+    out = tmp_path / f"{n}.labels"
+    subprocess.run([str(BIN / "gseg"), "segment", str(scan), "-c", config, "--labels-out", str(out), "-q", "-w"],
+                   check=True, capture_output=True)
+    return out.read_bytes()
+
+
+def test_labels_are_byte_identical_to_gseg_segment_on_every_shared_labelled_scan(tmp_path):
+    scans = labelled_scans()
+    if not scans:
+        pytest.skip(f"no labelled scans under {SHARED / 'data'} (the shared data is not beside this checkout)")
+    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:  # the tool runs, two at a time
+        expected = list(pool.map(lambda k: tool_labels(scans[k][0], KITTI_CONFIG, tmp_path, k), range(len(scans))))
+    segmenter = gseg.GroundSegmenter(gseg.Params(KITTI_CONFIG))
+    for (bin_path, _), tool in zip(scans, expected):
+        labels = segmenter.segment(gseg.read_kitti_bin(str(bin_path))).labels
+        assert labels.tobytes() == tool, bin_path
+    assert len(scans) >= 20
+
+
+def test_labels_are_byte_identical_to_gseg_segment_on_the_vlp16_rawlog(tmp_path):
+    if not VLP16.exists():
+        pytest.skip(f"{VLP16} is absent (Debian package mrpt-common)")
+    points, description = gseg.read_scan(str(VLP16))
+    assert points.shape == (11305, 4) and "Velodyne" in description
+    result = gseg.segment(points, config=VLP16_CONFIG)
+    assert result.labels.tobytes() == tool_labels(VLP16, VLP16_CONFIG, tmp_path)
+    assert 0 < result.num_ground < len(points)
+
+
+def test_evaluate_gives_the_counts_of_gseg_eval(tmp_path):
+    root = SHARED / "data/semantickitti"
+    if not root.exists():
+        pytest.skip(f"{root} is absent")
+    subprocess.run([str(BIN / "gseg"), "eval", "-i", str(root), "-c", KITTI_CONFIG, "--report", str(tmp_path / "r"), "-q",
+                    "--threads", "1"], check=True, capture_output=True)
+    rows = list(csv.DictReader(open(tmp_path / "r_frames.csv")))
+    assert rows
+    segmenter = gseg.GroundSegmenter(gseg.Params(KITTI_CONFIG))
+    for row in rows:
+        seq = root / "sequences" / row["sequence"]
+        points = gseg.read_kitti_bin(str(seq / "velodyne" / (row["frame"] + ".bin")))
+        labels = gseg.read_kitti_labels(str(seq / "labels" / (row["frame"] + ".label")), points=len(points))
+        score = gseg.evaluate(points, labels, segmenter.segment(points).labels)
+        assert (score["tp"], score["fp"], score["fn"]) == (int(row["TP"]), int(row["FP"]), int(row["FN"])), row
+        assert score["precision"] == pytest.approx(float(row["precision"]), abs=1e-4)
+        assert score["without_vegetation"]["precision"] == pytest.approx(float(row["precision_noveg"]), abs=1e-4)
+        assert [r["range"] for r in score["by_range"]] == [10.0 * k for k in range(1, 11)]
+
+
+def test_a_float32_n_by_4_array_is_read_in_place_and_other_layouts_give_the_same_labels(kitti_scan):
+    points = gseg.read_kitti_bin(str(kitti_scan))
+    address, stride, copied = gseg._view_of(points)
+    assert (address, stride, copied) == (points.ctypes.data, 16, False)
+    wide = np.zeros((len(points), 5), np.float32)  # a column beside: viewed in place with a 20-byte stride
+    wide[:, :4] = points
+    assert gseg._view_of(wide[:, :4])[1:] == (20, False)
+    expected = gseg.segment(points).labels
+    for other in (wide[:, :4], points[:, :3].copy(), points.astype(np.float64), np.asfortranarray(points)):
+        assert np.array_equal(gseg.segment(other).labels, expected)
+    assert gseg._view_of(np.asfortranarray(points))[2] is True  # columns apart: one converted copy
+
+
+def test_the_result_describes_the_labels(kitti_scan):
+    points = gseg.read_kitti_bin(str(kitti_scan))
+    points[5] = np.nan
+    r = gseg.segment(points)
+    assert r.labels.dtype == np.uint8 and r.labels.shape == (len(points),)
+    assert r.num_ground + r.num_nonground == len(points) and r.num_nonfinite == 1 and r.labels[5] == 0
+    assert np.array_equal(r.ground_indices, np.flatnonzero(r.labels == 1))
+    assert np.array_equal(r.nonground_indices, np.flatnonzero(r.labels == 0))
+    assert np.array_equal(np.flatnonzero(r.reflections), r.reflection_indices)
+    assert not r.labels[r.reflection_indices].any()
+    assert r.height == dict(r.height, source="fixed", auto=False, dist_to_ground=1.723)
+    assert r.phase1["input_points"] == len(points) - 1 and r.phase2["ground_points"] == r.num_ground
+    assert set(r.phase1["ms"]) == {"grid", "classification", "plane_fit", "expansion", "refinement", "total"}
+    auto = gseg.segment(points, distToGround="auto")
+    assert auto.height["auto"] and auto.height["source"] == "estimated"
+    assert auto.height["dist_to_ground"] == pytest.approx(1.73, abs=0.15)
+
+
+def test_threads_segment_in_parallel_with_the_same_labels(kitti_scan):
+    points = gseg.read_kitti_bin(str(kitti_scan))
+    expected = gseg.segment(points).labels
+    results = [None] * 4
+
+    def work(k):
+        results[k] = gseg.GroundSegmenter().segment(points).labels
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert all(np.array_equal(r, expected) for r in results)
+
+
+def test_params_from_keywords_dicts_and_files_and_bad_keys_name_the_key(tmp_path):
+    assert gseg.Params().distToGround == 1.723
+    assert gseg.Params(distToGround=1.9, heightGate=0.12).heightGate == 0.12
+    assert gseg.Params({"distToGround": "auto"}).distToGround == "auto"
+    assert gseg.Params(sensorHeight={"maxRange": 20}).sensorHeight["maxRange"] == 20
+    from_file = gseg.Params(VLP16_CONFIG)
+    assert from_file.to_dict()["distToGround"] != 1.723
+    assert gseg.Params(VLP16_CONFIG, heightGate=0.2).heightGate == 0.2
+    assert gseg.Params(from_file) == from_file
+    (tmp_path / "c.yaml").write_text(from_file.to_yaml())
+    assert gseg.Params(str(tmp_path / "c.yaml")) == from_file
+    assert "heightGate" in gseg.Params.keys()
+    for bad, key in ((dict(bogus=1), "bogus"), (dict(heightGate=-1), "heightGate"), (dict(cellSizeX="wide"), "cellSizeX"),
+                     (dict(sensorHeight={"nope": 1}), "nope"), (dict(heightGate=[1]), "heightGate")):
+        with pytest.raises(ValueError, match=key):
+            gseg.Params(**bad)
+    with pytest.raises(ValueError, match="absent.yaml"):
+        gseg.Params(str(tmp_path / "absent.yaml"))
+    with pytest.raises(TypeError):
+        gseg.Params(42)
+
+
+@pytest.mark.parametrize("points, error, match", [
+    (np.zeros((0, 4), np.float32), ValueError, "empty"),
+    (np.zeros((10, 2), np.float32), ValueError, "shape"),
+    (np.zeros(12, np.float32), ValueError, "shape"),
+    (np.zeros((2, 3, 4), np.float32), ValueError, "shape"),
+    (np.full((10, 3), np.nan, np.float32), ValueError, "no finite point"),
+    (np.array([["a", "b", "c"]]), TypeError, "dtype"),
+    (np.zeros((10, 3), np.complex64), TypeError, "dtype"),
+    ([[0.0, 0.0, 0.0]], TypeError, "numpy array"),
+])
+def test_bad_points_raise_with_the_reason(points, error, match):
+    with pytest.raises(error, match=match):
+        gseg.segment(points)
+
+
+def test_bad_files_and_existing_outputs_raise_and_lose_nothing(tmp_path, kitti_scan):
+    with pytest.raises(ValueError, match="absent.bin"):
+        gseg.read_kitti_bin(str(tmp_path / "absent.bin"))
+    (tmp_path / "cut.bin").write_bytes(b"\0" * 18)
+    with pytest.raises(ValueError, match="cut.bin"):
+        gseg.read_kitti_bin(str(tmp_path / "cut.bin"))
+    points = gseg.read_kitti_bin(str(kitti_scan))
+    (tmp_path / "short.label").write_bytes(b"\0" * 8)
+    with pytest.raises(ValueError, match="short.label"):
+        gseg.read_kitti_labels(str(tmp_path / "short.label"), points=len(points))
+    with pytest.raises(ValueError, match="entries"):
+        gseg.evaluate(points, np.zeros(3, np.uint32), np.zeros(len(points), np.uint8))
+    with pytest.raises(ValueError):
+        gseg.evaluate(points, np.zeros(len(points), np.uint32), np.full(len(points), 2, np.uint8))
+    with pytest.raises(ValueError):
+        gseg.read_scan(str(tmp_path / "absent.rawlog"))
+    labels = gseg.segment(points).labels
+    ply = tmp_path / "scan.ply"
+    gseg.write_ply(str(ply), points, labels)
+    before = ply.read_bytes()
+    assert gseg.read_ply(str(ply)).shape == (len(points), 4)
+    with pytest.raises(ValueError, match="overwrite=True"):
+        gseg.write_ply(str(ply), points, 1 - labels)
+    assert ply.read_bytes() == before
+    with pytest.raises(ValueError, match="labels"):
+        gseg.write_ply(str(tmp_path / "other.ply"), points, labels[:10])
+    assert not (tmp_path / "other.ply").exists()
+    gseg.write_ply(str(ply), points, 1 - labels, overwrite=True)
+    assert ply.read_bytes() != before
+
+
+def test_every_public_function_explains_itself():
+    for f in (gseg.segment, gseg.evaluate, gseg.read_kitti_bin, gseg.read_kitti_labels, gseg.read_ply, gseg.read_scan,
+              gseg.write_ply, gseg.GroundSegmenter.segment, gseg.Params):
+        assert f.__doc__ and len(f.__doc__) > 60, f
+    assert "[m]" in gseg.segment.__doc__ and "float32" in gseg.GroundSegmenter.segment.__doc__
+    assert gseg.__version__.count(".") == 2
+
+
+def test_the_readme_example_runs_and_prints_what_the_readme_says(tmp_path):
+    if not (SHARED / "data/semantickitti/sequences/00/labels/000000.label").exists():
+        pytest.skip("the shared data is not beside this checkout")
+    readme = (SRC / "README.md").read_text()
+    section = readme[readme.index("## From Python"):]
+    code = section[section.index("```python\n") + len("```python\n"):section.index("```\n", section.index("```python"))]
+    claimed = section[section.index("It prints `") + len("It prints `"):]
+    claimed = claimed[:claimed.index("`")]
+    code = code.replace('"../shared/', f'"{SHARED}/').replace('"config/', f'"{SRC}/config/')
+    code = code.replace('"000000.ply"', f'"{tmp_path}/000000.ply"')
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env=dict(os.environ)).stdout
+    assert out.strip() == claimed
+    assert (tmp_path / "000000.ply").exists()
+
+
+def kitti_poses(seq):
+    """The velodyne poses of a KITTI sequence in the first scan's frame (Tr^-1 P_k Tr), 4 x 4 each."""
+    tr = next(np.array([float(v) for v in line.split()[1:]]) for line in open(seq / "calib.txt") if line.startswith("Tr:"))
+    tr = np.vstack([tr.reshape(3, 4), [0, 0, 0, 1]])
+    poses = [np.vstack([np.array(line.split(), float).reshape(3, 4), [0, 0, 0, 1]]) for line in open(seq / "poses.txt")]
+    return [np.linalg.inv(tr) @ p @ tr for p in poses]
+
+
+def test_the_map_builder_writes_the_files_of_rawlog_octomap_byte_for_byte(tmp_path):
+    seq = SHARED / "data/semantickitti/sequences/00"
+    if not seq.exists():
+        pytest.skip(f"{seq} is absent")
+    rawlog = tmp_path / "seq00.rawlog"
+    subprocess.run([str(BIN / "kitti2rawlog"), "-i", str(seq), "-o", str(rawlog), "-q"], check=True, capture_output=True)
+    subprocess.run([str(BIN / "rawlog-octomap"), "-i", str(rawlog), "-o", str(tmp_path / "tool"), "-c", KITTI_CONFIG, "-q"],
+                   check=True, capture_output=True)
+    builder = gseg.MapBuilder(gseg.Params(KITTI_CONFIG))
+    scans = list(gseg.RawlogScans(str(rawlog)))
+    assert len(scans) == 6
+    for points, pose, sensor_pose, _ in scans:
+        assert builder.insert(points, pose, sensor_pose)
+    written = builder.write(str(tmp_path / "py"))
+    tool_files = sorted(tmp_path.glob("tool_*"))
+    assert len(written) == len(tool_files) >= 6
+    for tool in tool_files:
+        assert (tmp_path / ("py_" + tool.name[len("tool_"):])).read_bytes() == tool.read_bytes(), tool.name
+    # The same drive from numpy alone (KITTI's poses, no rawlog): the same path, as many scans.
+    direct = gseg.MapBuilder(gseg.Params(KITTI_CONFIG))
+    for k, pose in enumerate(kitti_poses(seq)):
+        assert direct.insert(gseg.read_kitti_bin(str(seq / "velodyne" / f"{k:06d}.bin")), pose)
+    assert direct.stats()["scans"] == 6
+    assert direct.stats()["path_length"] == pytest.approx(builder.stats()["path_length"], abs=1e-6)
+    assert direct.stats()["ground_voxels"] == pytest.approx(builder.stats()["ground_voxels"], rel=0.01)
+
+
+def test_the_map_builder_refuses_bad_poses_empty_maps_and_existing_outputs(tmp_path):
+    builder = gseg.MapBuilder()
+    points = np.zeros((100, 3), np.float32)
+    points[:, 0] = np.linspace(1, 10, 100)
+    points[:, 2] = -1.7
+    with pytest.raises(ValueError, match="nothing to write"):
+        builder.write(str(tmp_path / "m"))
+    for bad, match in ((np.eye(3), "4 x 4"), (np.full((4, 4), np.nan), "NaN"), (np.diag([2.0, 1, 1, 1]), "rigid"),
+                       (np.diag([1.0, 1, -1, 1]), "rigid")):
+        with pytest.raises(ValueError, match=match):
+            builder.insert(points, bad)
+    with pytest.raises(ValueError, match="sensor_pose"):
+        builder.insert(points, np.eye(4), sensor_pose=np.zeros((4, 4)))
+    far = np.eye(4)
+    far[0, 3] = 1e9  # outside the map's extent
+    with pytest.raises(ValueError, match="extent"):
+        builder.insert(points, far)
+    assert builder.insert(points, np.eye(4))
+    paths = builder.write(str(tmp_path / "m"))
+    before = [open(p, "rb").read() for p in paths]
+    with pytest.raises(ValueError, match="overwrite=True"):
+        builder.write(str(tmp_path / "m"))
+    assert [open(p, "rb").read() for p in paths] == before
+    assert builder.write(str(tmp_path / "m"), overwrite=True) == paths
+    with pytest.raises(ValueError, match="absent.rawlog"):
+        list(gseg.RawlogScans(str(tmp_path / "absent.rawlog")))
+
+
+def test_paths_may_be_pathlib_paths_and_file_objects_are_refused(kitti_scan, tmp_path):
+    assert gseg.read_kitti_bin(kitti_scan).shape[1] == 4  # a pathlib.Path
+    with open(kitti_scan, "rb") as f:
+        pass
+    with pytest.raises(TypeError):
+        gseg.read_kitti_bin(f)  # a (closed) file object is not a path
+    with pytest.raises(TypeError):
+        gseg.write_ply(None, np.zeros((3, 3), np.float32), np.zeros(3, np.uint8))
