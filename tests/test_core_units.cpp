@@ -425,23 +425,25 @@ TEST(AutoHeight, NeverRefusesAScanFallsBackToThePreviousThenTheDefault) {
     gseg::AutoHeightSegmenter seg(p);
     const std::vector<float> few = {5, 0, -1, 6, 0, -1, 7, 0, -1};  // no ground level to be found
     auto r = seg.segment(gseg::PointCloudView(few.data(), 3));
-    EXPECT_EQ(r.labels.size(), 3u);
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Fallback);
-    EXPECT_EQ(seg.lastDecision().height, 1.5);
-    EXPECT_NE(seg.lastDecision().describe().find("no estimate"), std::string::npos) << seg.lastDecision().describe();
+    EXPECT_EQ(r.result.labels.size(), 3u);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(r.decision.height, 1.5);
+    EXPECT_NE(r.decision.describe().find("no estimate"), std::string::npos) << r.decision.describe();
 
     gseg::test::Scene s;
     s.addFlatGround(0.9);
     const auto scan = gseg::test::simulate(s, gseg::test::Lidar::vlp16());
     r = seg.segment(gseg::PointCloudView(scan.xyz.data(), scan.size()));
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Estimated);
-    EXPECT_NEAR(seg.lastDecision().height, 0.9, 0.05);
-    EXPECT_GT(r.numGround, scan.size() / 2);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Estimated);
+    EXPECT_NEAR(r.decision.height, 0.9, 0.05);
+    EXPECT_GT(r.result.numGround, scan.size() / 2);
+    const gseg::SensorHeightEstimate previous = r.decision.estimate;
 
+    r = seg.segment(gseg::PointCloudView(few.data(), 3), true, &previous);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::PreviousScan);
+    EXPECT_NEAR(r.decision.height, 0.9, 0.05);
+    // No state between scans: without a previous estimate, the fallback again.
     r = seg.segment(gseg::PointCloudView(few.data(), 3));
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::PreviousScan);
-    EXPECT_NEAR(seg.lastDecision().height, 0.9, 0.05);
-    seg.reset();
-    seg.segment(gseg::PointCloudView(few.data(), 3));
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(r.decision.height, 1.5);
 }
