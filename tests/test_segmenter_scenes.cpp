@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 using gseg::test::Lidar;
 using gseg::test::Scene;
@@ -238,7 +239,8 @@ AutoOutcome runAuto(const gseg::test::NamedScan& n) {
     gseg::Params p;
     p.centroidSearchRadius = n.searchRadius;
     gseg::AutoHeightSegmenter seg(p);
-    AutoOutcome a{{{}, seg.segment(gseg::PointCloudView(n.scan.xyz.data(), n.scan.size()))}, seg.lastDecision()};
+    gseg::AutoHeightResult r = seg.segment(gseg::PointCloudView(n.scan.xyz.data(), n.scan.size()));
+    AutoOutcome a{{{}, std::move(r.result)}, std::move(r.decision)};
     a.o.all = gseg::test::groundPR(n.scan, a.o.result.labels);
     return a;
 }
