@@ -1,4 +1,6 @@
-// Grid indexing, parameters, plane fit, classification and region growing in isolation.
+// Grid indexing, parameters, plane fit, classification, region growing and reflections below the
+// ground in isolation.
+#include <gseg/below_ground.hpp>
 #include <gseg/cell_classifier.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/params.hpp>
@@ -338,6 +340,38 @@ TEST(RegionGrowing, FewSeedsNearTheRobotReachBeyondTheBlindZone) {
     EXPECT_EQ(gseg::expandRegion(c, s, acceptAll), (std::vector<std::uint8_t>{2, 0, 0, 0, 0, 0, 0}));
 }
 
+// --- reflections below the ground ----------------------------------------------------------------
+
+TEST(BelowGround, FlagsNonGroundFarBelowTheGroundOfItsColumnOrOfColumnsUpToTwoAway) {
+    gseg::Params p;  // columns 1.5 m x 1.0 m, margin 0.5 m
+    std::vector<float> xyz;
+    std::vector<std::uint8_t> labels;
+    auto add = [&](float x, float y, float z, bool ground) {
+        xyz.insert(xyz.end(), {x, y, z});
+        labels.push_back(ground);
+    };
+    for (int ix = 0; ix < 4; ++ix)  // ground at z = -1.7 over x in [0, 6), y in [0, 4)
+        for (int iy = 0; iy < 4; ++iy) add(0.75f + 1.5f * float(ix), 0.5f + float(iy), -1.7f, true);
+    add(2.0f, 1.5f, -2.5f, false);    // 16: 0.8 m below its column's ground: flagged
+    add(2.0f, 1.5f, -2.0f, false);    // 17: 0.3 m below: kept
+    add(8.0f, 1.5f, -2.5f, false);    // 18: column (5, 1), two away from the ground of (3, 1): flagged
+    add(2.0f, 7.5f, -2.5f, false);    // 19: column (1, 7), four away: no reference, kept
+    add(2.0f, 1.5f, std::nanf(""), false);  // 20: not finite: never flagged
+    add(0.75f, 3.5f, -2.5f, true);    // 21: ground, the lowest of its column (0, 3), and never flagged
+    add(0.75f, 3.2f, -2.9f, false);   // 22: 0.4 m below the lowest ground of its column: kept
+    add(6.5f, 0.5f, -2.3f, false);    // 23: column (4, 0), one away, 0.6 m below: flagged
+    add(12.5f, 0.5f, -1.7f, true);    // 24: ground of column (8, 0)
+    const gseg::PointCloudView cloud(xyz.data(), labels.size());
+    gseg::BelowGroundScratch scratch;
+    const std::vector<std::uint32_t> want = {16, 18, 23};
+    EXPECT_EQ(gseg::flagBelowGround(cloud, labels, p, scratch), want);
+    p.belowGroundMargin = 0;  // 0: never
+    EXPECT_TRUE(gseg::flagBelowGround(cloud, labels, p, scratch).empty());
+    p.belowGroundMargin = 0.5;
+    std::fill(labels.begin(), labels.end(), std::uint8_t(0));  // no ground: nothing to compare with
+    EXPECT_TRUE(gseg::flagBelowGround(cloud, labels, p, scratch).empty());
+}
+
 // --- sensor height (distToGround: auto) ---------------------------------------------------------
 
 TEST(SensorHeight, EstimatedFromTheLowestDenseSurface) {
@@ -391,23 +425,25 @@ TEST(AutoHeight, NeverRefusesAScanFallsBackToThePreviousThenTheDefault) {
     gseg::AutoHeightSegmenter seg(p);
     const std::vector<float> few = {5, 0, -1, 6, 0, -1, 7, 0, -1};  // no ground level to be found
     auto r = seg.segment(gseg::PointCloudView(few.data(), 3));
-    EXPECT_EQ(r.labels.size(), 3u);
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Fallback);
-    EXPECT_EQ(seg.lastDecision().height, 1.5);
-    EXPECT_NE(seg.lastDecision().describe().find("no estimate"), std::string::npos) << seg.lastDecision().describe();
+    EXPECT_EQ(r.result.labels.size(), 3u);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(r.decision.height, 1.5);
+    EXPECT_NE(r.decision.describe().find("no estimate"), std::string::npos) << r.decision.describe();
 
     gseg::test::Scene s;
     s.addFlatGround(0.9);
     const auto scan = gseg::test::simulate(s, gseg::test::Lidar::vlp16());
     r = seg.segment(gseg::PointCloudView(scan.xyz.data(), scan.size()));
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Estimated);
-    EXPECT_NEAR(seg.lastDecision().height, 0.9, 0.05);
-    EXPECT_GT(r.numGround, scan.size() / 2);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Estimated);
+    EXPECT_NEAR(r.decision.height, 0.9, 0.05);
+    EXPECT_GT(r.result.numGround, scan.size() / 2);
+    const gseg::SensorHeightEstimate previous = r.decision.estimate;
 
+    r = seg.segment(gseg::PointCloudView(few.data(), 3), true, &previous);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::PreviousScan);
+    EXPECT_NEAR(r.decision.height, 0.9, 0.05);
+    // No state between scans: without a previous estimate, the fallback again.
     r = seg.segment(gseg::PointCloudView(few.data(), 3));
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::PreviousScan);
-    EXPECT_NEAR(seg.lastDecision().height, 0.9, 0.05);
-    seg.reset();
-    seg.segment(gseg::PointCloudView(few.data(), 3));
-    EXPECT_EQ(seg.lastDecision().source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Fallback);
+    EXPECT_EQ(r.decision.height, 1.5);
 }

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 using gseg::test::Lidar;
 using gseg::test::Scene;
@@ -240,7 +241,8 @@ AutoOutcome runAuto(const gseg::test::NamedScan& n) {
     gseg::Params p;
     p.centroidSearchRadius = n.searchRadius;
     gseg::AutoHeightSegmenter seg(p);
-    AutoOutcome a{{{}, seg.segment(gseg::PointCloudView(n.scan.xyz.data(), n.scan.size()))}, seg.lastDecision()};
+    gseg::AutoHeightResult r = seg.segment(gseg::PointCloudView(n.scan.xyz.data(), n.scan.size()));
+    AutoOutcome a{{{}, std::move(r.result)}, std::move(r.decision)};
     a.o.all = gseg::test::groundPR(n.scan, a.o.result.labels);
     return a;
 }

@@ -1,3 +1,4 @@
+#include <gseg/below_ground.hpp>
 #include <gseg/cell_classifier.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/ground_segmenter.hpp>
@@ -85,7 +86,7 @@ struct detail::Workspace {
     std::vector<std::pair<std::uint64_t, float>> lowestRejected;
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
-    std::vector<float> columnGround, columnScratch;  // flagBelowGround: lowest ground per column (dense)
+    BelowGroundScratch belowGround;
 };
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
@@ -97,11 +98,61 @@ GroundSegmenter& GroundSegmenter::operator=(GroundSegmenter&&) noexcept = defaul
 
 namespace {
 
+/// What differs between the two phases, built once per scan from Params.
+struct PhaseSettings {
+    int number = 1;            ///< 1 or 2: mixed into the per-cell RANSAC seeds
+    double cellSizeZ = 0;      ///< [m] cell height
+    double heightGate = 0;     ///< [m] expansion's height gate (tau; infinite: none)
+    bool recover = false;      ///< recover the points of non-ground cells on a ground neighbour's plane (ours, after the authors' implementation)
+    bool recordRejected = false;  ///< record per column the lowest point this phase rejected (for the next phase)
+    bool belowRejected = false;   ///< a cell above a point the previous phase rejected is floating
+
+    /// Phase I: tall cells over the whole cloud, no height gate.
+    static PhaseSettings first(const Params& p) {
+        PhaseSettings s;
+        s.number = 1;
+        s.cellSizeZ = p.cellSizeZPhase1;
+        s.heightGate = std::numeric_limits<double>::infinity();
+        s.recover = p.recoverNearGround;
+        s.recordRejected = true;
+        return s;
+    }
+    /// Phase II: thin cells over Phase I's ground, with the height gate.
+    static PhaseSettings second(const Params& p) {
+        PhaseSettings s;
+        s.number = 2;
+        s.cellSizeZ = p.cellSizeZPhase2;
+        s.heightGate = p.heightGate;
+        s.belowRejected = true;
+        return s;
+    }
+};
+
 /// One phase of GSeg3D over the points `input`; appends the indices it calls ground to `ground`.
+///
+/// Which steps are the paper's (Lodhi and Hertzberg 2025, ../shared/docs/gseg3d.md section 1), which
+/// the authors' implementation's (section 2) and which this project's own:
+/// - Step 1, grid [paper]. Ours: the vertical grid aligned on the expected ground (gridGroundLevel).
+/// - Step 2, local eigen classification [paper; constants and the variance rule of small cells:
+///   authors']. The PCA normal check of planar cells (checkPlaneNormal) is the authors'; upright
+///   strips among line cells (stripMinSpread) and the least tilted plane of a line cell are ours.
+/// - Step 3, surface gradient analysis (RANSAC plane fit) [paper]. Ours: the best plane within the
+///   slope limit must hold more than minGroundInlierRatio of the cell.
+/// - Algorithm 1 sparsity buckets and the ambiguous-cell rule [paper, 0.3 m: authors']. Ours: only
+///   a population of at least minPointsPerCell outliers can make a cell ambiguous.
+/// - Step 4, region expansion over a KD-tree of centroids [paper]. Ours: the seed is the candidates
+///   near the robot at ground level (seedHeightTolerance) instead of synthetic points, with the
+///   few-seeds disc (fewer than 4 seeds: also those just beyond the nearest candidate) and the
+///   tolerance widening with the slope; the height gate measured along the fitted planes.
+/// - Floating-cell rejection [paper]. Ours: Phase II also looks below a cell for points Phase I
+///   rejected (PhaseSettings::belowRejected).
+/// - Recovery of points on a ground neighbour's plane in Phase I [authors' implementation, not the
+///   paper] (recoverNearGround).
+/// Around the phases (GroundSegmenter::run), ours: non-finite points labelled non-ground without
+/// taking part, and reflections below the ground flagged (below_ground.hpp).
 class Phase {
 public:
-    Phase(const Params& p, int number, double cellSizeZ, double heightGate)
-        : p_(p), number_(number), sz_(cellSizeZ), gate_(heightGate) {}
+    Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings) {}
 
     void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, std::vector<std::uint32_t>& ground,
              detail::Workspace& ws, PhaseReport& report, bool keepCells) {
@@ -110,7 +161,7 @@ public:
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, sz_, originZ());
+        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, set_.cellSizeZ, originZ());
         report.ms.grid = msSince(t);
         classifyCells(cloud, ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -162,7 +213,7 @@ private:
                 s.outcome = CellOutcome::Steep;
                 continue;
             }
-            const PlaneFitResult fit = fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, number_),
+            const PlaneFitResult fit = fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
                                                 ws.mask, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
             if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
                 s.outcome = CellOutcome::Steep;
@@ -211,22 +262,22 @@ private:
             const CellOutcome o = ws.cells[b].outcome;
             if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
         }
-        if (number_ != 2) return false;
+        if (!set_.belowRejected) return false;
         const std::uint64_t key = columnKey(g[c]);
         const auto it = std::lower_bound(ws.lowestRejected.begin(), ws.lowestRejected.end(),
                                          std::pair<std::uint64_t, float>(key, -std::numeric_limits<float>::infinity()));
-        const double bottom = originZ() + double(g[c].iz) * sz_;
+        const double bottom = originZ() + double(g[c].iz) * set_.cellSizeZ;
         return it != ws.lowestRejected.end() && it->first == key && double(it->second) < bottom;
     }
 
-    double originZ() const { return -p_.distToGround - p_.gridGroundLevel * sz_; }
+    double originZ() const { return -p_.distToGround - p_.gridGroundLevel * set_.cellSizeZ; }
 
     void expand(detail::Workspace& ws) const {
         ExpansionSettings es;
         es.seed = Eigen::Vector3f(0.f, 0.f, float(-p_.distToGround));
         es.seedRadius = p_.robotRadius + p_.centroidSearchRadius;
         es.radius = p_.centroidSearchRadius;
-        es.heightGate = gate_;
+        es.heightGate = set_.heightGate;
         es.normals = &ws.normals;
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
@@ -259,12 +310,12 @@ private:
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
-        if (number_ == 1) ws.lowestRejected.clear();
+        if (set_.recordRejected) ws.lowestRejected.clear();
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
-            if (number_ == 1 && s.outcome != CellOutcome::Ground && p_.recoverNearGround) recover(ws, c);
-            if (number_ == 1 && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
+            if (set_.recover && s.outcome != CellOutcome::Ground) recover(ws, c);
+            if (set_.recordRejected && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
             if (s.outcome == CellOutcome::Ground || s.recovered) {
                 if (s.outcome == CellOutcome::Ground)
                     ++r.groundCells;
@@ -351,8 +402,7 @@ private:
     }
 
     const Params& p_;
-    int number_;
-    double sz_, gate_;
+    const PhaseSettings set_;
 };
 
 }  // namespace
@@ -384,73 +434,17 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
-    Phase(params, 1, params.cellSizeZPhase1, std::numeric_limits<double>::infinity())
-        .run(cloud, ws.input, ws.phase1Ground, ws, r.phase1, keepCellDiagnostics);
+    Phase(params, PhaseSettings::first(params)).run(cloud, ws.input, ws.phase1Ground, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
-    Phase(params, 2, params.cellSizeZPhase2, params.heightGate)
-        .run(cloud, ws.phase1Ground, ws.phase2Ground, ws, r.phase2, keepCellDiagnostics);
+    Phase(params, PhaseSettings::second(params)).run(cloud, ws.phase1Ground, ws.phase2Ground, ws, r.phase2, keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
     for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
     r.numGround = ws.phase2Ground.size();
     r.numNonGround = cloud.size() - r.numGround;
-    flagBelowGround(cloud, params, ws, r);
+    r.belowGround = flagBelowGround(cloud, r.labels, params, ws.belowGround);  // ours, not the paper's
     r.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return r;
-}
-
-// Non-ground points more than belowGroundMargin below the lowest ground of their column (or,
-// without ground there, of the columns around it, up to two away): mirror reflections and
-// multipath. Columns with no ground that close flag nothing. Uses Phase II's grid, which is still
-// in the workspace, and a dense map of its columns.
-void GroundSegmenter::flagBelowGround(const PointCloudView& cloud, const Params& params, detail::Workspace& ws,
-                                      Result& r) const {
-    if (!(params.belowGroundMargin > 0) || ws.phase2Ground.empty()) return;
-    constexpr float kNone = std::numeric_limits<float>::infinity();
-    constexpr int kPad = 2;
-    const auto& cells = ws.grid.cells();
-    std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
-    std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
-    for (std::size_t c = 0; c < cells.size(); ++c)
-        if (ws.cells[c].outcome == CellOutcome::Ground) {
-            lo[0] = std::min(lo[0], cells[c].ix), hi[0] = std::max(hi[0], cells[c].ix);
-            lo[1] = std::min(lo[1], cells[c].iy), hi[1] = std::max(hi[1], cells[c].iy);
-        }
-    const std::int64_t w = std::int64_t(hi[0]) - lo[0] + 1 + 2 * kPad, h = std::int64_t(hi[1]) - lo[1] + 1 + 2 * kPad;
-    if (w * h > std::int64_t(16) << 20) return;  // absurdly spread ground: no reference worth a map
-    auto& ground = ws.columnGround;
-    ground.assign(std::size_t(w * h), kNone);
-    auto at = [&](std::int64_t ix, std::int64_t iy) { return std::size_t((ix - lo[0] + kPad) * h + (iy - lo[1] + kPad)); };
-    for (std::size_t c = 0; c < cells.size(); ++c) {
-        if (ws.cells[c].outcome != CellOutcome::Ground) continue;
-        float& g = ground[at(cells[c].ix, cells[c].iy)];
-        for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) g = std::min(g, ws.pts[k].z());
-    }
-    float highest = -kNone;  // no point above the highest ground minus the margin can be flagged
-    for (float g : ground)
-        if (g != kNone) highest = std::max(highest, g);
-    // Columns without ground take the lowest ground one ring out, then two rings out.
-    auto& next = ws.columnScratch;
-    for (int ring = 0; ring < kPad; ++ring) {
-        next = ground;
-        for (std::int64_t x = 1; x + 1 < w; ++x)
-            for (std::int64_t y = 1; y + 1 < h; ++y) {
-                float& v = next[std::size_t(x * h + y)];
-                if (v != kNone) continue;
-                for (int dx = -1; dx <= 1; ++dx)
-                    for (int dy = -1; dy <= 1; ++dy) v = std::min(v, ground[std::size_t((x + dx) * h + y + dy)]);
-            }
-        ground.swap(next);
-    }
-    const double below = double(highest) - params.belowGroundMargin;
-    for (std::uint32_t i : ws.input) {
-        if (r.labels[i] || double(cloud.z(i)) >= below) continue;
-        const std::int64_t ix = cellCoord(cloud.x(i), params.cellSizeX), iy = cellCoord(cloud.y(i), params.cellSizeY);
-        if (ix < lo[0] - kPad || ix > hi[0] + kPad || iy < lo[1] - kPad || iy > hi[1] + kPad) continue;
-        const float g = ground[at(ix, iy)];
-        if (g != kNone && double(cloud.z(i)) < double(g) - params.belowGroundMargin) r.belowGround.push_back(i);
-    }
 }
 
 const char* toString(CellClass c) {

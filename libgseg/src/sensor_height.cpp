@@ -177,30 +177,31 @@ std::string HeightDecision::describe() const {
 AutoHeightSegmenter::AutoHeightSegmenter(const Params& params, const SensorHeightOptions& options)
     : segmenter_(params), options_(options), fallback_(params.distToGround) {}
 
-Result AutoHeightSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics) {
-    HeightDecision d;
+AutoHeightResult AutoHeightSegmenter::segment(const PointCloudView& cloud, bool keepCellDiagnostics,
+                                              const SensorHeightEstimate* previous) {
+    AutoHeightResult out;
+    HeightDecision& d = out.decision;
     d.estimate = estimateSensorHeight(cloud, options_);
     if (d.estimate.valid) {
         d.source = HeightDecision::Source::Estimated;
         d.height = d.estimate.height;
         d.tiltDegrees = d.estimate.tiltDegrees;
-        previous_ = d, havePrevious_ = true;
-    } else if (havePrevious_) {
+    } else if (previous && previous->valid) {
         d.source = HeightDecision::Source::PreviousScan;
-        d.height = previous_.height, d.tiltDegrees = previous_.tiltDegrees;
+        d.height = previous->height, d.tiltDegrees = previous->tiltDegrees;
     } else {
         d.source = HeightDecision::Source::Fallback;
         d.height = fallback_;
     }
-    last_ = d;
     // A tilt below a quarter of a degree is not worth a copy of the cloud.
-    const Eigen::Vector3d normal = d.source == HeightDecision::Source::PreviousScan ? previous_.estimate.normal : d.estimate.normal;
+    const Eigen::Vector3d normal = d.source == HeightDecision::Source::PreviousScan ? previous->normal : d.estimate.normal;
     if (d.tiltDegrees < options_.minLevelTiltDegrees || d.tiltDegrees > options_.maxLevelTiltDegrees) {
         // Level enough, or terrain rather than a mounting tilt: keep the frame and use the plane's
         // height straight under the sensor.
-        last_.height = d.height / std::max(0.1, normal.z());
-        last_.tiltDegrees = 0;
-        return segmenter_.segment(cloud, last_.height, keepCellDiagnostics);
+        d.height = d.height / std::max(0.1, normal.z());
+        d.tiltDegrees = 0;
+        out.result = segmenter_.segment(cloud, d.height, keepCellDiagnostics);
+        return out;
     }
     const Eigen::Matrix3f R = Eigen::Quaterniond::FromTwoVectors(normal, Eigen::Vector3d::UnitZ()).toRotationMatrix().cast<float>();
     levelled_.resize(3 * cloud.size());
@@ -209,7 +210,8 @@ Result AutoHeightSegmenter::segment(const PointCloudView& cloud, bool keepCellDi
         Eigen::Map<Eigen::Vector3f> out(&levelled_[3 * i]);
         out = R * Eigen::Vector3f(p[0], p[1], p[2]);
     }
-    return segmenter_.segment(PointCloudView(levelled_.data(), cloud.size()), d.height, keepCellDiagnostics);
+    out.result = segmenter_.segment(PointCloudView(levelled_.data(), cloud.size()), d.height, keepCellDiagnostics);
+    return out;
 }
 
 namespace {

@@ -2,11 +2,12 @@
 /// \file cell_classifier.hpp
 /// Local eigen classification of one cell (paper step 2) and the sparsity buckets of Algorithm 1.
 
-#include <gseg/ground_segmenter.hpp>
+#include <gseg/cell_types.hpp>
 #include <gseg/params.hpp>
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 
 namespace gseg {
 

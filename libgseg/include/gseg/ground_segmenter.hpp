@@ -2,6 +2,7 @@
 /// \file ground_segmenter.hpp
 /// GSeg3D ground segmentation of one LiDAR scan (the library's entry point).
 
+#include <gseg/cell_types.hpp>
 #include <gseg/params.hpp>
 #include <gseg/point_cloud.hpp>
 
@@ -17,27 +18,6 @@ struct Workspace;  // scratch memory of GroundSegmenter (implementation detail)
 
 /// Per-point label. Stored as one byte per point: 1 ground, 0 non-ground.
 enum class Label : std::uint8_t { NonGround = 0, Ground = 1 };
-
-/// What the local eigen classification made of a cell.
-enum class CellClass : std::uint8_t {
-    TooFewPoints,  ///< fewer than minPointsPerCell points: not classified
-    Small,         ///< minPointsPerCell..minPointsForPca-1 points: variance rule instead of PCA
-    Line,          ///< l1 dominant
-    Plane,         ///< l1 ~ l2 >> l3
-    NonPlanar      ///< l1 ~ l2 ~ l3 (clutter)
-};
-
-/// Why a cell ended up as it did. Points of every cell that is not Ground are non-ground,
-/// except the plane outliers of a Ground cell, which are non-ground too.
-enum class CellOutcome : std::uint8_t {
-    Ground,             ///< reached by the expansion and accepted: plane inliers are ground
-    TooFewPoints,       ///< not classified (fewer than minPointsPerCell points)
-    Steep,              ///< line or plane steeper than slopeThresholdDegrees, or small cell taller than wide
-    NonPlanar,          ///< non-planar (clutter)
-    NotReached,         ///< ground candidate that the region expansion never reached
-    RejectedAmbiguous,  ///< inliers and outliers equally sparse, and no neighbour or too high above the lowest one
-    RejectedFloating    ///< an occupied non-ground cell lies directly below
-};
 
 /// Diagnostics of one occupied cell of one phase.
 struct CellDiagnostics {
@@ -117,14 +97,9 @@ public:
 
 private:
     Result run(const PointCloudView& cloud, const Params& params, bool keepCellDiagnostics);
-    void flagBelowGround(const PointCloudView& cloud, const Params& params, detail::Workspace& ws, Result& r) const;
 
     Params params_;
     std::unique_ptr<detail::Workspace> ws_;
 };
-
-/// Name of a CellClass / CellOutcome, for reports.
-const char* toString(CellClass c);
-const char* toString(CellOutcome o);
 
 }  // namespace gseg

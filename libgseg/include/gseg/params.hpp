@@ -50,8 +50,8 @@ struct Params {
     // --- per-cell refinement ----------------------------------------------------------------------
     double sparsityLow = 0.001;              ///< [m^3/point] bounding-box volume per point below this: Low sparsity
     double sparsityMedium = 0.01;            ///< [m^3/point] below this (and not Low): Medium; otherwise High
-    double belowGroundMargin = 0.5;          ///< [m] non-ground points this far below the local ground are flagged as reflections (Result::belowGround; 0: never)
     double maxGroundHeightDeviation = 0.3;   ///< [m] ambiguous cell rejected if its ground is higher than this above the lowest neighbour (above a curb)
+    double belowGroundMargin = 0.5;          ///< [m] non-ground points this far below the local ground are flagged as reflections (Result::belowGround; 0: never)
 
     /// Throws std::invalid_argument naming the first invalid key and its value.
     void validate() const;

@@ -79,25 +79,30 @@ struct HeightDecision {
     std::string describe() const;   ///< one line for reports, e.g. "1.78 m (estimated, tilt 4.9 deg)"
 };
 
+/// One scan segmented by AutoHeightSegmenter: the labels and the height that made them.
+struct AutoHeightResult {
+    Result result;            ///< as from GroundSegmenter (labels in input order)
+    HeightDecision decision;  ///< the height used and why
+};
+
 /// Segments scans with `distToGround: auto`: the height (and a mounting tilt between
-/// minLevelTiltDegrees and maxLevelTiltDegrees, which is levelled out) is estimated per scan; where a scan gives no estimate, the previous scan's is
-/// used, and before any estimate the fallback height (Params::distToGround). Never refuses a scan.
-/// Labels come back in input order, as from GroundSegmenter. One object per stream and thread.
+/// minLevelTiltDegrees and maxLevelTiltDegrees, which is levelled out) is estimated per scan; where
+/// a scan gives no estimate, the caller's `previous` estimate (an earlier scan's) is used, and
+/// without one the fallback height (Params::distToGround). Never refuses a scan. Keeps no state
+/// between scans but scratch memory: the decision comes back with the labels. One object per thread.
 class AutoHeightSegmenter {
 public:
     explicit AutoHeightSegmenter(const Params& params, const SensorHeightOptions& options = SensorHeightOptions());
 
-    Result segment(const PointCloudView& cloud, bool keepCellDiagnostics = true);
-    const HeightDecision& lastDecision() const { return last_; }
-    /// Forgets the previous scan's estimate (the next scan without one gets the fallback height).
-    void reset() { havePrevious_ = false; }
+    /// `previous`: a valid estimate of an earlier scan (its decision.estimate), used if this scan
+    /// gives none (Source::PreviousScan); nullptr: the fallback height then (Source::Fallback).
+    AutoHeightResult segment(const PointCloudView& cloud, bool keepCellDiagnostics = true,
+                             const SensorHeightEstimate* previous = nullptr);
 
 private:
     GroundSegmenter segmenter_;
     SensorHeightOptions options_;
     double fallback_;
-    bool havePrevious_ = false;
-    HeightDecision previous_, last_;
     std::vector<float> levelled_;
 };
 

@@ -1,5 +1,7 @@
 #include <gseg/mrpt/segment_scan.hpp>
 
+#include <utility>
+
 namespace gseg::mrpt {
 
 ScanSegmenter::ScanSegmenter(const LoadedConfig& config)
@@ -11,9 +13,10 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
     out.distToGround = config_.params.distToGround;
     if (cloud.empty()) return out;  // nothing to label
     if (config_.distToGroundAuto) {
-        auto_.reset();  // the rule: this scan's own estimate or the fallback height, never an earlier scan's
-        out.result = auto_.segment(cloud, keepCellDiagnostics);
-        out.height = auto_.lastDecision();
+        // The rule: this scan's own estimate or the fallback height, never an earlier scan's.
+        AutoHeightResult a = auto_.segment(cloud, keepCellDiagnostics);
+        out.result = std::move(a.result);
+        out.height = std::move(a.decision);
         out.distToGround = out.height.height;
         out.distToGroundEstimated = out.height.source == HeightDecision::Source::Estimated;
     } else {
