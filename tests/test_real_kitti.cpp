@@ -222,10 +222,9 @@ TEST(RealKitti, AutoHeightOnTheThirtyDriveFramesNeverRefusesAndStaysPrecise) {
     std::string missing;
     std::size_t estimated = 0;
     const auto run = [&](const gseg::PointCloudView& c) {
-        seg.reset();
-        gseg::Result r = seg.segment(c, false);
-        estimated += seg.lastDecision().source == gseg::HeightDecision::Source::Estimated;
-        return r;
+        gseg::AutoHeightResult r = seg.segment(c, false);
+        estimated += r.decision.source == gseg::HeightDecision::Source::Estimated;
+        return std::move(r.result);
     };
     if (!scoreAll(run, got, missing, kDrives)) GTEST_SKIP() << missing;
     double sumP = 0, sumF = 0;
