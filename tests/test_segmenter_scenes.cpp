@@ -332,6 +332,11 @@ TEST(Scenes, ReflectionsBelowTheRoadAreNeverGroundAndAreFlagged) {
     EXPECT_EQ(flagged, o.result.belowGround.size());  // nothing else is flagged
     EXPECT_EQ(groundFlagged, 0u);
     EXPECT_TRUE(std::is_sorted(o.result.belowGround.begin(), o.result.belowGround.end()));
+    // The road above the reflections stays ground: nearly as much as on the same flat road without
+    // them (measured 90.2 % against 92.4 %). Issue #20: Phase II's floating check, if it saw every
+    // reflection below a column, would drop the road above them (to 62 %).
+    const Outcome flat = runScene(gseg::test::scene("flat"));
+    EXPECT_GE(o.all.recall, flat.all.recall - 0.03);
 }
 
 TEST(Scenes, AutoHeightLowMountedVlp16IsEstimatedNotRefused) {
