@@ -5,6 +5,7 @@
 #include <gseg/map/octomap_plugin.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/params.hpp>
+#include <support/paths.hpp>
 
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/maps/TMetricMapInitializer.h>
@@ -19,13 +20,6 @@
 namespace {
 
 const std::string kConfig = std::string(GSEG_SOURCE_DIR) + "/config/";
-
-std::string readFile(const std::string& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 
 /// The keys and values that the line "Differs from <what> in: ..." names (empty for "nothing").
 /// Fails the test if there is not exactly one such line.
@@ -47,7 +41,7 @@ std::map<std::string, std::string> claimedDifferences(const std::string& text, c
 /// Holds the YAML file `name` to its claim line.
 void expectYamlIsWhatItSays(const std::string& name) {
     SCOPED_TRACE(name);
-    const auto claims = claimedDifferences(readFile(kConfig + name), "the library defaults");
+    const auto claims = claimedDifferences(gseg::test::readText(kConfig + name), "the library defaults");
     const auto cfg = gseg::mrpt::loadConfig(kConfig + name);
     const gseg::Params defaults;
     for (const auto& key : gseg::Params::keys()) {
@@ -75,7 +69,7 @@ TEST(ConfigClaims, EachYamlFileDiffersFromTheDefaultsExactlyWhereItSays) {
 }
 
 TEST(ConfigClaims, TheObservations2mapIniIsRawlogOctomapWithKittiHdl64AsItSays) {
-    const std::string path = kConfig + "octomap_maps.ini", text = readFile(path);
+    const std::string path = kConfig + "octomap_maps.ini", text = gseg::test::readText(path);
     // Read as observations2map reads it: the [MappingApplication] maps.
     mrpt::config::CConfigFile ini(path);
     mrpt::maps::TSetOfMetricMapInitializers maps;

@@ -40,6 +40,9 @@ const std::string kVlp16 = "/usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog"
 const std::string kKfSlam = "/usr/share/mrpt/datasets/kf-slam_6D_demo.rawlog";
 const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "ground_filter";
 
+/// The built rawlog-gseg with `args` (shell words): exit status and stdout + stderr.
+gseg::test::CommandResult rawlogGseg(const std::string& args) { return gseg::test::runToolCommand("rawlog-gseg", args); }
+
 mrpt::obs::CObservation::Ptr firstLidar(const std::string& rawlog) {
     mrpt::obs::CObservation::Ptr found;
     gseg::mrpt::forEachRawlogEntry(rawlog, [&](std::size_t, const auto& obj) {
@@ -175,7 +178,7 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "vlp16.rawlog").string();
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" + out +
+    const auto r = rawlogGseg("-w -i '" + kVlp16 + "' -o '" + out +
                                           "' -c '" GSEG_SOURCE_DIR "/config/vlp16.yaml'");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("1 scans segmented, 11305 points"), std::string::npos) << r.output;
@@ -192,11 +195,11 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
     EXPECT_EQ(ground + obstacles, 11305u);
     EXPECT_EQ(ground, 2060u);  // the same as `gseg segment` with this config (distToGround: auto)
 
-    auto rep = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out +
+    auto rep = rawlogGseg("-i '" + kVlp16 + "' -o '" + out +
                                       "' --replace");
     EXPECT_EQ(rep.status, 2) << "the previous output is not replaced without -w: " << rep.output;
     EXPECT_EQ(entryClasses(out).size(), 3u);
-    rep = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + kVlp16 + "' -o '" + out + "' --replace -w");
+    rep = rawlogGseg("-i '" + kVlp16 + "' -o '" + out + "' --replace -w");
     ASSERT_EQ(rep.status, 0) << rep.output;
     EXPECT_EQ(entryClasses(out).size(), 2u);
 }
@@ -206,18 +209,18 @@ TEST(RawlogGseg, AFixedHeightThatTheScanContradictsIsSaid) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "vlp16_kitti.rawlog").string();
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" + out +
+    const auto r = rawlogGseg("-w -i '" + kVlp16 + "' -o '" + out +
                                           "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml'");
     ASSERT_EQ(r.status, 0) << "a warning, not an error: " << r.output;
     EXPECT_NE(r.output.find("entry 0 ('Velodyne1_SCAN'): the ground lies 2.27 m below the sensor"), std::string::npos)
         << r.output;
     EXPECT_NE(r.output.find("distToGround is 1.723 m"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("0.7 % ground"), std::string::npos) << "what the warning is about: " << r.output;
-    const auto right = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" +
+    const auto right = rawlogGseg("-w -i '" + kVlp16 + "' -o '" +
                                               out + "' -c '" GSEG_SOURCE_DIR "/config/vlp16.yaml'");
     ASSERT_EQ(right.status, 0) << right.output;
     EXPECT_EQ(right.output.find("the ground lies"), std::string::npos) << "auto: nothing to say: " << right.output;
-    const auto quiet = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -q -w -i '" + kVlp16 + "' -o '" +
+    const auto quiet = rawlogGseg("-q -w -i '" + kVlp16 + "' -o '" +
                                               out + "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml'");
     ASSERT_EQ(quiet.status, 0) << quiet.output;
     EXPECT_EQ(quiet.output, "") << "--quiet prints errors only";
@@ -227,7 +230,7 @@ TEST(RawlogGseg, SensoryFrameLayoutPassesThroughEntryForEntry) {
     if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "kf.rawlog").string();
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kKfSlam + "' -o '" + out + "'");
+    const auto r = rawlogGseg("-w -i '" + kKfSlam + "' -o '" + out + "'");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_EQ(entryClasses(out), entryClasses(kKfSlam));  // 600 sensory frames + 600 actions, none dropped
 }
@@ -244,12 +247,12 @@ TEST(RawlogGseg, CorruptInputNamesTheEntryAndLeavesNoOutput) {
     fs::resize_file(cut, size / 2 + 7);
     const std::string out = (kDir / "never.rawlog").string();
     fs::remove(out);
-    auto r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + cut + "' -o '" + out + "'");
+    auto r = rawlogGseg("-i '" + cut + "' -o '" + out + "'");
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_NE(r.output.find("entry "), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out));
     std::ofstream(kDir / "garbage.rawlog") << "not a rawlog, just text";
-    r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + (kDir / "garbage.rawlog").string() +
+    r = rawlogGseg("-i '" + (kDir / "garbage.rawlog").string() +
                                "' -o '" + out + "'");
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_NE(r.output.find("garbage.rawlog: not an MRPT rawlog"), std::string::npos) << r.output;
@@ -304,7 +307,7 @@ TEST(RawlogGseg, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
     if (!fs::exists("/usr/bin/rawlog-edit")) GTEST_SKIP() << "rawlog-edit absent (package mrpt-apps)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "plugin.rawlog").string();
-    ASSERT_EQ(gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -w -i '" + kVlp16 + "' -o '" + out + "'").status, 0);
+    ASSERT_EQ(rawlogGseg("-w -i '" + kVlp16 + "' -o '" + out + "'").status, 0);
     const auto r = gseg::test::runCommand(GSEG_PLUGIN_HOST_ENV "rawlog-edit -p '" GSEG_BINARY_DIR
                                           "/lib/libgseg_mrpt.so' --info -i '" + out + "'");
     EXPECT_EQ(r.status, 0) << r.output;
@@ -474,10 +477,6 @@ TEST(GroundFilterHostile, MalformedRotatingScansAreRejectedWithAReason) {
 // --- rawlog-gseg on hostile runs (issue #9 items 6 to 9, 11; #10 item 5) ----------------------------
 
 namespace {
-
-gseg::test::CommandResult rawlogGseg(const std::string& args) {
-    return gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' " + args);
-}
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
@@ -812,7 +811,7 @@ void expectBatchOutputs(const Batch& batch, const fs::path& out, const fs::path&
     fs::create_directories(single);
     for (const std::string& in : batch.good) {
         const std::string name = fs::path(in).filename().string();
-        const auto alone = gseg::test::runCommand("'" + gseg::test::tool("rawlog-gseg") + "' -i '" + in + "' -o '" +
+        const auto alone = rawlogGseg("-i '" + in + "' -o '" +
                                                   (single / name).string() + "'");
         ASSERT_EQ(alone.status, 0) << alone.output;
         const std::string one = gseg::test::readText((single / name).string());

@@ -9,11 +9,7 @@
 
 namespace {
 
-std::string runTool(const std::string& args, int& status) {
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' bench " + args);
-    status = r.status;
-    return r.output;
-}
+using gseg::test::runGseg;
 
 }  // namespace
 
@@ -29,14 +25,14 @@ TEST(BenchTool, ReportsTimesPerPhaseStepAndTheMachine) {
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(xyzi.data()),
                                                 std::streamsize(xyzi.size() * sizeof(float)));
     int status = -1;
-    const std::string out = runTool("'" + path + "' --repeat 3 --threads 2", status);
+    const std::string out = runGseg("bench", "'" + path + "' --repeat 3 --threads 2", status);
     ASSERT_EQ(status, 0) << out;
     const std::string points = std::to_string(scan.size()) + " points";
     for (const std::string expected : {"median", "p90", "phase I", "phase II", "plane fit", "expansion",
                                        "hardware threads", "peak memory", "2 thread(s)", points.c_str()})
         EXPECT_NE(out.find(expected), std::string::npos) << expected << " missing from:\n" << out;
-    runTool("/nonexistent.bin", status);
+    runGseg("bench", "/nonexistent.bin", status);
     EXPECT_EQ(status, 1);
-    runTool("'" + path + "' --repeat 0", status);
+    runGseg("bench", "'" + path + "' --repeat 0", status);
     EXPECT_EQ(status, 2);
 }

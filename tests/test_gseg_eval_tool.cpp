@@ -17,11 +17,7 @@ namespace {
 
 const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "eval_tool";
 
-std::string runTool(const std::string& args, int& status) {
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval " + args);
-    status = r.status;
-    return r.output;
-}
+using gseg::test::runGseg;
 
 std::string slurp(const fs::path& p) { return gseg::test::readText(p.string()); }
 
@@ -71,10 +67,10 @@ TEST(EvalTool, SharedKittiReportsAgreeSerialParallelAndWithTheIndependentScorer)
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
     for (const char* d : {"serial", "parallel", "pred"}) fs::remove_all(kDir / d);  // not "bad": BadTrees may run now
     int status = -1;
-    const std::string serial = runTool("'" + root + "' --threads 1 --report '" + (kDir / "serial/k").string() +
+    const std::string serial = runGseg("eval", "'" + root + "' --threads 1 --report '" + (kDir / "serial/k").string() +
                                        "' --labels-out-dir '" + (kDir / "pred").string() + "'", status);
     ASSERT_EQ(status, 0) << serial;
-    const std::string parallel = runTool("'" + root + "' --threads 2 --report '" + (kDir / "parallel/k").string() + "'",
+    const std::string parallel = runGseg("eval", "'" + root + "' --threads 2 --report '" + (kDir / "parallel/k").string() + "'",
                                          status);
     ASSERT_EQ(status, 0) << parallel;
     // 00/000003..000005 have no labels: reported by name and skipped.
@@ -116,7 +112,7 @@ TEST(EvalTool, SingleScanMode) {
     const std::string label = gseg::test::sharedData("semantickitti/sequences/08/labels/000000.label");
     if (scan.empty() || label.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/08");
     int status = -1;
-    const std::string out = runTool("--scan '" + scan + "' --labels '" + label + "'", status);
+    const std::string out = runGseg("eval", "--scan '" + scan + "' --labels '" + label + "'", status);
     EXPECT_EQ(status, 0) << out;
     EXPECT_NE(out.find("1 frames evaluated, 0 skipped"), std::string::npos) << out;
 }
@@ -125,7 +121,7 @@ TEST(EvalTool, BadTrees) {
     int status = -1;
     fs::remove_all(kDir / "bad");
     fs::create_directories(kDir / "bad/empty");
-    std::string out = runTool("'" + (kDir / "bad/empty").string() + "'", status);
+    std::string out = runGseg("eval", "'" + (kDir / "bad/empty").string() + "'", status);
     EXPECT_EQ(status, 1);
     EXPECT_NE(out.find("no sequences/ folder"), std::string::npos) << out;
 
@@ -139,7 +135,7 @@ TEST(EvalTool, BadTrees) {
     std::ofstream(seq / "labels/000000.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), 1600);
     std::ofstream(seq / "labels/000001.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), 1598);
     std::ofstream(seq / "labels/000002.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), 1200);
-    out = runTool("'" + (kDir / "bad/root").string() + "' --report '" + (kDir / "bad/out/r").string() + "'", status);
+    out = runGseg("eval", "'" + (kDir / "bad/root").string() + "' --report '" + (kDir / "bad/out/r").string() + "'", status);
     EXPECT_EQ(status, 0) << out;
     EXPECT_NE(out.find("1 frames evaluated, 2 skipped"), std::string::npos) << out;
     EXPECT_NE(out.find("skipped 01/000001"), std::string::npos) << out;
@@ -147,10 +143,10 @@ TEST(EvalTool, BadTrees) {
     EXPECT_NE(out.find("300 labels for 400 points"), std::string::npos) << out;
     EXPECT_TRUE(fs::exists(kDir / "bad/out/r_table.md"));
 
-    out = runTool("'" + (kDir / "bad/root").string() + "' --sequences 07", status);
+    out = runGseg("eval", "'" + (kDir / "bad/root").string() + "' --sequences 07", status);
     EXPECT_EQ(status, 1);
     EXPECT_NE(out.find("no scans"), std::string::npos) << out;
-    runTool("", status);
+    runGseg("eval", "", status);
     EXPECT_EQ(status, 2);
 }
 
@@ -171,24 +167,24 @@ TEST(EvalTool, SequencesWithoutFramesOrWithAnUnlistableFolderAreNamedAndTheOther
     fs::create_symlink("loop", root / "sequences/06/loop");
     fs::create_symlink("loop", root / "sequences/06/velodyne");  // velodyne -> loop -> loop
     int status = -1;
-    std::string out = runTool("'" + root.string() + "' --sequences 00,05", status);
+    std::string out = runGseg("eval", "'" + root.string() + "' --sequences 00,05", status);
     EXPECT_EQ(status, 3) << out;
     EXPECT_NE(out.find("gseg eval: sequence 05: no scans (*.bin) in " + (root / "sequences/05/velodyne").string()),
               std::string::npos) << out;
     EXPECT_NE(out.find("1 frames evaluated, 0 skipped, 1 sequence(s) without frames"), std::string::npos) << out;
-    out = runTool("'" + root.string() + "' --sequences 00,07", status);
+    out = runGseg("eval", "'" + root.string() + "' --sequences 00,07", status);
     EXPECT_EQ(status, 3) << out;
     EXPECT_NE(out.find("gseg eval: sequence 07: no folder " + (root / "sequences/07/velodyne").string()), std::string::npos)
         << out;
     // Every sequence: 06 is named with the folder and the reason, 00 is evaluated.
-    out = runTool("'" + root.string() + "'", status);
+    out = runGseg("eval", "'" + root.string() + "'", status);
     EXPECT_EQ(status, 3) << out;
     EXPECT_NE(out.find("gseg eval: sequence 06: no folder " + (root / "sequences/06/velodyne").string() +
                        " (Too many levels of symbolic links)"),
               std::string::npos) << out;
     EXPECT_NE(out.find("1 frames evaluated"), std::string::npos) << out;
     // Nothing to evaluate at all: an error naming what was wrong.
-    out = runTool("'" + root.string() + "' --sequences 05,06", status);
+    out = runGseg("eval", "'" + root.string() + "' --sequences 05,06", status);
     EXPECT_EQ(status, 1) << out;
     EXPECT_NE(out.find("sequence 05: no scans"), std::string::npos) << out;
     EXPECT_NE(out.find("sequence 06: no folder"), std::string::npos) << out;
@@ -201,7 +197,7 @@ TEST(EvalTool, BreakdownCountsAgreeWithTheScoresAndDrawOnePicturePerFrame) {
     const fs::path dir = kDir / "breakdown";
     fs::remove_all(dir);
     int status = -1;
-    const std::string out = runTool("'" + root + "' --threads 2 --breakdown --report '" + (dir / "r").string() + "'", status);
+    const std::string out = runGseg("eval", "'" + root + "' --threads 2 --breakdown --report '" + (dir / "r").string() + "'", status);
     ASSERT_EQ(status, 0) << out;
     EXPECT_NE(out.find("failure breakdown, all frames:"), std::string::npos) << out;
     EXPECT_NE(out.find("false ground by height above the local labelled ground"), std::string::npos) << out;

@@ -6,6 +6,7 @@
 // sequence always, and on SemanticKITTI 00 where ../shared/data has it. The observations2map part
 // is skipped where mrpt-apps is not installed.
 #include <gseg/map/traversability_map.hpp>
+#include <support/child.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/paths.hpp>
 
@@ -39,12 +40,7 @@ const std::string kPreload = kAsan.empty() ? "" : kAsan + ":";
 
 bool haveObservations2map() { return runCommand("command -v observations2map").status == 0; }
 
-std::string tempDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("gseg_routes_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d.string();
-}
+std::string tempDir(const std::string& name) { return gseg::test::freshDir("map_routes", name).string(); }
 
 /// A KITTI odometry sequence of four HDL-64 scans 2 m apart on a street with a wall and a box:
 /// velodyne/*.bin, poses.txt (camera 0), calib.txt (Tr) and times.txt.
@@ -74,6 +70,12 @@ std::string simulatedSequence(const std::string& dir, double height = 1.723) {
 
 const char* const kSuffixes[] = {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png",
                                  "_traversability.ply", "_traversability.3Dscene"};
+
+/// kitti2rawlog of the first scan of simulatedSequence(dir/seq): dir/seq.rawlog and dir/seq.simplemap.
+gseg::test::CommandResult simulatedSimplemap(const std::string& dir) {
+    return runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + simulatedSequence(dir + "/seq") + "' -o " + dir +
+                      "/seq.rawlog --simplemap " + dir + "/seq.simplemap --last 1");
+}
 
 /// The YAML that says what an observations2map INI (one gsegTraversabilityMap) says: its `_gseg`
 /// keys at the top level, `_sensorHeight` as `sensorHeight:`, `_creationOpts` as `traversability:`.
@@ -170,8 +172,7 @@ TEST(MapRoutes, RawlogOctomapAndObservations2mapGiveByteIdenticalFilesOnKitti00)
 TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo) {
     if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps)";
     const std::string dir = tempDir("noplugin");
-    auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + simulatedSequence(dir + "/seq") + "' -o " + dir +
-                        "/seq.rawlog --simplemap " + dir + "/seq.simplemap --last 1");
+    auto r = simulatedSimplemap(dir);
     ASSERT_EQ(r.status, 0) << r.output;
     // MRPT's behaviour, the reason for the wrapper: exit 0, "done", no file.
     r = runCommand("cd '" + kSource + "' && observations2map config/octomap_maps.ini " + dir + "/seq.simplemap " + dir +
@@ -214,11 +215,9 @@ TEST(MapRoutes, Observations2mapWithoutThePluginWritesNothingAndTheWrapperSaysSo
 TEST(MapRoutes, TheWrapperNamesTheFileAndReasonOfEveryConfigurationError) {
     if (!haveObservations2map()) GTEST_SKIP() << "observations2map absent (apt-get install mrpt-apps)";
     const std::string dir = tempDir("wrapper_errors");
-    auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + simulatedSequence(dir + "/seq") + "' -o " + dir +
-                        "/seq.rawlog --simplemap " + dir + "/seq.simplemap --last 1");
+    auto r = simulatedSimplemap(dir);
     ASSERT_EQ(r.status, 0) << r.output;
-    std::ifstream in(kSource + "/config/octomap_maps.ini");
-    const std::string ini((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string ini = gseg::test::readText(kSource + "/config/octomap_maps.ini");
     const auto lineOf = [&](const std::string& text, const std::string& key) {
         const std::size_t at = text.find("\n" + key + " = ");
         return std::to_string(1 + std::count(text.begin(), text.begin() + long(at) + 1, '\n'));

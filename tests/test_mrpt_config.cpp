@@ -2,6 +2,7 @@
 #include <gseg/io/ply.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <support/child.hpp>
+#include <support/paths.hpp>
 
 #include <mrpt/containers/yaml.h>
 
@@ -16,9 +17,7 @@
 namespace {
 
 std::string writeTemp(const std::string& name, const std::string& text) {
-    const std::string path = std::string(GSEG_BINARY_DIR) + "/tests/" + name;
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
+    return gseg::test::writeTestFile("mrpt_config", name, text);
 }
 
 std::string errorOf(const std::string& path) {
@@ -48,8 +47,7 @@ TEST(Config, ShippedKittiFileIsTheLibraryDefaultsWithEveryKey) {
     // One source of truth: every key of the file is the library default.
     const gseg::Params defaults;
     for (const auto& key : gseg::Params::keys()) EXPECT_EQ(cfg.params.get(key), defaults.get(key)) << key;
-    std::ifstream in(path);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string text = gseg::test::readText(path);
     for (const auto& key : gseg::Params::keys())
         EXPECT_NE(text.find("\n" + key + ":"), std::string::npos) << key << " missing from " << path;
     // config/auto_height.yaml: the same with distToGround: auto (the numeric value is the fallback).
@@ -82,7 +80,7 @@ TEST(Config, NestedUnderGsegAndAuto) {
 }
 
 TEST(Config, ErrorsNameFileAndKey) {
-    const std::string unknown = writeTemp("unknown.yaml", "cellSizeX: 1.5\ncelSizeY: 1.0\n");
+    const std::string unknown = writeTemp("unknown_key.yaml", "cellSizeX: 1.5\ncelSizeY: 1.0\n");
     EXPECT_NE(errorOf(unknown).find("celSizeY"), std::string::npos) << errorOf(unknown);
     EXPECT_NE(errorOf(unknown).find(unknown), std::string::npos);
     const std::string negative = writeTemp("negative.yaml", "cellSizeX: -1.5\n");

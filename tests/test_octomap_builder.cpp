@@ -5,6 +5,7 @@
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/map/world_scan.hpp>
+#include <support/child.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/scenes.hpp>
 #include <support/paths.hpp>
@@ -28,6 +29,9 @@
 #include <unistd.h>
 
 namespace {
+
+/// `<build>/tests/octomap_builder/<name>`, emptied and created.
+std::string tempDir(const std::string& name) { return gseg::test::freshDir("octomap_builder", name).string(); }
 
 using gseg::map::CellClass;
 using gseg::map::TraversabilityMap;
@@ -166,8 +170,7 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
                             {20.0, -20.0, CellClass::Unknown}};  // behind the wall: never seen
     for (const auto& p : probes) EXPECT_EQ(grid.at(p.x, p.y), p.want) << "at " << p.x << ", " << p.y;
 
-    const std::string dir = std::filesystem::temp_directory_path() / ("gseg_builder_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
+    const std::string dir = tempDir("drive");
     const auto written = m.write(dir + "/drive");
     ASSERT_EQ(written, TraversabilityMap::outputPaths(dir + "/drive"));
     ASSERT_EQ(written.size(), 6u);
@@ -218,8 +221,7 @@ TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
     EXPECT_GT(l.height - (l.mapTop + l.mapHeight), 100);
     const auto unknown = gseg::map::colourOf(CellClass::Unknown), page = gseg::map::backgroundColour();
     EXPECT_GT(std::abs(int(unknown.r) - int(page.r)) + std::abs(int(unknown.g) - int(page.g)) + std::abs(int(unknown.b) - int(page.b)), 100);
-    const std::string dir = std::filesystem::temp_directory_path() / ("gseg_orient_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
+    const std::string dir = tempDir("orient");
     m.write(dir + "/o");
     mrpt::img::CImage png;
     ASSERT_TRUE(png.loadFromFile(dir + "/o_traversability.png"));
@@ -245,8 +247,7 @@ TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
 
 TEST(OctomapBuilder, PlyAndSceneHoldTheOccupiedVoxelsAndThePath) {
     const auto& m = theDrive();
-    const std::string dir = std::filesystem::temp_directory_path() / ("gseg_views_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
+    const std::string dir = tempDir("views");
     m.write(dir + "/v");
     const auto s = m.stats();
     const std::size_t shown = s.groundVoxels - s.groundUnderObstacle + s.obstacleVoxels;
@@ -373,13 +374,6 @@ void expectSameVoxels(const octomap::OcTree& reference, const octomap::OcTree& f
 }
 
 std::string fileBytes(const std::string& path) { return gseg::test::readText(path); }
-
-std::string tempDir(const std::string& name) {
-    const auto d = std::filesystem::temp_directory_path() / ("gseg_builder_" + std::to_string(::getpid()) + "_" + name);
-    std::filesystem::remove_all(d);
-    std::filesystem::create_directories(d);
-    return d.string();
-}
 
 TEST(OctomapBuilder, FastPathEqualsASimpleReferenceIntegration) {
     gseg::map::TraversabilityOptions shortRays;  // rays cut at 12 m, voxels off the 0.2 m grid

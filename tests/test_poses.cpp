@@ -13,9 +13,7 @@ namespace {
 using namespace gseg::map;
 
 std::string writeTemp(const std::string& name, const std::string& text) {
-    const auto path = std::filesystem::temp_directory_path() / ("gseg_poses_" + std::to_string(::getpid()) + "_" + name);
-    std::ofstream(path) << text;
-    return path.string();
+    return gseg::test::writeTestFile("poses", name, text);
 }
 
 TEST(Poses, TumReadsPositionAndQuaternion) {

@@ -2,6 +2,7 @@
 // file, raw scans or rawlog-gseg's pairs), the real SemanticKITTI sequence 00 through kitti2rawlog
 // (and rawlog-gseg), threads, progress, skipped scans, failing early, and bad input.
 #include <gseg/map/poses.hpp>
+#include <support/child.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/sim_drive.hpp>
 #include <support/paths.hpp>
@@ -33,30 +34,18 @@ using gseg::test::kRoadZ;
 using gseg::test::vehiclePose;
 using gseg::test::writeDrive;
 
-struct ToolRun {
-    int status = 0;
-    std::string out, err;
-};
+using gseg::test::runTool;
+using gseg::test::ToolRun;
 
-/// Runs a built tool; `limits` goes before it in bash (e.g. "ulimit -f 64; trap '' XFSZ;"), `launcher`
-/// before the tool (e.g. gseg::test::mpirun()).
-ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir, const std::string& limits = "",
-                const std::string& launcher = "") {
-    ToolRun r;
-    const std::string command = limits + " exec " + launcher + gseg::test::tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
-    const int st = std::system(("bash -c \"" + command + "\"").c_str());
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);  // a crash is >= 128
-    std::ifstream o(dir + "/out.txt"), e(dir + "/err.txt");
-    r.out.assign(std::istreambuf_iterator<char>(o), {});
-    r.err.assign(std::istreambuf_iterator<char>(e), {});
-    return r;
-}
+std::string tempDir(const std::string& name) { return gseg::test::freshDir("rawlog_octomap", name).string(); }
 
-std::string tempDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("gseg_r2o_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d.string();
+/// tempDir(name) holding the simulated drive (drive.rawlog) and gseg.yaml with the mounting's
+/// height (distToGround: 1.8).
+std::string driveDir(const std::string& name) {
+    const std::string dir = tempDir(name);
+    writeDrive(dir + "/drive.rawlog");
+    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    return dir;
 }
 
 bool occupied(const octomap::OcTree& t, double x, double y, double z) {
@@ -110,9 +99,7 @@ void expectDriveMap(const std::string& prefix) {
 }
 
 TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
-    const std::string dir = tempDir("sim");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("sim");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("voxels (0.20 m)"), std::string::npos) << r.out;
@@ -243,9 +230,7 @@ TEST(RawlogOctomap, ChainKitti2rawlogRawlogGsegRawlogOctomapSegmentsEachScanOnce
 }
 
 TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
-    const std::string dir = tempDir("threads");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("threads");
     for (const char* threads : {"0", "1", "3"}) {
         const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/t" + threads + " -c " + dir +
                                                         "/gseg.yaml --threads " + threads, dir);
@@ -260,9 +245,7 @@ TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
 // of a rank to a core), not the machine's: two threads bound to one core only take turns.
 TEST(RawlogOctomap, DefaultWorkersAreTheCoresTheProcessMayUse) {
     if (std::system("taskset -c 0 true > /dev/null 2>&1") != 0) GTEST_SKIP() << "taskset (util-linux) is not available";
-    const std::string dir = tempDir("affinity");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("affinity");
     const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
     const ToolRun one = runTool("rawlog-octomap", args + "/one", dir, "", "taskset -c 0 ");
     ASSERT_EQ(one.status, 0) << one.err;
@@ -302,9 +285,7 @@ TEST(RawlogOctomap, AFixedHeightThatTheFirstScanContradictsIsSaid) {
 }
 
 TEST(RawlogOctomap, ProgressShowsScansPerSecondAndTimeLeft) {
-    const std::string dir = tempDir("progress");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("progress");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
     ASSERT_EQ(r.status, 0) << r.err;
     // Not a terminal: plain lines (the first scan, then every 10 s, then the end), no carriage returns.
@@ -333,9 +314,7 @@ TEST(RawlogOctomap, AScanThatCannotBeSegmentedIsSkippedNamedAndCounted) {
 
 TEST(RawlogOctomap, NoOccupiedVoxelIsNoCrash) {
     // #9 item 3: SEGV in ColorOcTree when nothing ends up occupied.
-    const std::string dir = tempDir("empty");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("empty");
     // Every point beyond --max-range (the nearest is the road 1.8 m below the sensor).
     ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml --max-range 1.5", dir);
     ASSERT_EQ(r.status, 0) << r.err;
@@ -425,9 +404,7 @@ TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
 
 TEST(RawlogOctomap, DiskFullIsAnErrorAndNoMapFiles) {
     // #9 item 6. The file size limit (EFBIG once the signal is ignored) stands in for a full disk.
-    const std::string dir = tempDir("full");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("full");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir,
                               "ulimit -f 200; trap '' XFSZ;");
     EXPECT_EQ(r.status, 1) << r.err;
@@ -441,9 +418,7 @@ TEST(RawlogOctomap, DiskFullIsAnErrorAndNoMapFiles) {
 }
 
 TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
-    const std::string dir = tempDir("bench");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("bench");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/b -c " + dir +
                                                     "/gseg.yaml --max-range 15 --bench 2", dir);
     ASSERT_EQ(r.status, 0) << r.err;
@@ -459,9 +434,7 @@ TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
 // #12: the other ranks' threads are more workers of rank 0's pipeline; rank 0 alone maps, in order.
 TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
-    const std::string dir = tempDir("mpi");
-    writeDrive(dir + "/drive.rawlog");
-    std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";
+    const std::string dir = driveDir("mpi");
     const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
     const ToolRun one = runTool("rawlog-octomap", args + "/one --threads 1", dir);
     ASSERT_EQ(one.status, 0) << one.err;

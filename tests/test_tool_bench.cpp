@@ -16,11 +16,7 @@ namespace {
 
 const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "tool_bench";
 
-std::string runBench(const std::string& args, int& status) {
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' bench " + args);
-    status = r.status;
-    return r.output;
-}
+using gseg::test::runGseg;
 
 /// A simulated HDL-64 scan of flat ground `height` below the sensor with a box, as a KITTI .bin.
 std::string writeScan(const fs::path& dir, const std::string& name, double height) {
@@ -55,7 +51,7 @@ TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
     std::ofstream(dir / "auto.yaml") << "distToGround: auto\n";
     int status = -1;
     const std::string out =
-        runBench("'" + low + "' '" + high + "' --repeat 2 --config '" + (dir / "auto.yaml").string() + "'", status);
+        runGseg("bench", "'" + low + "' '" + high + "' --repeat 2 --config '" + (dir / "auto.yaml").string() + "'", status);
     ASSERT_EQ(status, 0) << out;
     EXPECT_NE(out.find("low.bin: distToGround auto 1.7"), std::string::npos) << out;
     EXPECT_NE(out.find("high.bin: distToGround auto 2.5"), std::string::npos) << out;
@@ -83,13 +79,13 @@ TEST(BenchPerScan, BadConfigAndArguments) {
     const std::vector<float> pts(4 * 10, 1.0f);
     std::ofstream(scan, std::ios::binary).write(reinterpret_cast<const char*>(pts.data()), 160);
     int status = -1;
-    std::string out = runBench("'" + scan + "' --config '" + (dir / "bad.yaml").string() + "'", status);
+    std::string out = runGseg("bench", "'" + scan + "' --config '" + (dir / "bad.yaml").string() + "'", status);
     EXPECT_EQ(status, 1) << out;
     EXPECT_NE(out.find("gseg bench: "), std::string::npos) << out;
     EXPECT_NE(out.find("noSuchKey"), std::string::npos) << out;
-    out = runBench("'" + scan + "' --threads 0", status);
+    out = runGseg("bench", "'" + scan + "' --threads 0", status);
     EXPECT_EQ(status, 2) << out;
-    out = runBench("", status);
+    out = runGseg("bench", "", status);
     EXPECT_EQ(status, 2) << out;
 }
 
@@ -108,14 +104,14 @@ TEST(BenchHostile, NanPointsAndEmptyScansNeverAbort) {
     std::ofstream(dir / "empty.ply") << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
                                         "property float z\nend_header\n";
     int status = -1;
-    std::string out = runBench("'" + scan + "' --repeat 1 --threads 2", status);
+    std::string out = runGseg("bench", "'" + scan + "' --repeat 1 --threads 2", status);
     EXPECT_EQ(status, 0) << out;
     EXPECT_NE(out.find("nan.bin: 1 non-finite point(s) left out"), std::string::npos) << out;
-    out = runBench("'" + scan + "' '" + (dir / "empty.ply").string() + "' --repeat 1 --threads 2", status);
+    out = runGseg("bench", "'" + scan + "' '" + (dir / "empty.ply").string() + "' --repeat 1 --threads 2", status);
     EXPECT_EQ(status, 3) << out;  // done, one scan could not be timed
     EXPECT_NE(out.find("empty.ply: skipped: no finite point"), std::string::npos) << out;
     EXPECT_FALSE(rowOf(out, "nan.bin").empty()) << out;
-    out = runBench("'" + (dir / "empty.ply").string() + "' --repeat 1", status);
+    out = runGseg("bench", "'" + (dir / "empty.ply").string() + "' --repeat 1", status);
     EXPECT_EQ(status, 1) << out;
     EXPECT_NE(out.find("gseg bench: no scan to time"), std::string::npos) << out;
 }

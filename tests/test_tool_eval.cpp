@@ -160,11 +160,7 @@ TEST(EvalReport, UndefinedFiguresShowAsNotAvailable) {
 
 namespace {
 
-std::string runEval(const std::string& args, int& status) {
-    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval " + args);
-    status = r.status;
-    return r.output;
-}
+using gseg::test::runGseg;
 
 std::string slurp(const fs::path& p) { return gseg::test::readText(p.string()); }
 
@@ -186,9 +182,9 @@ TEST(EvalConfig, DefaultEqualsKittiHdl64YamlAndAutoHeightRuns) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     int status = -1;
-    std::string out = runEval("'" + root + "' --threads 2 --report '" + (dir / "default").string() + "'", status);
+    std::string out = runGseg("eval", "'" + root + "' --threads 2 --report '" + (dir / "default").string() + "'", status);
     ASSERT_EQ(status, 0) << out;
-    out = runEval("'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' --report '" +
+    out = runGseg("eval", "'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' --report '" +
                       (dir / "yaml").string() + "'",
                   status);
     ASSERT_EQ(status, 0) << out;
@@ -197,14 +193,14 @@ TEST(EvalConfig, DefaultEqualsKittiHdl64YamlAndAutoHeightRuns) {
     EXPECT_EQ(def, withoutLastColumn(slurp(dir / "yaml_frames.csv")));
 
     // distToGround: auto is estimated per frame (the KITTI sensor is ~1.73 m up: similar scores).
-    out = runEval("'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/auto_height.yaml'", status);
+    out = runGseg("eval", "'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/auto_height.yaml'", status);
     ASSERT_EQ(status, 0) << out;
     EXPECT_NE(out.find("4 frames evaluated, 3 skipped, 0 without a height estimate"), std::string::npos) << out;
     EXPECT_NE(out.find("| **mean** | 2 seq. |"), std::string::npos) << out;
 
     // A bad config: one line naming the file, nothing written.
     std::ofstream(dir / "bad.yaml") << "cellSizeX: -1\n";
-    out = runEval("'" + root + "' --config '" + (dir / "bad.yaml").string() + "' --report '" +
+    out = runGseg("eval", "'" + root + "' --config '" + (dir / "bad.yaml").string() + "' --report '" +
                       (dir / "bad").string() + "'",
                   status);
     EXPECT_EQ(status, 1) << out;
@@ -223,7 +219,7 @@ TEST(EvalConfig, EveryFrameSkippedIsAnError) {
     std::ofstream(seq / "labels/000000.label", std::ios::binary).write("\0\0\0\0", 4);  // 1 label for 50 points
     int status = -1;
     const std::string out =
-        runEval("'" + (kDir / "allbad").string() + "' --report '" + (kDir / "allbad/r").string() + "'", status);
+        runGseg("eval", "'" + (kDir / "allbad").string() + "' --report '" + (kDir / "allbad/r").string() + "'", status);
     EXPECT_EQ(status, 1) << out;
     EXPECT_NE(out.find("skipped 02/000000"), std::string::npos) << out;
     EXPECT_NE(out.find("0 frames evaluated, 1 skipped"), std::string::npos) << out;
@@ -258,7 +254,7 @@ TEST(EvalConfig, SequenceFiguresMatchTheIndependentScorer) {
     const fs::path dir = kDir / "scorer";
     fs::remove_all(dir);
     int status = -1;
-    const std::string out = runEval("'" + gseg::test::sharedData("semantickitti") + "' --sequences 08 --report '" +
+    const std::string out = runGseg("eval", "'" + gseg::test::sharedData("semantickitti") + "' --sequences 08 --report '" +
                                         (dir / "r").string() + "' --labels-out-dir '" + (dir / "pred").string() + "'",
                                     status);
     ASSERT_EQ(status, 0) << out;

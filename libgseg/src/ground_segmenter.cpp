@@ -130,15 +130,15 @@ struct PhaseSettings {
 
 /// One phase of GSeg3D over the points `input`; appends the indices it calls ground to `ground`.
 ///
-/// Which steps are the paper's (Lodhi and Hertzberg 2025, ../shared/docs/gseg3d.md section 1), which
-/// the authors' implementation's (section 2) and which this project's own:
+/// Which steps are the paper's (Lodhi and Hertzberg, ICRCV 2025), which the authors' public
+/// implementation's (dfki-ric/ground_segmentation, where the paper is vague) and which our own:
 /// - Step 1, grid [paper]. Ours: the vertical grid aligned on the expected ground (gridGroundLevel).
 /// - Step 2, local eigen classification [paper; constants and the variance rule of small cells:
 ///   authors']. The PCA normal check of planar cells (checkPlaneNormal) is the authors'; upright
 ///   strips among line cells (stripMinSpread) and the least tilted plane of a line cell are ours.
 /// - Step 3, surface gradient analysis (RANSAC plane fit) [paper]. Ours: the best plane within the
 ///   slope limit must hold more than minGroundInlierRatio of the cell.
-/// - Algorithm 1 sparsity buckets and the ambiguous-cell rule [paper, 0.3 m: authors']. Ours: only
+/// - Algorithm 1 sparsity buckets and the ambiguous-cell rule [paper; bucket limits: authors']. Ours: only
 ///   a population of at least minPointsPerCell outliers can make a cell ambiguous.
 /// - Step 4, region expansion over a KD-tree of centroids [paper]. Ours: the seed is the candidates
 ///   near the robot at ground level (seedHeightTolerance) instead of synthetic points, with the

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fcntl.h>
+#include <filesystem>
 #include <fstream>
 #include <spawn.h>
 #include <sstream>
@@ -54,6 +55,14 @@ std::string readText(const std::string& path) {
     return ss.str();
 }
 
+std::string writeTestFile(const std::string& group, const std::string& name, const std::string& text) {
+    const std::filesystem::path dir = std::filesystem::path(GSEG_BINARY_DIR) / "tests" / group;
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / name).string();
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
 CommandResult runCommand(const std::string& shellCommand) {
     CommandResult r;
     FILE* pipe = ::popen((shellCommand + " 2>&1").c_str(), "r");
@@ -62,6 +71,28 @@ CommandResult runCommand(const std::string& shellCommand) {
     while (std::fgets(buf, sizeof buf, pipe)) r.output += buf;
     const int st = ::pclose(pipe);
     r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
+}
+
+CommandResult runToolCommand(const std::string& name, const std::string& args) {
+    return runCommand("'" + tool(name) + "' " + args);
+}
+
+std::string runGseg(const std::string& subcommand, const std::string& args, int& status) {
+    const CommandResult r = runToolCommand("gseg", subcommand + " " + args);
+    status = r.status;
+    return r.output;
+}
+
+ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir, const std::string& limits,
+                const std::string& launcher) {
+    ToolRun r;
+    const std::string command =
+        limits + " exec " + launcher + tool(name) + " " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
+    const int st = std::system(("bash -c \"" + command + "\"").c_str());
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);  // a crash is >= 128
+    r.out = readText(dir + "/out.txt");
+    r.err = readText(dir + "/err.txt");
     return r;
 }
 

@@ -32,12 +32,35 @@ std::string mpirun(int processes, std::string& whyNot);
 /// The whole content of a text file ("" if it cannot be read).
 std::string readText(const std::string& path);
 
+/// Writes `text` as it is (binary) to `<build>/tests/<group>/<name>`, creating the folder if
+/// needed; returns the path.
+std::string writeTestFile(const std::string& group, const std::string& name, const std::string& text);
+
 /// Exit status and combined stdout + stderr of a shell command.
 struct CommandResult {
     int status = -1;  ///< exit code, -1 if it did not exit normally
     std::string output;
 };
 CommandResult runCommand(const std::string& shellCommand);
+
+/// runCommand() of the built tool `name` with `args` (shell words): exit status and stdout + stderr.
+CommandResult runToolCommand(const std::string& name, const std::string& args);
+
+/// The built `gseg` with `subcommand` and `args` (shell words, e.g. "'scan.bin' --threads 2")
+/// through runCommand(): its stdout + stderr, and its exit code in `status`.
+std::string runGseg(const std::string& subcommand, const std::string& args, int& status);
+
+/// Exit status, stdout and stderr (apart) of a built tool run by runTool().
+struct ToolRun {
+    int status = 0;  ///< exit code; 128 + the signal's number when a signal ended it
+    std::string out, err;
+};
+
+/// Runs the built tool `name` with `args` (shell words) through bash, `limits` before it (e.g.
+/// "ulimit -f 64; trap '' XFSZ;") and `launcher` in front of it (e.g. mpirun()); its stdout and
+/// stderr go through `dir`/out.txt and `dir`/err.txt (which stay there) and come back.
+ToolRun runTool(const std::string& name, const std::string& args, const std::string& dir,
+                const std::string& limits = "", const std::string& launcher = "");
 
 /// Starts the built tool `name` with `args` without waiting for it (no shell), its stderr into
 /// `stderrPath`; its pid, or -1 if it could not be started. For tests that act on a running tool
