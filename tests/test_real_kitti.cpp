@@ -49,16 +49,52 @@ const Measured kAll[] = {
     {"semantickitti-extra", "10", "000000", 99.9, 84.2}, {"semantickitti-extra", "10", "000009", 99.8, 85.2},
 };
 
+// The 30 consecutive frames of ../shared/data/semantickitti-drives (sequences 00 urban, 05
+// residential, 07 dense urban: frames 0-9 each), measured likewise (issue #20).
+const Measured kDrives[] = {
+    {"semantickitti-drives", "00", "000000", 99.3, 94.1},
+    {"semantickitti-drives", "00", "000001", 99.2, 93.9},
+    {"semantickitti-drives", "00", "000002", 99.0, 94.4},
+    {"semantickitti-drives", "00", "000003", 98.9, 93.7},
+    {"semantickitti-drives", "00", "000004", 98.5, 94.2},
+    {"semantickitti-drives", "00", "000005", 98.7, 94.3},
+    {"semantickitti-drives", "00", "000006", 98.3, 92.7},
+    {"semantickitti-drives", "00", "000007", 98.4, 94.5},
+    {"semantickitti-drives", "00", "000008", 98.1, 94.3},
+    {"semantickitti-drives", "00", "000009", 97.7, 95.1},
+    {"semantickitti-drives", "05", "000000", 96.4, 97.0},
+    {"semantickitti-drives", "05", "000001", 95.6, 96.7},
+    {"semantickitti-drives", "05", "000002", 95.6, 95.5},
+    {"semantickitti-drives", "05", "000003", 95.5, 95.2},
+    {"semantickitti-drives", "05", "000004", 95.5, 95.2},
+    {"semantickitti-drives", "05", "000005", 95.6, 95.3},
+    {"semantickitti-drives", "05", "000006", 95.5, 95.3},
+    {"semantickitti-drives", "05", "000007", 95.5, 95.2},
+    {"semantickitti-drives", "05", "000008", 95.9, 95.3},
+    {"semantickitti-drives", "05", "000009", 96.3, 95.0},
+    {"semantickitti-drives", "07", "000000", 92.3, 98.0},
+    {"semantickitti-drives", "07", "000001", 91.9, 98.2},
+    {"semantickitti-drives", "07", "000002", 91.3, 98.0},
+    {"semantickitti-drives", "07", "000003", 91.4, 98.0},
+    {"semantickitti-drives", "07", "000004", 91.9, 98.1},
+    {"semantickitti-drives", "07", "000005", 92.2, 98.4},
+    {"semantickitti-drives", "07", "000006", 91.3, 98.0},
+    {"semantickitti-drives", "07", "000007", 91.2, 98.1},
+    {"semantickitti-drives", "07", "000008", 91.8, 98.0},
+    {"semantickitti-drives", "07", "000009", 91.8, 98.3},
+};
+
 gseg::Params kittiParams() { return gseg::Params(); }  // = config/kitti_hdl64.yaml
 
 struct Scored {
     double p, r, f1;
 };
 
-/// Scores every frame of kAll with `segment`; false (and a skip message) if a folder is absent.
-template <typename Segment>
-bool scoreAll(Segment&& segment, std::vector<Scored>& out, std::string& missing) {
-    for (const Measured& m : kAll) {
+/// Scores every frame of `frames` (default kAll) with `segment`; false (and a skip message) if a
+/// folder is absent.
+template <typename Segment, std::size_t N = sizeof(kAll) / sizeof(kAll[0])>
+bool scoreAll(Segment&& segment, std::vector<Scored>& out, std::string& missing, const Measured (&frames)[N] = kAll) {
+    for (const Measured& m : frames) {
         const std::string base = std::string(m.root) + "/sequences/" + m.seq;
         const std::string scan = gseg::test::sharedData(base + "/velodyne/" + m.frame + ".bin");
         const std::string label = gseg::test::sharedData(base + "/labels/" + m.frame + ".label");
@@ -158,6 +194,46 @@ TEST(RealKitti, AutoHeightOnBothSharedFoldersNeverRefusesAndStaysPrecise) {
     EXPECT_EQ(estimated, got.size());
     EXPECT_GE(sumP / n, 97.0);  // measured 97.78
     EXPECT_GE(sumF / n, 94.5);  // measured 95.25
+}
+
+TEST(RealKitti, PrecisionAndRecallOnTheThirtyDriveFrames) {
+    gseg::GroundSegmenter seg(kittiParams());
+    std::vector<Scored> got;
+    std::string missing;
+    if (!scoreAll([&](const gseg::PointCloudView& c) { return seg.segment(c, false); }, got, missing, kDrives))
+        GTEST_SKIP() << missing;
+    double sumP = 0, sumR = 0, sumF = 0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        const Measured& m = kDrives[i];
+        std::printf("drives %s/%s: P %.2f R %.2f F1 %.2f\n", m.seq, m.frame, got[i].p, got[i].r, got[i].f1);
+        EXPECT_GE(got[i].p, m.p - 1.0) << m.seq << "/" << m.frame;
+        EXPECT_GE(got[i].r, m.r - 1.0) << m.seq << "/" << m.frame;
+        sumP += got[i].p, sumR += got[i].r, sumF += got[i].f1;
+    }
+    const double n = double(got.size());
+    std::printf("mean over %zu drive frames: P %.2f R %.2f F1 %.2f\n", got.size(), sumP / n, sumR / n, sumF / n);
+    EXPECT_GE(sumP / n, 95.0);  // measured 95.36 (dense urban 07: 91.2-92.3)
+    EXPECT_GE(sumF / n, 95.3);  // measured 95.59
+}
+
+TEST(RealKitti, AutoHeightOnTheThirtyDriveFramesNeverRefusesAndStaysPrecise) {
+    gseg::AutoHeightSegmenter seg(kittiParams());  // config/auto_height.yaml
+    std::vector<Scored> got;
+    std::string missing;
+    std::size_t estimated = 0;
+    const auto run = [&](const gseg::PointCloudView& c) {
+        gseg::AutoHeightResult r = seg.segment(c, false);
+        estimated += r.decision.source == gseg::HeightDecision::Source::Estimated;
+        return std::move(r.result);
+    };
+    if (!scoreAll(run, got, missing, kDrives)) GTEST_SKIP() << missing;
+    double sumP = 0, sumF = 0;
+    for (const Scored& s : got) sumP += s.p, sumF += s.f1;
+    const double n = double(got.size());
+    std::printf("auto height, mean over %zu drive frames: P %.2f F1 %.2f\n", got.size(), sumP / n, sumF / n);
+    EXPECT_EQ(estimated, got.size());
+    EXPECT_GE(sumP / n, 95.0);  // measured 95.45
+    EXPECT_GE(sumF / n, 95.3);  // measured 95.60
 }
 
 TEST(RealKitti, ScoresMatchTheIndependentScorer) {

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <utility>
 
 using gseg::test::Lidar;
@@ -330,6 +332,11 @@ TEST(Scenes, ReflectionsBelowTheRoadAreNeverGroundAndAreFlagged) {
     EXPECT_EQ(flagged, o.result.belowGround.size());  // nothing else is flagged
     EXPECT_EQ(groundFlagged, 0u);
     EXPECT_TRUE(std::is_sorted(o.result.belowGround.begin(), o.result.belowGround.end()));
+    // The road above the reflections stays ground: nearly as much as on the same flat road without
+    // them (measured 90.2 % against 92.4 %). Issue #20: Phase II's floating check, if it saw every
+    // reflection below a column, would drop the road above them (to 62 %).
+    const Outcome flat = runScene(gseg::test::scene("flat"));
+    EXPECT_GE(o.all.recall, flat.all.recall - 0.03);
 }
 
 TEST(Scenes, AutoHeightLowMountedVlp16IsEstimatedNotRefused) {
@@ -392,4 +399,65 @@ TEST(Scenes, OtherSensorsA32BeamStreetAndAForwardLookingSolidStateOnVegetatedHil
     EXPECT_EQ(h.decision.source, gseg::HeightDecision::Source::Estimated);
     EXPECT_GE(h.o.all.precision, 0.975);  // measured 98.5 %
     EXPECT_GE(h.o.all.recall, 0.9);       // measured 94.1 %
+}
+
+// --- issue #20: the ground beside the road, rough terrain, sparse sensors ----------------------
+
+namespace {
+
+struct RecallCase {
+    const char* name;
+    double precision, recall;          ///< floors with the true sensor height
+    double beside;                     ///< floor of the recall beside the road (|y| >= 4.3 m; gravel: everywhere)
+    double autoPrecision, autoRecall;  ///< floors with distToGround: auto
+};
+
+// Share of the truth-ground points with |y| >= minAbsY (beside the road) labelled ground.
+double besideRoadRecall(const gseg::test::NamedScan& n, const std::vector<std::uint8_t>& labels, double minAbsY) {
+    std::size_t truth = 0, found = 0;
+    for (std::size_t i = 0; i < n.scan.size(); ++i)
+        if (n.scan.truth[i] == Truth::Ground && std::abs(n.scan.xyz[3 * i + 1]) >= minAbsY)
+            ++truth, found += labels[i] != 0;
+    return truth ? double(found) / double(truth) : 0.0;
+}
+
+}  // namespace
+
+TEST(Scenes, GroundBesideTheRoadRoughTerrainAndSparseSensors) {
+    // Floors about half a point under what this version measures (printed). What is missed is far
+    // out: on every scene the ground beyond the range where the rings lie more than the search
+    // radius apart (HDL-64E at 1.73 m: about 35 m; HDL-32E at 1.84 m: about 25 m) is not reached,
+    // and on the HDL-32E the terrain 20-30 m out is reached by Phase I but stopped by Phase II's
+    // height gate between single-ring (line) cells. Issue #20's analysis: loosening either costs
+    // precision on the real scans.
+    const RecallCase cases[] = {
+        // name                   P      R      beside  auto P  auto R    (measured P / R / beside; auto P / R)
+        {"grass_verge_5cm", 0.980, 0.935, 0.880, 0.980, 0.935},      // 98.47 / 94.28 / 88.67; 98.50 / 94.15
+        {"grass_verge_15cm", 0.975, 0.925, 0.895, 0.975, 0.940},     // 98.21 / 93.04 / 90.29; 98.17 / 94.50
+        {"embankment_12", 0.990, 0.960, 0.935, 0.990, 0.950},        // 99.36 / 96.59 / 94.15; 99.35 / 95.86
+        {"gravel_road", 0.995, 0.920, 0.865, 0.995, 0.910},          // 99.82 / 92.56 / 87.36; 99.78 / 91.52
+        {"hdl32_road_terrain", 0.995, 0.885, 0.810, 0.995, 0.885},   // 99.90 / 88.98 / 81.55; 99.90 / 88.97
+        {"vlp16_rolling_grass", 0.990, 0.870, 0.815, 0.990, 0.870},  // 99.54 / 87.72 / 82.14; 99.33 / 87.82
+    };
+    for (const RecallCase& c : cases) {
+        const auto n = gseg::test::scene(c.name);
+        const Outcome o = runScene(n);
+        const AutoOutcome a = runAuto(n);
+        const double beside = besideRoadRecall(n, o.result.labels, 4.3);
+        std::printf("%-20s true height: P %.4f R %.4f (beside the road %.4f); auto (%.3f m): P %.4f R %.4f\n", c.name,
+                    o.all.precision, o.all.recall, beside, a.decision.height, a.o.all.precision, a.o.all.recall);
+        EXPECT_GE(o.all.precision, c.precision) << c.name;
+        EXPECT_GE(o.all.recall, c.recall) << c.name;
+        EXPECT_GE(beside, c.beside) << c.name;
+        EXPECT_EQ(a.decision.source, gseg::HeightDecision::Source::Estimated) << c.name;
+        EXPECT_GE(a.o.all.precision, c.autoPrecision) << c.name;
+        EXPECT_GE(a.o.all.recall, c.autoRecall) << c.name;
+        // On the level roads nothing 0.7 m or more above the road (car roofs and bonnets, hedge
+        // tops, the wall) is ever ground. (The VLP-16's bushes stand on hills: no road level.)
+        if (std::string(c.name) == "vlp16_rolling_grass") continue;
+        std::size_t high = 0;
+        for (std::size_t i = 0; i < n.scan.size(); ++i)
+            high += n.scan.truth[i] == Truth::NonGround && o.result.labels[i] && n.scan.xyz[3 * i + 2] > -n.sensorHeight + 0.7;
+        EXPECT_EQ(high, 0u) << c.name;
+    }
 }

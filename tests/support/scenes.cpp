@@ -1,6 +1,7 @@
 #include <support/scenes.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <random>
@@ -25,6 +26,41 @@ Scene hills(double a, double h = kH) {
     const auto f = [a](double x, double y) { return a * std::sin(2 * M_PI * x / 40.0) + 0.6 * a * std::sin(2 * M_PI * y / 55.0 + 1.0); };
     const double z0 = f(0, 0);
     t.height = [f, z0, h](double x, double y) { return -h + f(x, y) - z0; };
+    s.terrains.push_back(t);
+    return s;
+}
+
+// Roughness: value noise on a square lattice of `spacing` metres whose node heights are uniform
+// with standard deviation `sigma` metres, bilinearly interpolated (deterministic in x, y and seed).
+double roughness(double x, double y, double sigma, double spacing, std::uint32_t seed) {
+    const auto node = [&](std::int64_t i, std::int64_t j) {
+        std::uint64_t h = std::uint64_t(i) * 0x9E3779B97F4A7C15ull ^ (std::uint64_t(j) + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
+        h ^= std::uint64_t(seed) * 0x165667B19E3779F9ull;
+        h ^= h >> 29, h *= 0xBF58476D1CE4E5B9ull, h ^= h >> 32;
+        return (double(h >> 11) / double(1ull << 53) - 0.5) * std::sqrt(12.0) * sigma;  // uniform, std sigma
+    };
+    const double u = x / spacing, v = y / spacing;
+    const double fu = std::floor(u), fv = std::floor(v);
+    const auto i = std::int64_t(fu), j = std::int64_t(fv);
+    const double a = u - fu, b = v - fv;
+    return (1 - a) * (1 - b) * node(i, j) + a * (1 - b) * node(i + 1, j) + (1 - a) * b * node(i, j + 1) +
+           a * b * node(i + 1, j + 1);
+}
+
+// A straight road along x (|y| < halfWidth, flat at z = -h) between verges that lie `left` and
+// `right` metres above it, rough (4 cm, the grass of issue #20), and that slope up at `leftDeg`
+// degrees beyond `leftFoot` metres on the left (an embankment; 0: flat).
+Scene roadBetweenVerges(double h, double halfWidth, double left, double right, double leftDeg = 0,
+                        double leftFoot = 1e9) {
+    Scene s;
+    Terrain t;
+    const double tanLeft = std::tan(leftDeg * M_PI / 180.0);
+    t.height = [=](double x, double y) {
+        if (std::abs(y) < halfWidth) return -h;
+        const double r = roughness(x, y, 0.04, 0.3, 5);
+        if (y < 0) return -h + right + r;
+        return -h + left + r + (y > leftFoot ? (y - leftFoot) * tanLeft : 0.0);
+    };
     s.terrains.push_back(t);
     return s;
 }
@@ -150,6 +186,82 @@ const std::map<std::string, Builder>& builders() {
                  s.boxes.push_back(bush);
              }
              return make("solid_state_hills", s, 1.0, Lidar::solidState(), 5.0);
+         }},
+        // --- issue #20: the ground beside the road, rough terrain, sparse sensors ---
+        {"grass_verge_5cm",
+         [] {
+             // An 8 m road between grass verges 5 cm above it (4 cm roughness); a parked car on the
+             // road, a 1.4 m hedge along the left verge 9 m out.
+             Scene s = roadBetweenVerges(kH, 4.0, 0.05, 0.05);
+             s.addCar(6, -3.5, -kH);
+             Box hedge;
+             hedge.lo[0] = -25, hedge.lo[1] = 9.0, hedge.lo[2] = -kH, hedge.hi[0] = 25, hedge.hi[1] = 10.5;
+             hedge.hi[2] = -kH + 1.4, hedge.scatter = 0.4;
+             s.boxes.push_back(hedge);
+             return make("grass_verge_5cm", s);
+         }},
+        {"grass_verge_15cm",
+         [] {
+             // The same with verges 15 cm above the road (a curb-high grass shoulder).
+             Scene s = roadBetweenVerges(kH, 4.0, 0.15, 0.15);
+             s.addCar(6, -3.5, -kH);
+             Box hedge;
+             hedge.lo[0] = -25, hedge.lo[1] = 9.0, hedge.lo[2] = -kH, hedge.hi[0] = 25, hedge.hi[1] = 10.5;
+             hedge.hi[2] = -kH + 1.4, hedge.scatter = 0.4;
+             s.boxes.push_back(hedge);
+             return make("grass_verge_15cm", s);
+         }},
+        {"embankment_12",
+         [] {
+             // A flat road; on the left a 5 cm verge that rises at 12 deg from 6 m out (an
+             // embankment, 4 cm roughness); on the right a flat verge and a wall 12 m out.
+             Scene s = roadBetweenVerges(kH, 4.0, 0.05, 0.05, 12.0, 6.0);
+             s.addBox(-25, -12.5, -kH, 25, -12.0, -kH + 2.5);
+             return make("embankment_12", s);
+         }},
+        {"gravel_road",
+         [] {
+             // Gravel everywhere: 3 cm roughness on a 10 cm lattice plus 2 cm on a 0.5 m one; two cars.
+             Scene s;
+             Terrain t;
+             t.height = [](double x, double y) { return -kH + roughness(x, y, 0.03, 0.1, 9) + roughness(x, y, 0.02, 0.5, 10); };
+             s.terrains.push_back(t);
+             s.addCar(5, 2.0, -kH);
+             s.addCar(-12, -3.5, -kH);
+             return make("gravel_road", s);
+         }},
+        {"hdl32_road_terrain",
+         [] {
+             // An HDL-32E 1.84 m up over an 8 m road; terrain on both sides 8 cm above it, rolling by
+             // 0.3 m over 25 m with 4 cm roughness, out to the end of the range; cars on the road.
+             Scene s;
+             Terrain t;
+             t.height = [](double x, double y) {
+                 if (std::abs(y) < 4.0) return -1.84;
+                 const double dy = std::abs(y) - 4.0;
+                 return -1.84 + 0.08 + 0.3 * std::sin(2 * M_PI * x / 25.0) * std::min(1.0, dy / 6.0) +
+                        roughness(x, y, 0.04, 0.3, 13);
+             };
+             s.terrains.push_back(t);
+             s.addCar(8, -3.2, -1.84);
+             s.addCar(-15, 1.4, -1.84);
+             return make("hdl32_road_terrain", s, 1.84, Lidar::hdl32(), 5.0);
+         }},
+        {"vlp16_rolling_grass",
+         [] {
+             // A VLP-16 1.2 m up on rolling grass (the hills of hills_gentle at 0.5 m, 3 cm roughness)
+             // with two bushes.
+             Scene s = hills(0.5, 1.2);
+             const auto base = s.terrains[0].height;
+             s.terrains[0].height = [base](double x, double y) { return base(x, y) + roughness(x, y, 0.03, 0.3, 17); };
+             for (const double x : {7.0, -9.0}) {
+                 const double z = base(x + 0.6, 3.6);
+                 Box bush;
+                 bush.lo[0] = x, bush.lo[1] = 3.0, bush.lo[2] = z - 0.1, bush.hi[0] = x + 1.2, bush.hi[1] = 4.2;
+                 bush.hi[2] = z + 0.9, bush.scatter = 0.5;
+                 s.boxes.push_back(bush);
+             }
+             return make("vlp16_rolling_grass", s, 1.2, Lidar::vlp16(), 10.0);
          }},
         {"reflections",
          [] {
