@@ -1,0 +1,200 @@
+// What a user sees first in the Debian viewers (issue #22): every PLY carries its class as a
+// scalar field CloudCompare loads by default, in the one palette; CloudCompare -SILENT under Xvfb
+// keeps it (skipped where CloudCompare is not installed).
+
+#include "support/child.hpp"
+#include "support/paths.hpp"
+
+#include <gseg/io/ply.hpp>
+#include <gseg/map/traversability_map.hpp>
+#include <gseg/palette.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A seeded scan: x, y, z, intensity per point, ground (label 1) on z = -1.7, the rest above it.
+struct LabelledScan {
+    std::vector<float> xyzi;
+    std::vector<std::uint8_t> labels;
+};
+
+LabelledScan seededScan(std::size_t n) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-20.f, 20.f), h(0.f, 2.f), in(0.f, 255.f);
+    LabelledScan s;
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool ground = i % 3 != 0;
+        s.xyzi.insert(s.xyzi.end(), {u(rng), u(rng), ground ? -1.7f : -1.2f + h(rng), in(rng)});
+        s.labels.push_back(ground ? 1 : 0);
+    }
+    return s;
+}
+
+/// A small map: a ground plane around the origin and a wall at x = 6, seen from two sensor positions.
+std::string writeSmallMap(const fs::path& dir) {
+    std::vector<float> ground, wall;
+    for (float x = -8; x <= 8; x += 0.1f)
+        for (float y = -8; y <= 8; y += 0.1f) ground.insert(ground.end(), {x, y, -1.7f});
+    for (float y = -3; y <= 3; y += 0.1f)
+        for (float z = -1.5f; z <= 0.5f; z += 0.1f) wall.insert(wall.end(), {6.f, y, z});
+    gseg::map::TraversabilityMap map;
+    for (const double x : {0.0, 1.0})
+        map.insertScan(gseg::PointCloudView(ground.data(), ground.size() / 3), gseg::PointCloudView(wall.data(), wall.size() / 3),
+                       Eigen::Vector3d(x, 0, 0));
+    const std::string prefix = (dir / "map").string();
+    map.write(prefix);
+    return prefix;
+}
+
+/// The PLY's class field, label and colours agree point by point: scalar 1 exactly where label 0,
+/// RGB the palette's colour of the label.
+void expectClassFieldAgrees(const std::string& ply, const std::string& scalar) {
+    const std::vector<double> label = gseg::io::readPlyProperty(ply, "label"), cls = gseg::io::readPlyProperty(ply, scalar);
+    const std::vector<double> r = gseg::io::readPlyProperty(ply, "red"), g = gseg::io::readPlyProperty(ply, "green"),
+                              b = gseg::io::readPlyProperty(ply, "blue");
+    ASSERT_EQ(cls.size(), label.size());
+    std::size_t ones = 0;
+    for (std::size_t i = 0; i < label.size(); ++i) {
+        ASSERT_TRUE(label[i] == 0 || label[i] == 1) << ply << " vertex " << i;
+        ASSERT_EQ(cls[i], 1 - label[i]) << ply << " vertex " << i;
+        const std::uint8_t* want = label[i] == 1 ? gseg::palette::kGround : gseg::palette::kNonGround;
+        ASSERT_EQ(r[i], want[0]) << i;
+        ASSERT_EQ(g[i], want[1]) << i;
+        ASSERT_EQ(b[i], want[2]) << i;
+        ones += cls[i] == 1;
+    }
+    EXPECT_GT(ones, 0u) << ply;
+    EXPECT_LT(ones, label.size()) << ply;
+}
+
+/// The names of a PLY's vertex properties, in header order.
+std::vector<std::string> plyProperties(const std::string& ply) {
+    std::istringstream in(gseg::test::readText(ply).substr(0, 4096));
+    std::vector<std::string> names;
+    for (std::string line; std::getline(in, line) && line != "end_header";) {
+        std::istringstream words(line);
+        std::string w, type, name;
+        words >> w >> type >> name;
+        if (w == "property") names.push_back(name);
+    }
+    return names;
+}
+
+}  // namespace
+
+TEST(ViewerPly, ScanPlyCarriesTheClassFirstAsAScalarFieldAndReadsBack) {
+    const fs::path dir = gseg::test::freshDir("viewers", "scan_ply");
+    const LabelledScan s = seededScan(3000);
+    gseg::io::PlyOptions options;
+    options.intensity = true;
+    const std::string ply = (dir / "scan.ply").string();
+    gseg::io::writeLabelledPly(ply, gseg::PointCloudView(s.xyzi.data(), s.labels.size(), 16), s.labels, gseg::io::PlyColours(),
+                               options);
+    EXPECT_EQ(gseg::io::classScalarProperty(options), "scalar_non_ground");
+    // CloudCompare shows the first scalar field: the class, before the intensity.
+    const std::vector<std::string> props = plyProperties(ply);
+    const std::vector<std::string> want = {"x", "y", "z", "scalar_non_ground", "intensity", "red", "green", "blue", "label"};
+    EXPECT_EQ(props, want);
+    EXPECT_EQ(gseg::io::readPly(ply), s.xyzi);  // x, y, z, intensity exactly
+    const std::vector<double> label = gseg::io::readPlyProperty(ply, "label");
+    for (std::size_t i = 0; i < label.size(); ++i) ASSERT_EQ(label[i], s.labels[i]) << i;
+    expectClassFieldAgrees(ply, "scalar_non_ground");
+}
+
+TEST(ViewerPly, MapPlyCarriesTheObstacleClassAsAScalarFieldInThePalette) {
+    const fs::path dir = gseg::test::freshDir("viewers", "map_ply");
+    const std::string ply = writeSmallMap(dir) + "_traversability.ply";
+    const std::vector<std::string> props = plyProperties(ply);
+    ASSERT_GE(props.size(), 4u);
+    EXPECT_EQ(props[3], "scalar_obstacle");
+    expectClassFieldAgrees(ply, "scalar_obstacle");
+    // The palette is the map's colours too.
+    const auto t = gseg::map::colourOf(gseg::map::CellClass::Traversable), o = gseg::map::colourOf(gseg::map::CellClass::Obstacle);
+    EXPECT_EQ(std::vector<int>({t.r, t.g, t.b}), std::vector<int>(gseg::palette::kGround, gseg::palette::kGround + 3));
+    EXPECT_EQ(std::vector<int>({o.r, o.g, o.b}), std::vector<int>(gseg::palette::kNonGround, gseg::palette::kNonGround + 3));
+}
+
+/// Runs `CloudCompare -SILENT` under Xvfb on `ply`, exporting what it loaded as ASC with a header;
+/// returns the column names and the rows, or skips the test where CloudCompare is absent.
+struct Asc {
+    std::vector<std::string> columns;
+    std::vector<std::vector<double>> rows;
+};
+
+Asc cloudCompareSilent(const fs::path& dir, const std::string& ply, std::string& error) {
+    const std::string cmd = "cd '" + dir.string() + "' && xvfb-run -a env LIBGL_ALWAYS_SOFTWARE=1 CloudCompare -SILENT -O '" + ply +
+                            "' -C_EXPORT_FMT ASC -SEP SEMICOLON -ADD_HEADER -SAVE_CLOUDS 2>&1";
+    const auto r = gseg::test::runCommand(cmd);
+    Asc asc;
+    std::string file;
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().extension() == ".asc") file = e.path().string();
+    if (r.status != 0 || file.empty()) {
+        error = "CloudCompare -SILENT wrote no ASC (exit " + std::to_string(r.status) + "): " + r.output;
+        return asc;
+    }
+    std::ifstream in(file);
+    std::string line;
+    std::getline(in, line);
+    if (line.rfind("//", 0) == 0) line = line.substr(2);
+    std::istringstream header(line);
+    for (std::string c; std::getline(header, c, ';');) asc.columns.push_back(c);
+    while (std::getline(in, line)) {
+        std::istringstream cells(line);
+        std::vector<double> row;
+        for (std::string c; std::getline(cells, c, ';');) row.push_back(std::stod(c));
+        asc.rows.push_back(row);
+    }
+    return asc;
+}
+
+bool haveCloudCompare() {
+    return gseg::test::runCommand("command -v CloudCompare && command -v xvfb-run").status == 0;
+}
+
+TEST(ViewerPly, CloudCompareSilentLoadsTheClassFieldOfScanAndMapPlys) {
+    if (!haveCloudCompare())
+        GTEST_SKIP() << "CloudCompare or xvfb-run not installed (apt-get install cloudcompare xvfb): not checked";
+    const fs::path dir = gseg::test::freshDir("viewers", "cloudcompare");
+    const LabelledScan s = seededScan(2000);
+    gseg::io::PlyOptions options;
+    options.intensity = true;
+    fs::create_directories(dir / "scan");
+    const std::string scan = (dir / "scan" / "scan.ply").string();
+    gseg::io::writeLabelledPly(scan, gseg::PointCloudView(s.xyzi.data(), s.labels.size(), 16), s.labels, gseg::io::PlyColours(),
+                               options);
+    fs::create_directories(dir / "map");
+    const std::string map = writeSmallMap(dir / "map") + "_traversability.ply";
+    const struct {
+        std::string ply, field;
+    } cases[] = {{scan, "non ground"}, {map, "obstacle"}};
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.ply);
+        std::string error;
+        const Asc asc = cloudCompareSilent(fs::path(c.ply).parent_path(), c.ply, error);
+        ASSERT_TRUE(error.empty()) << error;
+        // CloudCompare's own name for the field (the `scalar_` prefix dropped, `_` as a space).
+        const auto at = std::find(asc.columns.begin(), asc.columns.end(), c.field);
+        ASSERT_NE(at, asc.columns.end()) << "no '" << c.field << "' column among " << ::testing::PrintToString(asc.columns);
+        const std::size_t k = std::size_t(at - asc.columns.begin());
+        const std::vector<double> label = gseg::io::readPlyProperty(c.ply, "label");
+        ASSERT_EQ(asc.rows.size(), label.size());
+        const auto g = std::find(asc.columns.begin(), asc.columns.end(), "G");
+        ASSERT_NE(g, asc.columns.end());
+        for (std::size_t i = 0; i < label.size(); ++i) {
+            ASSERT_EQ(asc.rows[i].at(k), 1 - label[i]) << "point " << i;
+            ASSERT_EQ(asc.rows[i].at(std::size_t(g - asc.columns.begin())),
+                      label[i] == 1 ? gseg::palette::kGround[1] : gseg::palette::kNonGround[1]) << "point " << i;
+        }
+    }
+}
