@@ -1,16 +1,24 @@
 // What a user sees first in the Debian viewers (issue #22): every PLY carries its class as a
 // scalar field CloudCompare loads by default, in the one palette; CloudCompare -SILENT under Xvfb
-// keeps it (skipped where CloudCompare is not installed).
+// keeps it (skipped where CloudCompare is not installed); every .3Dscene carries its legend and
+// opens framing its whole content.
 
 #include "support/child.hpp"
 #include "support/paths.hpp"
 
 #include <gseg/io/ply.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/mrpt/scene.hpp>
 #include <gseg/palette.hpp>
+
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/COpenGLViewport.h>
+#include <mrpt/opengl/CText.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -197,4 +205,83 @@ TEST(ViewerPly, CloudCompareSilentLoadsTheClassFieldOfScanAndMapPlys) {
                       label[i] == 1 ? gseg::palette::kGround[1] : gseg::palette::kNonGround[1]) << "point " << i;
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scenes: the legend SceneViewer3D draws and the camera it takes from the file.
+
+namespace {
+
+struct SceneView {
+    bool followCamera = false;
+    float pointing[3] = {0, 0, 0};
+    float zoom = 0;
+    std::vector<std::string> legend;  ///< the legend viewport's texts, in order
+};
+
+SceneView readScene(const std::string& path) {
+    mrpt::opengl::COpenGLScene scene;
+    EXPECT_TRUE(scene.loadFromFile(path)) << path;
+    SceneView v;
+    v.followCamera = scene.followCamera();
+    const auto& cam = scene.getViewport("main")->getCamera();
+    v.pointing[0] = cam.getPointingAtX(), v.pointing[1] = cam.getPointingAtY(), v.pointing[2] = cam.getPointingAtZ();
+    v.zoom = cam.getZoomDistance();
+    if (const auto legend = scene.getViewport("legend"))
+        for (const auto& o : *legend)
+            if (const auto text = std::dynamic_pointer_cast<mrpt::opengl::CText>(o)) v.legend.push_back(text->getString());
+    return v;
+}
+
+/// The camera frames the box: pointing at its centre, and the box's bounding sphere within the
+/// 30 deg field of view at that distance (not a close-up of a part of it, nor a speck).
+void expectFrames(const SceneView& v, const float lo[3], const float hi[3]) {
+    float r2 = 0;
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(v.pointing[a], 0.5f * (lo[a] + hi[a]), 1e-3f) << "axis " << a;
+        r2 += 0.25f * (hi[a] - lo[a]) * (hi[a] - lo[a]);
+    }
+    const float halfHeight = v.zoom * std::tan(15.f * 3.14159265f / 180.f);  // visible half height at the centre
+    EXPECT_GT(v.zoom, std::sqrt(r2)) << "the camera sits inside the content";
+    EXPECT_GT(halfHeight, 0.5f * std::sqrt(r2)) << "a close-up: the content is larger than the view";
+    EXPECT_LT(halfHeight, 2.0f * std::sqrt(r2)) << "the content is a speck in the view";
+}
+
+}  // namespace
+
+TEST(ViewerScene, ScanSceneCarriesItsLegendAndFramesEveryPoint) {
+    const fs::path dir = gseg::test::freshDir("viewers", "scan_scene");
+    const LabelledScan s = seededScan(3000);
+    const gseg::PointCloudView view(s.xyzi.data(), s.labels.size(), 16);
+    const std::string path = (dir / "scan.3Dscene").string();
+    const std::string bytes = gseg::mrpt::scanSceneBytes(view, s.labels, "gseg: a seeded scan");
+    std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    const SceneView v = readScene(path);
+    EXPECT_TRUE(v.followCamera) << "SceneViewer3D keeps its own close-up camera unless followCamera is set";
+    ASSERT_GE(v.legend.size(), 3u);
+    EXPECT_EQ(v.legend[0], "gseg: a seeded scan");
+    EXPECT_EQ(v.legend[1], "ground: 2000 points");
+    EXPECT_EQ(v.legend[2], "non-ground: 1000 points");
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (std::size_t i = 0; i < view.size(); ++i)
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], view.point(i)[a]), hi[a] = std::max(hi[a], view.point(i)[a]);
+    expectFrames(v, lo, hi);
+}
+
+TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
+    const fs::path dir = gseg::test::freshDir("viewers", "map_scene");
+    const std::string prefix = writeSmallMap(dir);
+    const SceneView v = readScene(prefix + "_traversability.3Dscene");
+    EXPECT_TRUE(v.followCamera);
+    ASSERT_EQ(v.legend.size(), 5u);
+    EXPECT_NE(v.legend[0].find("traversability map"), std::string::npos) << v.legend[0];
+    EXPECT_NE(v.legend[1].find("traversable"), std::string::npos) << v.legend[1];
+    EXPECT_NE(v.legend[2].find("obstacle"), std::string::npos) << v.legend[2];
+    EXPECT_NE(v.legend[3].find("path"), std::string::npos) << v.legend[3];
+    // The box of the voxels shown (the PLY holds their centres) and the path.
+    const std::vector<float> xyz = gseg::io::readPly(prefix + "_traversability.ply");
+    float lo[3] = {0, 0, 0}, hi[3] = {1, 0, 0};  // the path: (0,0,0) and (1,0,0)
+    for (std::size_t i = 0; i < xyz.size(); i += 4)
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], xyz[i + std::size_t(a)]), hi[a] = std::max(hi[a], xyz[i + std::size_t(a)]);
+    expectFrames(v, lo, hi);
 }

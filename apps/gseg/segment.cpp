@@ -72,7 +72,11 @@ int run(const Cli& cli) {
             ro.title = mrpt::displayName(cli.scan) + ", " + scan.description + ": ground / non-ground";
         add(cli.pngOut, mrpt::topDownPng(cloud, r.labels, ro));
     }
-    if (!cli.sceneOut.empty()) add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels));
+    if (!cli.sceneOut.empty())
+        add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels, "gseg: " + mrpt::displayName(cli.scan) +
+                                                                    (scan.description.rfind("rawlog entry", 0) == 0
+                                                                         ? ", " + scan.description.substr(0, scan.description.find(':'))
+                                                                         : "")));
     std::vector<std::string> paths;
     for (const auto& o : outputs) paths.push_back(o.first);
     io::AtomicFileSet files(paths);
