@@ -88,7 +88,7 @@ TEST(SegmentTool, KittiScanWritesLabelsPlyPngAndScene) {
     ASSERT_TRUE(points);
     ASSERT_EQ(points->size(), bytes.size());
     std::size_t greenPoints = 0;
-    for (std::size_t i = 0; i < points->size(); ++i) greenPoints += points->getPointColor(i).G == 200;
+    for (std::size_t i = 0; i < points->size(); ++i) greenPoints += points->getPointColor(i).G == gseg::palette::kGround[1];
     EXPECT_EQ(greenPoints, ground);
 }
 
