@@ -1,16 +1,18 @@
 // What a user sees first in the Debian viewers (issue #22): every PLY carries its class as a
 // scalar field CloudCompare loads by default, in the one palette; CloudCompare -SILENT under Xvfb
 // keeps it (skipped where CloudCompare is not installed); every .3Dscene carries its legend and
-// opens framing its whole content.
+// opens framing its whole content; the README's VLP-16 and sequence-00 figures come from runs.
 
 #include "support/child.hpp"
 #include "support/paths.hpp"
 
 #include <gseg/io/ply.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/scene.hpp>
 #include <gseg/palette.hpp>
 
+#include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/COpenGLViewport.h>
 #include <mrpt/opengl/CText.h>
@@ -18,10 +20,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -284,4 +288,103 @@ TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
     for (std::size_t i = 0; i < xyz.size(); i += 4)
         for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], xyz[i + std::size_t(a)]), hi[a] = std::max(hi[a], xyz[i + std::size_t(a)]);
     expectFrames(v, lo, hi);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The README's figures come from runs: parsed from README.md, compared with what the tools print
+// and write.
+
+namespace {
+
+/// README.md with every run of whitespace as one space (its sentences wrap anywhere).
+std::string readmeFlat() {
+    const std::string text = gseg::test::readText(std::string(GSEG_SOURCE_DIR) + "/README.md");
+    std::string flat;
+    for (const char c : text)
+        if (!std::isspace(static_cast<unsigned char>(c))) flat += c;
+        else if (!flat.empty() && flat.back() != ' ') flat += ' ';
+    return flat;
+}
+
+/// The points of the observations labelled `label` in a rawlog.
+std::size_t pointsOf(const std::string& rawlog, const std::string& label) {
+    std::size_t n = 0;
+    gseg::mrpt::forEachRawlogEntry(rawlog, [&](std::size_t, const std::shared_ptr<mrpt::serialization::CSerializable>& o) {
+        if (const auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(o); pc && pc->sensorLabel == label)
+            n += pc->pointcloud->size();
+        return true;
+    });
+    return n;
+}
+
+/// "17.1 % ground, 35.00 ms per scan, distToGround auto: estimated 2.27 m" without the time.
+std::string withoutTime(const std::string& line) { return std::regex_replace(line, std::regex("[0-9.]+ ms per scan"), "ms"); }
+
+/// The summary line of a rawlog-gseg run ("rawlog-gseg: 1 entries, ..."), "" if none.
+std::string summaryLine(const std::string& output) {
+    std::istringstream in(output);
+    for (std::string line; std::getline(in, line);)
+        if (line.rfind("rawlog-gseg: 1 entries", 0) == 0) return line;
+    return "";
+}
+
+}  // namespace
+
+TEST(ReadmeFigures, Vlp16FiguresAreWhatRawlogGsegWrites) {
+    const std::string vlp16 = "/usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog";
+    if (!fs::exists(vlp16)) GTEST_SKIP() << vlp16 << " absent (package mrpt-common)";
+    const std::string readme = readmeFlat();
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(readme, m, std::regex("`Velodyne1_SCAN_ground` \\((\\d+) points\\) and `Velodyne1_SCAN_obstacles` \\((\\d+) points\\)")))
+        << "README.md no longer states the VLP-16 split";
+    const std::size_t ground = std::stoul(m[1]), obstacles = std::stoul(m[2]);
+    const fs::path dir = gseg::test::freshDir("viewers", "readme_vlp16");
+    const std::string withConfig = (dir / "vlp16.rawlog").string();
+    const auto r = gseg::test::runCommand(gseg::test::tool("rawlog-gseg") + " -i " + vlp16 + " -o " + withConfig + " -c " +
+                                          GSEG_SOURCE_DIR + "/config/vlp16.yaml 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(pointsOf(withConfig, "Velodyne1_SCAN_ground"), ground);
+    EXPECT_EQ(pointsOf(withConfig, "Velodyne1_SCAN_obstacles"), obstacles);
+    // The two summaries the README shows (no -c, then config/vlp16.yaml), but for the time.
+    std::vector<std::string> shown;
+    const std::regex summary("rawlog-gseg: 1 entries, [^;]*; wrote out.rawlog");
+    for (auto it = std::sregex_iterator(readme.begin(), readme.end(), summary); it != std::sregex_iterator(); ++it)
+        shown.push_back(withoutTime(it->str()));
+    ASSERT_EQ(shown.size(), 2u) << "README.md: the two rawlog-gseg summaries of the VLP-16 rawlog";
+    const std::string noConfig = (dir / "out.rawlog").string();
+    const auto a = gseg::test::runCommand("cd '" + dir.string() + "' && " + gseg::test::tool("rawlog-gseg") + " -i " + vlp16 +
+                                          " -o out.rawlog 2>/dev/null");
+    ASSERT_EQ(a.status, 0) << a.output;
+    const auto b = gseg::test::runCommand("cd '" + dir.string() + "' && " + gseg::test::tool("rawlog-gseg") + " -i " + vlp16 +
+                                          " -o out.rawlog -w -c " + GSEG_SOURCE_DIR + "/config/vlp16.yaml 2>/dev/null");
+    ASSERT_EQ(b.status, 0) << b.output;
+    EXPECT_EQ(withoutTime(summaryLine(a.output)), shown[0]);
+    EXPECT_EQ(withoutTime(summaryLine(b.output)), shown[1]);
+}
+
+TEST(ReadmeFigures, Sequence00MapFiguresAreWhatRawlogOctomapPrints) {
+    const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
+    if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
+    const std::string readme = readmeFlat();
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(readme, m, std::regex("this gives (\\d+) ground, (\\d+) obstacle and (\\d+) free voxels at 0.2 m, "
+                                                        "clears (\\d+) obstacle voxels and leaves out (\\d+) reflection points")))
+        << "README.md no longer states the sequence-00 map figures";
+    const fs::path dir = gseg::test::freshDir("viewers", "readme_seq00");
+    const std::string rawlog = (dir / "seq00.rawlog").string();
+    const auto k = gseg::test::runCommand(gseg::test::tool("kitti2rawlog") + " -q -i " + fs::path(seq).parent_path().string() +
+                                          " -o " + rawlog + " 2>&1");
+    ASSERT_EQ(k.status, 0) << k.output;
+    const auto r = gseg::test::runCommand(gseg::test::tool("rawlog-octomap") + " -i " + rawlog + " -o " + (dir / "seq00").string() +
+                                          " -c " + GSEG_SOURCE_DIR + "/config/kitti_hdl64.yaml 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::smatch v, refl;
+    ASSERT_TRUE(std::regex_search(r.output, v, std::regex("voxels \\(0.20 m\\): (\\d+) ground, (\\d+) obstacle, (\\d+) free; (\\d+) obstacle voxels cleared")))
+        << r.output;
+    ASSERT_TRUE(std::regex_search(r.output, refl, std::regex("(\\d+) points more than belowGroundMargin below the ground left out"))) << r.output;
+    EXPECT_EQ(m[1].str(), v[1].str()) << "ground voxels";
+    EXPECT_EQ(m[2].str(), v[2].str()) << "obstacle voxels";
+    EXPECT_EQ(m[3].str(), v[3].str()) << "free voxels";
+    EXPECT_EQ(m[4].str(), v[4].str()) << "cleared obstacle voxels";
+    EXPECT_EQ(m[5].str(), refl[1].str()) << "reflection points left out";
 }
