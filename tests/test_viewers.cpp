@@ -8,10 +8,12 @@
 
 #include <gseg/io/ply.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/scene.hpp>
 #include <gseg/palette.hpp>
 
+#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/COpenGLViewport.h>
@@ -387,4 +389,52 @@ TEST(ReadmeFigures, Sequence00MapFiguresAreWhatRawlogOctomapPrints) {
     EXPECT_EQ(m[3].str(), v[3].str()) << "free voxels";
     EXPECT_EQ(m[4].str(), v[4].str()) << "cleared obstacle voxels";
     EXPECT_EQ(m[5].str(), refl[1].str()) << "reflection points left out";
+}
+
+// ---------------------------------------------------------------------------------------------
+// No configuration, any sensor: the loader's default is distToGround: auto where no file sets it.
+
+TEST(DefaultConfig, DistToGroundIsAutoWhereNoFileSetsIt) {
+    EXPECT_TRUE(gseg::mrpt::defaultConfig().distToGroundAuto);
+    EXPECT_TRUE(gseg::mrpt::loadConfigOrDefault("").distToGroundAuto);  // a tool without -c
+    EXPECT_DOUBLE_EQ(gseg::mrpt::defaultConfig().params.distToGround, gseg::Params().distToGround);  // the fallback
+    // A file without the key: auto; a number fixes it; KITTI's file keeps its 1.723 m.
+    const auto yaml = gseg::mrpt::loadConfigFromText("heightGate: 0.2\n", gseg::mrpt::ConfigFormat::Yaml, "t.yaml");
+    EXPECT_TRUE(yaml.distToGroundAuto);
+    EXPECT_DOUBLE_EQ(yaml.params.heightGate, 0.2);
+    const auto fixed = gseg::mrpt::loadConfigFromText("distToGround: 0.9\n", gseg::mrpt::ConfigFormat::Yaml, "f.yaml");
+    EXPECT_FALSE(fixed.distToGroundAuto);
+    EXPECT_DOUBLE_EQ(fixed.params.distToGround, 0.9);
+    const auto kitti = gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml");
+    EXPECT_FALSE(kitti.distToGroundAuto);
+    EXPECT_DOUBLE_EQ(kitti.params.distToGround, 1.723);
+    EXPECT_FALSE(gseg::mrpt::loadConfigOrDefault(std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml").distToGroundAuto);
+    // The map plugin's INI: a gseg section without the key is auto too; with a number, fixed.
+    mrpt::config::CConfigFileMemory ini;
+    ini.setContent(std::string("[map_gseg]\nheightGate = 0.2\n"));
+    gseg::mrpt::IniSections sections;
+    sections.params = "map_gseg", sections.sensorHeight = "map_sensorHeight", sections.traversability = "map_creationOpts";
+    EXPECT_TRUE(gseg::mrpt::loadConfigFromIni(ini, sections).distToGroundAuto);
+    ini.setContent(std::string("[map_gseg]\ndistToGround = 1.723\n"));
+    EXPECT_FALSE(gseg::mrpt::loadConfigFromIni(ini, sections).distToGroundAuto);
+}
+
+TEST(DefaultConfig, RawlogGsegWithoutConfigFindsTheVlp16GroundAndSaysTheHeight) {
+    const std::string vlp16 = "/usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog";
+    if (!fs::exists(vlp16)) GTEST_SKIP() << vlp16 << " absent (package mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("viewers", "no_config");
+    const auto r = gseg::test::runCommand(gseg::test::tool("rawlog-gseg") + " -i " + vlp16 + " -o '" + (dir / "out.rawlog").string() + "' 2>&1");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const std::string line = summaryLine(r.output);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(line, m, std::regex("([0-9.]+) % ground, .*distToGround auto: estimated ([0-9.]+) m"))) << r.output;
+    EXPECT_GT(std::stod(m[1]), 15.0) << "with KITTI's 1.723 m it was 0.7 %";
+    EXPECT_NEAR(std::stod(m[2]), 2.27, 0.05);
+    EXPECT_EQ(r.output.find("the ground lies"), std::string::npos) << "no height warning where the height is estimated";
+    // A fixed height the scan contradicts still warns (and the summary says it was fixed).
+    const auto k = gseg::test::runCommand(gseg::test::tool("rawlog-gseg") + " -i " + vlp16 + " -o '" + (dir / "k.rawlog").string() +
+                                          "' -c " + GSEG_SOURCE_DIR + "/config/kitti_hdl64.yaml 2>&1");
+    ASSERT_EQ(k.status, 0) << k.output;
+    EXPECT_NE(k.output.find("the ground lies 2.27 m below the sensor"), std::string::npos) << k.output;
+    EXPECT_NE(summaryLine(k.output).find("distToGround 1.723 m (fixed)"), std::string::npos) << k.output;
 }
