@@ -76,7 +76,7 @@ TEST(SegmentTool, KittiScanWritesLabelsPlyPngAndScene) {
     ASSERT_EQ(label.size(), bytes.size());
     for (std::size_t i = 0; i < bytes.size(); ++i) {
         ASSERT_EQ(label[i], double(bytes[i])) << i;
-        ASSERT_EQ(green[i], bytes[i] ? 200.0 : 60.0) << i;
+        ASSERT_EQ(green[i], bytes[i] ? gseg::palette::kGround[1] : gseg::palette::kNonGround[1]) << i;
     }
     mrpt::img::CImage img;
     ASSERT_TRUE(img.loadFromFile(png));
@@ -88,7 +88,7 @@ TEST(SegmentTool, KittiScanWritesLabelsPlyPngAndScene) {
     ASSERT_TRUE(points);
     ASSERT_EQ(points->size(), bytes.size());
     std::size_t greenPoints = 0;
-    for (std::size_t i = 0; i < points->size(); ++i) greenPoints += points->getPointColor(i).G == 200;
+    for (std::size_t i = 0; i < points->size(); ++i) greenPoints += points->getPointColor(i).G == gseg::palette::kGround[1];
     EXPECT_EQ(greenPoints, ground);
 }
 

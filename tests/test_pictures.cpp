@@ -109,3 +109,66 @@ TEST(Pictures, SizesOutsideTheLimitsAreRefused) {
     EXPECT_TRUE(same(light.textColour(), {0, 0, 0}));
     EXPECT_TRUE(same(dark.textColour(), {235, 235, 235}));
 }
+
+namespace {
+
+/// Every recorded text lies inside its canvas (x, y >= 0, right and bottom edges within).
+void expectInside(const std::vector<gseg::mrpt::DrawnText>& texts) {
+    ASSERT_FALSE(texts.empty());
+    for (const auto& t : texts) {
+        EXPECT_GE(t.x, 0) << t.text;
+        EXPECT_GE(t.y, 0) << t.text;
+        EXPECT_LE(t.x + t.width, t.canvasWidth) << "'" << t.text << "' runs off the right edge of a " << t.canvasWidth << " px canvas";
+        EXPECT_LE(t.y + t.height, t.canvasHeight) << "'" << t.text << "' runs off the bottom edge";
+    }
+}
+
+/// The title: the text drawn at the top-left corner (10, 8).
+std::string titleOf(const std::vector<gseg::mrpt::DrawnText>& texts) {
+    for (const auto& t : texts)
+        if (t.x == 10 && t.y == 8) return t.text;
+    return "";
+}
+
+}  // namespace
+
+TEST(Pictures, EveryTextFitsItsCanvasEvenWithLongFileNames) {
+    // A seeded scan, pictured at the sizes the tools use and a small one, under a long file name.
+    std::vector<float> xyz;
+    std::vector<std::uint8_t> labels;
+    for (int i = 0; i < 2000; ++i) {
+        const double a = 0.01 * i, r = 3 + 0.02 * i;
+        xyz.insert(xyz.end(), {float(r * std::cos(a)), float(r * std::sin(a)), i % 2 ? -1.7f : 0.5f});
+        labels.push_back(std::uint8_t(i % 2));
+    }
+    const gseg::PointCloudView cloud(xyz.data(), labels.size());
+    const std::string longName = "a_very_long_recording_name_from_a_field_campaign_" + std::string(120, 'x') + "_000042.rawlog";
+    for (const int size : {300, 800, 900}) {
+        std::vector<gseg::mrpt::DrawnText> texts;
+        {
+            const gseg::mrpt::TextRecorder recorder(texts);
+            gseg::mrpt::RenderOptions ro;
+            ro.sizePx = size;
+            ro.title = gseg::mrpt::displayName(longName) + ", entry 0 'Velodyne1_SCAN': ground / non-ground";
+            gseg::mrpt::topDownPng(cloud, labels, ro);
+        }
+        SCOPED_TRACE(size);
+        expectInside(texts);
+        // The title (at the top-left corner) is shortened in the middle: its start and end are still there.
+        const std::string title = titleOf(texts);
+        EXPECT_EQ(title.rfind("a_very", 0), 0u) << title;
+        EXPECT_NE(title.find("..."), std::string::npos) << title;
+        EXPECT_EQ(title.substr(title.size() - 12), "/ non-ground") << title;
+    }
+    // A title that fits is drawn as it is.
+    std::vector<gseg::mrpt::DrawnText> texts;
+    {
+        const gseg::mrpt::TextRecorder recorder(texts);
+        gseg::mrpt::RenderOptions ro;
+        ro.sizePx = 800;
+        ro.title = "000000.bin: ground / non-ground";
+        gseg::mrpt::topDownPng(cloud, labels, ro);
+    }
+    expectInside(texts);
+    EXPECT_EQ(titleOf(texts), "000000.bin: ground / non-ground");
+}

@@ -16,7 +16,7 @@ namespace {
 using mrpt::Colour;
 using mrpt::Picture;
 
-constexpr int kW = 900, kH = 570, kLeft = 70, kRight = 210, kTop = 70, kBottom = 60;
+constexpr int kW = 900, kH = 570, kLeft = 70, kRight = 260, kTop = 70, kBottom = 60;
 const Colour kBlack{0, 0, 0}, kGrey{210, 210, 210}, kWhite{255, 255, 255};
 const Colour kPalette[] = {{31, 119, 180}, {214, 39, 40},  {44, 160, 44},   {148, 103, 189},
                            {255, 127, 14}, {140, 86, 75}, {227, 119, 194}, {23, 190, 207}};
@@ -98,7 +98,7 @@ std::string rangePlotPng(const std::vector<SequenceSummary>& seqs) {
 void plotOutcomes(const std::string& path, const PointCloudView& cloud, const std::vector<PointOutcome>& outcomes,
                   const std::string& title) {
     // Classes indexed by PointOutcome; errors drawn last (over the correct points) and larger.
-    const std::vector<mrpt::PointClass> classes = {{{95, 95, 105}, "non-ground (correct)", 0, 1},
+    const std::vector<mrpt::PointClass> classes = {{{150, 150, 160}, "non-ground (correct)", 0, 1},
                                                    {{40, 170, 70}, "true ground", 1, 1},
                                                    {{255, 40, 40}, "false ground", 3, 3},
                                                    {{60, 140, 255}, "missed ground", 2, 3}};

@@ -65,14 +65,19 @@ int run(const Cli& cli) {
         ply.comment = "gseg ground segmentation of " + mrpt::displayName(cli.scan);
         add(cli.plyOut, io::labelledPlyBytes(cloud, r.labels, {}, ply));
     }
+    // The pictures' name of the scan: the file, and for a rawlog which entry and sensor
+    // ("x.rawlog, entry 0 'Velodyne1_SCAN'"; the description also names the class).
+    std::string name = mrpt::displayName(cli.scan);
+    if (scan.description.rfind("rawlog entry", 0) == 0) {
+        const std::size_t colon = scan.description.find(':'), quote = scan.description.find(" '");
+        name += ", " + scan.description.substr(7, colon - 7) + (quote == std::string::npos ? "" : scan.description.substr(quote));
+    }
     if (!cli.pngOut.empty()) {
         mrpt::RenderOptions ro;
-        ro.title = mrpt::displayName(cli.scan) + ": ground / non-ground";
-        if (scan.description.rfind("rawlog entry", 0) == 0)  // which scan of the rawlog
-            ro.title = mrpt::displayName(cli.scan) + ", " + scan.description + ": ground / non-ground";
+        ro.title = name + ": ground / non-ground";
         add(cli.pngOut, mrpt::topDownPng(cloud, r.labels, ro));
     }
-    if (!cli.sceneOut.empty()) add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels));
+    if (!cli.sceneOut.empty()) add(cli.sceneOut, mrpt::scanSceneBytes(cloud, r.labels, "gseg: " + name));
     std::vector<std::string> paths;
     for (const auto& o : outputs) paths.push_back(o.first);
     io::AtomicFileSet files(paths);

@@ -73,6 +73,12 @@ public:
             return;
         }
         ++scans_;
+        if (r.distToGroundEstimated) {
+            minHeight_ = std::min(minHeight_, r.distToGround), maxHeight_ = std::max(maxHeight_, r.distToGround);
+            ++estimated_;
+        } else {
+            fallback_ = r.distToGround, ++fixed_;
+        }
         if (!r.heightWarning.empty())  // a warning, not an error: said with the input's summary
             warnings_.push_back(name_ + "entry " + std::to_string(r.entry) + " ('" + r.label + "'): " + r.heightWarning);
         const double ground = 100.0 * double(r.ground) / double(std::max<std::size_t>(1, r.points));
@@ -84,11 +90,37 @@ public:
 
     std::size_t scans() const { return scans_; }
 
+    /// The sensor heights used, for the summary: "distToGround auto: estimated 2.27 m" (a range
+    /// over several scans, and the scans that fell back to the configured height), or
+    /// "distToGround 1.723 m (fixed)".
+    std::string heights(bool autoHeight) const {
+        char text[200];
+        if (!autoHeight) {
+            std::snprintf(text, sizeof text, "distToGround %.3f m (fixed)", fallback_);
+            return text;
+        }
+        std::string out = "distToGround auto: ";
+        if (estimated_ == 1 || (estimated_ > 1 && maxHeight_ - minHeight_ < 0.005))
+            std::snprintf(text, sizeof text, "estimated %.2f m", minHeight_);
+        else if (estimated_ > 1)
+            std::snprintf(text, sizeof text, "estimated %.2f to %.2f m", minHeight_, maxHeight_);
+        else
+            std::snprintf(text, sizeof text, "no estimate");
+        out += text;
+        if (fixed_) {
+            std::snprintf(text, sizeof text, ", %zu scan(s) at the configured %.3f m", fixed_, fallback_);
+            out += text;
+        }
+        return out;
+    }
+
 private:
     std::string name_;
     std::vector<std::string>& skipped_;
     std::vector<std::string>& warnings_;
     gseg::Progress& progress_;
+    double minHeight_ = 1e300, maxHeight_ = -1e300, fallback_ = 0;
+    std::size_t estimated_ = 0, fixed_ = 0;
     std::size_t scans_ = 0;
 };
 
@@ -118,8 +150,7 @@ std::string unmatchedSensor(const std::vector<std::string>& sensors, const std::
 /// input in the progress lines of a batch ("" for one input). Throws naming the entry on a bad
 /// input, leaving nothing at `outPath`.
 FileResult segmentFile(const Cli& cli, const std::string& in, const std::string& outPath, const std::string& name) {
-    gseg::mrpt::LoadedConfig config;
-    if (!cli.config.empty()) config = gseg::mrpt::loadConfig(cli.config);
+    const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(cli.config);
     gseg::mrpt::RawlogSegmenterOptions options;
     options.sensors = cli.sensors;
     options.replace = cli.replace;
@@ -146,6 +177,7 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
                   t.entries, t.scans, t.points, 100.0 * double(t.ground) / double(std::max<std::size_t>(1, t.points)),
                   t.scans ? t.ms / double(t.scans) : 0.0);
     result.message = text;
+    if (reporter.scans()) result.message += ", " + reporter.heights(config.distToGroundAuto);
     if (t.nonFinite) result.message += ", " + std::to_string(t.nonFinite) + " non-finite points labelled non-ground";
     if (t.alreadySplit) result.message += ", " + std::to_string(t.alreadySplit) + " already split (passed through)";
     if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";

@@ -248,7 +248,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(cli.prefix)) outputs.push_back({"-o", path});
     gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
-    const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
+    const gseg::mrpt::LoadedConfig cfg = gseg::mrpt::loadConfigOrDefault(cli.config);
     ScanStream stream(cli.poses);
     gseg::map::MapBuilder builder(cfg, cli.options);
 

@@ -176,7 +176,7 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
     std::vector<ScanWorker> workers;
     std::string setupError;
     try {
-        const gseg::mrpt::LoadedConfig cfg = cli.config.empty() ? gseg::mrpt::LoadedConfig() : gseg::mrpt::loadConfig(cli.config);
+        const gseg::mrpt::LoadedConfig cfg = gseg::mrpt::loadConfigOrDefault(cli.config);
         for (unsigned i = 0; i < threads; ++i) workers.emplace_back(cfg, cli.options);
     } catch (const std::exception& e) {
         setupError = gseg::mrpt::errorReason(e);

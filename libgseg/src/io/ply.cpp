@@ -213,6 +213,13 @@ std::vector<float> readPly(const std::string& path) {
     return parsePly(bytes.data(), bytes.size(), path);
 }
 
+std::string classScalarProperty(const PlyOptions& options) {
+    std::string name = "scalar_";
+    for (const char c : options.nonGroundName)
+        name += (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ? c : '_';
+    return name;
+}
+
 std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                              const PlyColours& colours, const PlyOptions& options) {
     if (labels.size() != cloud.size())
@@ -221,17 +228,24 @@ std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std:
     if (options.intensity && cloud.strideBytes() < 4 * sizeof(float))
         throw std::invalid_argument("writeLabelledPly: intensity asked for, but the points are " +
                                     std::to_string(cloud.strideBytes()) + " bytes apart (x, y, z, intensity need 16)");
-    std::string out = "ply\nformat binary_little_endian 1.0\ncomment " + options.comment + "\ncomment label: 1 " +
-                      options.groundName + " (" + colours.groundName + "), 0 " + options.nonGroundName + " (" +
-                      colours.nonGroundName + ")\nelement vertex " + std::to_string(cloud.size()) +
-                      "\nproperty float x\nproperty float y\nproperty float z\n" +
+    const std::string scalar = classScalarProperty(options);
+    std::string out = "ply\nformat binary_little_endian 1.0\ncomment " + options.comment + "\ncomment " + scalar + ": 1 " +
+                      options.nonGroundName + ", 0 " + options.groundName +
+                      " (CloudCompare's first scalar field: on its default ramp " + options.nonGroundName +
+                      " red, " + options.groundName + " blue)\ncomment label: 1 " + options.groundName + " (" +
+                      colours.groundName + "), 0 " + options.nonGroundName + " (" + colours.nonGroundName +
+                      ")\nelement vertex " + std::to_string(cloud.size()) +
+                      "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar " + scalar + "\n" +
                       (options.intensity ? "property float intensity\n" : "") +
                       "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar label\nend_header\n";
-    const std::size_t header = out.size(), record = options.intensity ? 20 : 16;
+    const std::size_t header = out.size(), record = options.intensity ? 21 : 17;
     out.resize(header + cloud.size() * record);
     char* p = out.data() + header;
     for (std::size_t i = 0; i < cloud.size(); ++i, p += record) {
-        std::memcpy(p, cloud.point(i), options.intensity ? 16 : 12);
+        const float* point = cloud.point(i);
+        std::memcpy(p, point, 12);
+        p[12] = char(labels[i] ? 0 : 1);
+        if (options.intensity) std::memcpy(p + 13, point + 3, 4);
         char* rest = p + record - 4;
         std::memcpy(rest, labels[i] ? colours.ground : colours.nonGround, 3);
         rest[3] = char(labels[i] ? 1 : 0);

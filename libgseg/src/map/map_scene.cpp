@@ -2,6 +2,7 @@
 
 #include <gseg/mrpt/gzip_stream.hpp>
 #include <gseg/map/layer_grid.hpp>
+#include <gseg/mrpt/scene.hpp>
 #include <gseg/map/traversability_map.hpp>
 
 #include <mrpt/opengl/COctoMapVoxels.h>
@@ -13,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -111,6 +113,25 @@ void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
     if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
     scene.insert(axes);
     if (layers && layers->find("elevation")) scene.insert(elevationMesh(*layers));
+    // The legend and a camera framing the voxels and the path (the shared scene helper).
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    bool any = false;
+    const auto grow = [&](float x, float y, float z) {
+        const float p[3] = {x, y, z};
+        for (int a = 0; a < 3; ++a) lo[a] = any ? std::min(lo[a], p[a]) : p[a], hi[a] = any ? std::max(hi[a], p[a]) : p[a];
+        any = true;
+    };
+    for (std::size_t i = 0; i < labels.size(); ++i) grow(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    for (const auto& p : path) grow(float(p.x()), float(p.y()), float(p.z()));
+    char title[96];
+    std::snprintf(title, sizeof title, "gseg traversability map, %.2f m voxels", resolution);
+    gseg::mrpt::addLegendAndCamera(
+        scene, title,
+        {{colours[1], "traversable: ground voxels (" + std::to_string(ground) + ")"},
+         {colours[0], "obstacle voxels (" + std::to_string(labels.size() - ground) + ")"},
+         {Rgb{40, 120, 255}, "driven path: a box at each sensor position (" + std::to_string(path.size()) + ")"},
+         {Rgb{200, 200, 200}, "axes at the start: x red, y green, z up blue, 2 m"}},
+        lo, hi);
     gseg::mrpt::writeGzipObject(file, scene);
 }
 

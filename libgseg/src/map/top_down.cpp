@@ -25,7 +25,7 @@ const gseg::mrpt::Colour kPath{40, 120, 255}, kStart{255, 255, 255};
 std::vector<gseg::mrpt::LegendEntry> legendEntries() {
     return {{colourOf(CellClass::Traversable), "traversable (ground, nothing within clearance)"},
             {colourOf(CellClass::Obstacle), "obstacle"},
-            {colourOf(CellClass::Unknown), "unknown: not seen (page around the map darker)"},
+            {colourOf(CellClass::Unknown), "unknown: not seen"},
             {kPath, "driven path; arrowhead: direction of travel"},
             {kStart, "start of the path"},
             {{}, "top view: x up, y (left) to the left", false},
@@ -55,13 +55,13 @@ void drawPath(gseg::mrpt::Picture& pic, const std::vector<Eigen::Vector3d>& path
     }
     for (std::size_t i = 1; i < pts.size(); ++i) pic.line(pts[i - 1].first, pts[i - 1].second, pts[i].first, pts[i].second, kPath, 2);
     if (pts.empty()) return;
-    for (std::size_t k = pts.size() - 1; k-- > 0;) {  // the arrowhead: from the last position at least 12 px back
+    for (std::size_t k = pts.size() - 1; k-- > 0;) {  // the arrow: the way from a position at least 12 px back
         const int dx = pts.back().first - pts[k].first, dy = pts.back().second - pts[k].second;
         if (dx * dx + dy * dy < 144 && k > 0) continue;
-        if (dx || dy) {
-            const double n = std::hypot(double(dx), double(dy));
-            pic.arrow(pts.back().first - int(std::lround(14 * dx / n)), pts.back().second - int(std::lround(14 * dy / n)),
-                      int(std::lround(14 * dx / n)), int(std::lround(14 * dy / n)), "", 2, kPath);
+        if (dx || dy) {  // 40 px long, ending at the last position, whatever the scale
+            const double n = std::hypot(double(dx), double(dy)), len = 40;
+            pic.arrow(pts.back().first - int(std::lround(len * dx / n)), pts.back().second - int(std::lround(len * dy / n)),
+                      int(std::lround(len * dx / n)), int(std::lround(len * dy / n)), "", 3, kPath);
         }
         break;
     }

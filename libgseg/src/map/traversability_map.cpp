@@ -1,6 +1,7 @@
 #include <gseg/map/traversability_map.hpp>
 
 #include <gseg/io/ply.hpp>
+#include <gseg/palette.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/mrpt/scene.hpp>
@@ -97,8 +98,8 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
 
 Rgb colourOf(CellClass c) {
     switch (c) {
-        case CellClass::Traversable: return {60, 180, 75};
-        case CellClass::Obstacle: return {220, 40, 40};
+        case CellClass::Traversable: return {gseg::palette::kGround[0], gseg::palette::kGround[1], gseg::palette::kGround[2]};
+        case CellClass::Obstacle: return {gseg::palette::kNonGround[0], gseg::palette::kNonGround[1], gseg::palette::kNonGround[2]};
         default: return {105, 105, 115};
     }
 }

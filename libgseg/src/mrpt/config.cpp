@@ -298,7 +298,7 @@ void loadIniSection(LoadedConfig& cfg, const ::mrpt::config::CConfigFileBase& in
 
 LoadedConfig loadIni(const ::mrpt::config::CConfigFileBase& ini, const IniSections& names, const std::string& where,
                      const std::string* text) {
-    LoadedConfig cfg;
+    LoadedConfig cfg = defaultConfig();
     const std::vector<IniKey> scanned = text ? scanIniKeys(*text) : std::vector<IniKey>();
     loadIniSection(cfg, ini, Section::Params, names.params, scanned, where);
     loadIniSection(cfg, ini, Section::SensorHeight, names.sensorHeight, scanned, where);
@@ -325,7 +325,7 @@ const std::vector<ConfigLimit>& configLimits() {
 }
 
 LoadedConfig loadConfigFromYaml(const ::mrpt::containers::yaml& root, const std::string& where) {
-    LoadedConfig cfg;
+    LoadedConfig cfg = defaultConfig();
     if (root.isNullNode()) {
         finish(cfg, where);
         return cfg;
@@ -381,7 +381,7 @@ LoadedConfig loadConfigFromText(const std::string& text, ConfigFormat format, co
         throw std::runtime_error(where + ": a NUL byte at offset " + std::to_string(nul) +
                                  ": not a text configuration file");
     if (format == ConfigFormat::Yaml) {
-        LoadedConfig cfg;
+        LoadedConfig cfg = defaultConfig();
         for (const YamlEntry& e : parseFlatYaml(text, where))
             apply(cfg, e.section, e.key, e.value, where + ":" + std::to_string(e.line));
         finish(cfg, where);
@@ -402,6 +402,14 @@ LoadedConfig loadConfigFromText(const std::string& text, ConfigFormat format, co
             throw std::runtime_error(where + ": unknown section [" + name + "] (gseg reads [gseg], [sensorHeight] and [traversability])");
     return loadIni(ini, IniSections(), where, &text);
 }
+
+LoadedConfig defaultConfig() {
+    LoadedConfig cfg;
+    cfg.distToGroundAuto = true;  // any sensor at any height; a file's number fixes it
+    return cfg;
+}
+
+LoadedConfig loadConfigOrDefault(const std::string& path) { return path.empty() ? defaultConfig() : loadConfig(path); }
 
 LoadedConfig loadConfig(const std::string& path) {
     const std::string ext = lower(path);

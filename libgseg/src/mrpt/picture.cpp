@@ -17,6 +17,18 @@ namespace {
 
 ::mrpt::img::TColor tcolor(Colour c) { return ::mrpt::img::TColor(c.r, c.g, c.b); }
 
+thread_local std::vector<DrawnText>* tRecorded = nullptr;  // TextRecorder's sink on this thread
+
+/// `s` as it fits between x and the right edge of a canvas `width` wide (4 px margin): unchanged
+/// when it fits, else its start and end around "..." (a file name keeps its end).
+std::string fitted(const std::string& s, int x, int width) {
+    const int room = (width - 4 - x) / Picture::kCharWidth;
+    if (int(s.size()) <= room) return s;
+    if (room <= 3) return s.substr(0, std::size_t(std::max(0, room)));
+    const std::size_t keep = std::size_t(room - 3), head = keep / 3;
+    return s.substr(0, head) + "..." + s.substr(s.size() - (keep - head));
+}
+
 /// MRPT 2.5.8's CImage text drawing is not thread-safe (eval's workers crashed the heap without it).
 std::mutex& textMutex() {
     static std::mutex m;
@@ -82,18 +94,29 @@ void Picture::circle(int x, int y, int radius, Colour c) { image_->drawCircle(x,
 void Picture::text(int x, int y, const std::string& s) { text(x, y, s, textColour()); }
 
 void Picture::text(int x, int y, const std::string& s, Colour c) {
+    const std::string shown = fitted(s, x, width_);
+    record(x, y, shown);
     const std::lock_guard<std::mutex> lock(textMutex());
-    image_->textOut(x, y, s, tcolor(c));
+    image_->textOut(x, y, shown, tcolor(c));
 }
+
+void Picture::record(int x, int y, const std::string& s) const {
+    if (tRecorded) tRecorded->push_back({x, y, int(s.size()) * kCharWidth, kTextHeight, s, width_, height_});
+}
+
+TextRecorder::TextRecorder(std::vector<DrawnText>& sink) : previous_(tRecorded) { tRecorded = &sink; }
+TextRecorder::~TextRecorder() { tRecorded = previous_; }
 
 void Picture::title(const std::string& title, const std::string& subtitle) {
     const int lines = subtitle.empty() ? 1 : 2;
-    const std::size_t chars = std::max(title.size(), subtitle.size());
+    const std::string shown = fitted(title, 10, width_);
+    const std::size_t chars = std::max(shown.size(), fitted(subtitle, 10, width_).size());
     fill(0, 0, std::min(width_ - 1, 16 + int(chars) * kCharWidth), 8 + lines * kLineHeight, background_);
+    record(10, 8, shown);
     {
         const std::lock_guard<std::mutex> lock(textMutex());
         image_->selectTextFont("9x15B");
-        image_->textOut(10, 8, title, tcolor(textColour()));
+        image_->textOut(10, 8, shown, tcolor(textColour()));
         image_->selectTextFont("9x15");
     }
     if (!subtitle.empty()) text(10, 8 + kLineHeight, subtitle);

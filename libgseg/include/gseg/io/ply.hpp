@@ -1,9 +1,10 @@
 #pragma once
 /// \file ply.hpp
 /// PLY point clouds: reading vertices (x, y, z, optional intensity, any property by name) and
-/// writing a cloud coloured by ground labels, with a `label` property, for viewers (CloudCompare
-/// filters by a scalar field such as `label`).
+/// writing a cloud coloured by ground labels, with the class as a scalar field CloudCompare loads
+/// by default and a `label` property for programs.
 
+#include <gseg/palette.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <cstdint>
@@ -32,8 +33,8 @@ std::vector<double> parsePlyProperty(const std::uint8_t* data, std::size_t size,
 
 /// Colours of writeLabelledPly (RGB) and their names (written into the header's comments).
 struct PlyColours {
-    std::uint8_t ground[3] = {40, 200, 60};     ///< label 1
-    std::uint8_t nonGround[3] = {230, 60, 40};  ///< label 0
+    std::uint8_t ground[3] = {palette::kGround[0], palette::kGround[1], palette::kGround[2]};  ///< label 1
+    std::uint8_t nonGround[3] = {palette::kNonGround[0], palette::kNonGround[1], palette::kNonGround[2]};  ///< label 0
     std::string groundName = "green", nonGroundName = "red";
 };
 
@@ -43,13 +44,28 @@ struct PlyOptions {
     /// (needs a stride of at least 16 bytes, as a KITTI buffer viewed in place).
     bool intensity = false;
     std::string comment = "gseg ground segmentation";  ///< first comment line of the header
-    std::string groundName = "ground", nonGroundName = "non-ground";  ///< what labels 1 and 0 mean
+    /// What labels 1 and 0 mean; nonGroundName also names the class scalar field
+    /// (`scalar_` + the name, non-alphanumerics as `_`: `scalar_non_ground`, `scalar_obstacle`).
+    std::string groundName = "ground", nonGroundName = "non-ground";
 };
 
-/// Writes `cloud` as binary little-endian PLY with x, y, z (float), optionally intensity (float),
-/// red, green, blue (uchar, by label) and label (uchar: 1 ground, 0 non-ground), atomically
-/// (temporary file, then rename). Throws std::invalid_argument if the label count differs from the
-/// point count, or intensity is asked for points packed closer than 16 bytes.
+/// The name of the class scalar-field property for `options` ("scalar_non_ground").
+std::string classScalarProperty(const PlyOptions& options = PlyOptions());
+
+/// Writes `cloud` as binary little-endian PLY with x, y, z (float), the class scalar field
+/// classScalarProperty() (uchar: 1 non-ground, 0 ground), optionally intensity (float), red, green,
+/// blue (uchar, by label) and label (uchar: 1 ground, 0 non-ground, as the labels file),
+/// atomically (temporary file, then rename).
+///
+/// For CloudCompare (2.11, Debian): a vertex property named `scalar_*` is a scalar field it loads
+/// by default, in its PLY dialog and with `-SILENT` (which drops other unknown properties such as
+/// `label`), named without the prefix ("non ground"); it shows the first scalar field of the
+/// header, over the RGB colours, on its default Blue>Green>Yellow>Red ramp from the minimum to
+/// the maximum. The class field therefore comes first, with 1 for the class drawn red in the RGB
+/// colours: CloudCompare's first view shows non-ground red (as the RGB), ground blue, and choosing
+/// Colors: RGB in its properties shows the palette. Throws std::invalid_argument if the label
+/// count differs from the point count, or intensity is asked for points packed closer than 16
+/// bytes.
 void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                       const PlyColours& colours = PlyColours(), const PlyOptions& options = PlyOptions());
 

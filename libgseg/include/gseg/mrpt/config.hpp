@@ -22,13 +22,27 @@ class CConfigFileBase;
 
 namespace gseg::mrpt {
 
-/// Parameters read from a file, plus what Params cannot hold.
+/// Parameters read from a file, plus what Params cannot hold. A value-initialised LoadedConfig
+/// holds the library defaults with the fixed distToGround of gseg::Params (KITTI's 1.723 m); what
+/// the loaders start from is defaultConfig().
 struct LoadedConfig {
     gseg::Params params;            ///< every key not given keeps its default; validated
-    bool distToGroundAuto = false;  ///< the file said `distToGround: auto` (estimate it per scan)
+    bool distToGroundAuto = false;  ///< estimate the sensor height per scan (`distToGround: auto`)
     gseg::SensorHeightOptions sensorHeight;           ///< YAML `sensorHeight:`, INI `[sensorHeight]`; validated
     gseg::map::TraversabilityOptions traversability;  ///< YAML `traversability:`, INI `[traversability]`; validated
 };
+
+/// The configuration where no file sets a key: the library defaults (gseg::Params, the values of
+/// config/kitti_hdl64.yaml) with `distToGround: auto`, so that a tool or the map plugin run
+/// without a file, or with one that does not set distToGround, estimates the sensor height per
+/// scan and gives sensible ground on any sensor at any height (Params::distToGround, 1.723 m, is
+/// then the fallback for a scan without an estimate). A file that sets `distToGround` to a number
+/// fixes the height (config/kitti_hdl64.yaml does); a fixed height the scan contradicts is
+/// warned about by the segmenter. Every loader below starts from this.
+LoadedConfig defaultConfig();
+
+/// loadConfig(path), or defaultConfig() when `path` is empty (a tool run without `-c`).
+LoadedConfig loadConfigOrDefault(const std::string& path);
 
 /// Reads a YAML (`.yaml`, `.yml`) or INI (`.ini`, `.cfg`, section `[gseg]`) file. Throws
 /// std::runtime_error (only that type) naming the file, and the line or key, on a missing or

@@ -30,6 +30,25 @@ struct LegendEntry {
     bool swatch = true;
 };
 
+/// Where a Picture drew a text, and the canvas: for tests (every text must lie inside its canvas).
+struct DrawnText {
+    int x = 0, y = 0, width = 0, height = 0;  ///< [px] the text's box, top-left corner and size
+    std::string text;                         ///< as drawn (after fitting)
+    int canvasWidth = 0, canvasHeight = 0;    ///< [px]
+};
+
+/// While one lives, every text the Pictures of this thread draw is appended to `sink`.
+class TextRecorder {
+public:
+    explicit TextRecorder(std::vector<DrawnText>& sink);
+    ~TextRecorder();
+    TextRecorder(const TextRecorder&) = delete;
+    TextRecorder& operator=(const TextRecorder&) = delete;
+
+private:
+    std::vector<DrawnText>* previous_;
+};
+
 /// The orientation line of every top view: "top view: x (forward) up, y (left) to the left".
 extern const char* const kTopViewOrientation;
 
@@ -44,6 +63,7 @@ class Picture {
 public:
     static constexpr int kLineHeight = 20;  ///< [px] legend and title line spacing
     static constexpr int kCharWidth = 9;    ///< [px] width of a character of the default font
+    static constexpr int kTextHeight = 15;  ///< [px] height of a line of text (fonts 9x15, 9x15B)
 
     /// Throws std::invalid_argument on a size below 1 or above 16384 pixels a side.
     Picture(int width, int height, Colour background);
@@ -62,7 +82,9 @@ public:
     void fill(int x0, int y0, int x1, int y1, Colour c);
     void line(int x0, int y0, int x1, int y1, Colour c, int width = 1);
     void circle(int x, int y, int radius, Colour c);
-    /// Text with its top-left corner at (x, y); in textColour() unless given.
+    /// Text with its top-left corner at (x, y); in textColour() unless given. A text longer than
+    /// the room up to the right edge is shortened in the middle ("08/velo...000000.bin"), so
+    /// every text fits its canvas (titles too).
     void text(int x, int y, const std::string& s);
     void text(int x, int y, const std::string& s, Colour c);
 
@@ -89,6 +111,8 @@ public:
     const ::mrpt::img::CImage& image() const { return *image_; }
 
 private:
+    void record(int x, int y, const std::string& s) const;  ///< to the TextRecorder of this thread, if any
+
     std::unique_ptr<::mrpt::img::CImage> image_;
     int width_ = 0, height_ = 0;
     Colour background_;

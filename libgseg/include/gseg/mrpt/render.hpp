@@ -6,6 +6,7 @@
 #include <gseg/mrpt/picture.hpp>
 #include <gseg/mrpt/png.hpp>
 #include <gseg/mrpt/top_view.hpp>
+#include <gseg/palette.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <cstdint>
@@ -17,8 +18,10 @@ namespace gseg::mrpt {
 /// How the picture is drawn. The sensor is at the centre; x (forward) points up, y (left) points left.
 using RenderOptions = TopViewOptions;
 
-/// Colours of the labels in scan pictures (and of the map's traversable / obstacle cells).
-inline constexpr Colour kGroundColour{40, 200, 60}, kNonGroundColour{230, 60, 40};  // as the PLY (gseg::io::PlyColours)
+/// Colours of the labels in scan pictures and scenes: the one palette (gseg/palette.hpp), as the
+/// PLYs and the map's traversable / obstacle cells.
+inline constexpr Colour kGroundColour{palette::kGround[0], palette::kGround[1], palette::kGround[2]};
+inline constexpr Colour kNonGroundColour{palette::kNonGround[0], palette::kNonGround[1], palette::kNonGround[2]};
 
 /// Writes a top-down PNG (drawTopView()): ground green, non-ground red (drawn over the ground),
 /// with the title, orientation, range circles, forward arrow, scale bar and a legend with the

@@ -4,6 +4,7 @@
 /// at gseg's outputs in 3D on stock Debian (SceneViewer3D refuses PLY point clouds, and octovis
 /// 1.9.7 shows a black view on bookworm).
 
+#include <gseg/mrpt/picture.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <cstdint>
@@ -21,9 +22,28 @@ namespace gseg::mrpt {
 /// that the caller writes it with checked writes. The same scene always gives the same bytes.
 std::string sceneFileBytes(const ::mrpt::opengl::COpenGLScene& scene);
 
+/// One line of a scene's legend: its text, drawn in `colour` (the class colour it explains).
+struct SceneLegendLine {
+    Colour colour;
+    std::string text;
+};
+
+/// What SceneViewer3D (mrpt-apps 2.5.8) shows at first open, for every `.3Dscene` gseg writes
+/// (scans and maps): adds to `scene` a viewport named "legend" over the top-left corner of the
+/// main view (dark, its own fixed camera, so it stays readable whatever the user does with the
+/// main view) holding `title` in white and one line per entry of `legend` in its colour (bitmap
+/// text, CText; at most 5 lines in all, each up to about 90 characters); and sets the main viewport's camera to frame the axis-aligned box
+/// [lo, hi] (metres, the scene's frame: the content's bounding box) whole, seen from behind and
+/// above (azimuth -135 deg, elevation 50 deg), with followCamera on, which SceneViewer3D reads
+/// from the file instead of keeping its default close-up camera.
+void addLegendAndCamera(::mrpt::opengl::COpenGLScene& scene, const std::string& title,
+                        const std::vector<SceneLegendLine>& legend, const float lo[3], const float hi[3]);
+
 /// A scene of a labelled scan in its sensor frame: ground points green, non-ground red (the
-/// colours of the PLY and the PNG), and x/y/z axes of 1 m at the sensor. Throws
+/// colours of the PLY and the PNG), x/y/z axes of 1 m at the sensor, the legend and the camera
+/// framing every finite point (addLegendAndCamera()); `title` heads the legend. Throws
 /// std::invalid_argument if the label count differs from the point count.
-std::string scanSceneBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels);
+std::string scanSceneBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                           const std::string& title = "gseg ground segmentation");
 
 }  // namespace gseg::mrpt
