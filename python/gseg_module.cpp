@@ -185,7 +185,7 @@ py::dict configDict(const gseg::mrpt::LoadedConfig& c) {
 /// Params: a loaded configuration (gseg::Params plus distToGround auto, sensorHeight,
 /// traversability), immutable once made, as the library's.
 struct PyParams {
-    gseg::mrpt::LoadedConfig config;
+    gseg::mrpt::LoadedConfig config = gseg::mrpt::defaultConfig();
 };
 
 PyParams paramsFrom(const py::object& source, const py::kwargs& kwargs) {
@@ -514,11 +514,14 @@ The configuration of the segmenter: every key of gseg's params.hpp (the YAML/INI
 distToGround [m], cellSizeX [m], heightGate [m]), distToGround="auto" to estimate the sensor
 height per scan, and the nested sensorHeight / traversability options.
 
-Params()                        the library defaults (KITTI HDL-64E, sensor 1.723 m up)
+Params()                        the defaults of the tools without a configuration file: the
+                                KITTI HDL-64E parameters with distToGround "auto" (the sensor
+                                height estimated per scan; 1.723 m where a scan gives no estimate)
 Params(distToGround=1.8, ...)   keyword arguments
 Params({"distToGround": "auto"}) a dict
 Params("config/vlp16.yaml")     a YAML or INI file (as the tools read them), optionally with
                                 keyword arguments that override its values
+distToGround is "auto" wherever it is not given (as in the files); give a number to fix it.
 Unknown keys and invalid values raise ValueError naming the key. Params are immutable: make new
 ones with Params(old, key=value).)doc")
         .def(py::init([](const py::object& source, const py::kwargs& kwargs) { return paramsFrom(source, kwargs); }),

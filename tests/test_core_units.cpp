@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -446,4 +447,34 @@ TEST(AutoHeight, NeverRefusesAScanFallsBackToThePreviousThenTheDefault) {
     r = seg.segment(gseg::PointCloudView(few.data(), 3));
     EXPECT_EQ(r.decision.source, gseg::HeightDecision::Source::Fallback);
     EXPECT_EQ(r.decision.height, 1.5);
+}
+
+// The segmenter's route (ground per column from its grid, the finite points given) and the
+// convenience one (both from the labels) flag the same points, on a seeded scene with reflections.
+TEST(BelowGround, TheGridRouteAndTheLabelRouteFlagTheSamePoints) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u(-20.f, 20.f), noise(-0.03f, 0.03f);
+    std::vector<float> xyz;
+    std::vector<std::uint8_t> labels;
+    for (int i = 0; i < 4000; ++i) {
+        const float x = u(rng), y = u(rng);
+        const int kind = i % 10;  // 0: a reflection 1-3 m down, 1: an obstacle, 2: no return, else ground
+        const float z = kind == 0 ? -1.73f - 1.f - std::fabs(noise(rng)) * 60 : kind == 1 ? 0.5f : -1.73f + noise(rng);
+        xyz.insert(xyz.end(), {x, y, kind == 2 ? NAN : z});
+        labels.push_back(kind >= 3);
+    }
+    const gseg::PointCloudView cloud(xyz.data(), labels.size());
+    gseg::Params p;
+    gseg::BelowGroundScratch scratch;
+    std::vector<std::uint32_t> finite;
+    std::vector<gseg::GroundColumn> columns;
+    for (std::uint32_t i = 0; i < labels.size(); ++i) {
+        if (std::isnan(cloud.z(i))) continue;
+        finite.push_back(i);
+        if (labels[i]) columns.push_back({gseg::cellCoord(cloud.x(i), p.cellSizeX), gseg::cellCoord(cloud.y(i), p.cellSizeY), cloud.z(i)});
+    }
+    std::reverse(columns.begin(), columns.end());  // any order
+    const auto fromLabels = gseg::flagBelowGround(cloud, labels, p, scratch);
+    EXPECT_EQ(gseg::flagBelowGround(cloud, finite, labels, columns, p, scratch), fromLabels);
+    EXPECT_EQ(fromLabels.size(), 400u);  // every reflection, nothing else
 }

@@ -7,39 +7,43 @@
 
 namespace gseg {
 
-// A dense map of the ground's columns: the lowest ground point per column, then spread to the
-// columns without ground one ring out, then two rings out.
 std::vector<std::uint32_t> flagBelowGround(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                                            const Params& params, BelowGroundScratch& scratch) {
+    std::vector<std::uint32_t> finitePoints;
+    std::vector<GroundColumn> columns;
+    for (std::uint32_t i = 0; i < std::uint32_t(cloud.size()); ++i) {
+        if (!std::isfinite(cloud.x(i)) || !std::isfinite(cloud.y(i)) || !std::isfinite(cloud.z(i))) continue;
+        finitePoints.push_back(i);
+        if (labels[i])
+            columns.push_back({cellCoord(cloud.x(i), params.cellSizeX), cellCoord(cloud.y(i), params.cellSizeY), cloud.z(i)});
+    }
+    return flagBelowGround(cloud, finitePoints, labels, columns, params, scratch);
+}
+
+// A dense map of the ground's columns: the lowest ground point per column, then spread to the
+// columns without ground one ring out, then two rings out.
+std::vector<std::uint32_t> flagBelowGround(const PointCloudView& cloud, const std::vector<std::uint32_t>& finitePoints,
+                                           const std::vector<std::uint8_t>& labels, const std::vector<GroundColumn>& groundColumns,
+                                           const Params& params, BelowGroundScratch& scratch) {
     std::vector<std::uint32_t> flagged;
-    if (!(params.belowGroundMargin > 0)) return flagged;
+    if (!(params.belowGroundMargin > 0) || groundColumns.empty()) return flagged;
     constexpr float kNone = std::numeric_limits<float>::infinity();
     constexpr int kPad = 2;
-    const std::uint32_t n = std::uint32_t(cloud.size());
-    auto finite = [&](std::uint32_t i) {
-        return std::isfinite(cloud.x(i)) && std::isfinite(cloud.y(i)) && std::isfinite(cloud.z(i));
-    };
     std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
     std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
-    bool anyGround = false;
-    for (std::uint32_t i = 0; i < n; ++i)
-        if (labels[i] && finite(i)) {
-            const std::int32_t ix = cellCoord(cloud.x(i), params.cellSizeX), iy = cellCoord(cloud.y(i), params.cellSizeY);
-            lo[0] = std::min(lo[0], ix), hi[0] = std::max(hi[0], ix);
-            lo[1] = std::min(lo[1], iy), hi[1] = std::max(hi[1], iy);
-            anyGround = true;
-        }
-    if (!anyGround) return flagged;
+    for (const GroundColumn& c : groundColumns) {
+        lo[0] = std::min(lo[0], c.ix), hi[0] = std::max(hi[0], c.ix);
+        lo[1] = std::min(lo[1], c.iy), hi[1] = std::max(hi[1], c.iy);
+    }
     const std::int64_t w = std::int64_t(hi[0]) - lo[0] + 1 + 2 * kPad, h = std::int64_t(hi[1]) - lo[1] + 1 + 2 * kPad;
     if (w * h > std::int64_t(16) << 20) return flagged;  // absurdly spread ground: no reference worth a map
     auto& ground = scratch.ground;
     ground.assign(std::size_t(w * h), kNone);
     auto at = [&](std::int64_t ix, std::int64_t iy) { return std::size_t((ix - lo[0] + kPad) * h + (iy - lo[1] + kPad)); };
-    for (std::uint32_t i = 0; i < n; ++i)
-        if (labels[i] && finite(i)) {
-            float& g = ground[at(cellCoord(cloud.x(i), params.cellSizeX), cellCoord(cloud.y(i), params.cellSizeY))];
-            g = std::min(g, cloud.z(i));
-        }
+    for (const GroundColumn& c : groundColumns) {
+        float& g = ground[at(c.ix, c.iy)];
+        g = std::min(g, c.lowest);
+    }
     float highest = -kNone;  // no point above the highest ground minus the margin can be flagged
     for (float g : ground)
         if (g != kNone) highest = std::max(highest, g);
@@ -57,8 +61,8 @@ std::vector<std::uint32_t> flagBelowGround(const PointCloudView& cloud, const st
         ground.swap(next);
     }
     const double below = double(highest) - params.belowGroundMargin;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        if (labels[i] || !finite(i) || double(cloud.z(i)) >= below) continue;
+    for (std::uint32_t i : finitePoints) {
+        if (labels[i] || double(cloud.z(i)) >= below) continue;
         const std::int64_t ix = cellCoord(cloud.x(i), params.cellSizeX), iy = cellCoord(cloud.y(i), params.cellSizeY);
         if (ix < lo[0] - kPad || ix > hi[0] + kPad || iy < lo[1] - kPad || iy > hi[1] + kPad) continue;
         const float g = ground[at(ix, iy)];

@@ -87,6 +87,7 @@ struct detail::Workspace {
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
     BelowGroundScratch belowGround;
+    std::vector<GroundColumn> groundColumns;  // flagBelowGround: the lowest ground of each Phase II ground cell
 };
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
@@ -442,7 +443,18 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
     r.numGround = ws.phase2Ground.size();
     r.numNonGround = cloud.size() - r.numGround;
-    r.belowGround = flagBelowGround(cloud, r.labels, params, ws.belowGround);  // ours, not the paper's
+    // Ours, not the paper's: reflections far below the ground (below_ground.hpp), the ground's
+    // columns taken from Phase II's grid, still in the workspace (a ground cell holds its inliers).
+    ws.groundColumns.clear();
+    const auto& cells = ws.grid.cells();
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+        if (ws.cells[c].outcome != CellOutcome::Ground) continue;
+        float lowest = std::numeric_limits<float>::infinity();
+        for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
+            if (ws.inlier[k]) lowest = std::min(lowest, ws.pts[k].z());
+        ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
+    }
+    r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);
     r.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return r;
 }

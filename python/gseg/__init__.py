@@ -25,8 +25,9 @@ def segment(points, config=None, **params):
 
     points: numpy array (N, 3) or (N, 4) (x, y, z[, intensity]) [m], sensor frame, float32 or
             float64 (float32 with x, y, z consecutive is read without a copy).
-    config: None (the library defaults: KITTI HDL-64E, sensor 1.723 m up), a YAML/INI file path
-            as the tools take with -c, a dict, or a Params.
+    config: None (the defaults: KITTI HDL-64E parameters, the sensor height estimated per scan,
+            distToGround "auto"), a YAML/INI file path as the tools take with -c, a dict, or a
+            Params.
     params: keys of the configuration overriding it, e.g. distToGround="auto" or heightGate=0.1.
     Returns a Result (labels, ground_indices, nonground_indices, reflections, height, phase1,
     phase2, total_ms). Raises ValueError on bad parameters or points, TypeError on a wrong dtype.

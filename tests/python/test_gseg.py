@@ -83,7 +83,7 @@ def test_a_float32_n_by_4_array_is_read_in_place_and_other_layouts_give_the_same
 def test_the_result_describes_the_labels(kitti_scan):
     points = gseg.read_kitti_bin(str(kitti_scan))
     points[5] = np.nan
-    r = gseg.segment(points)
+    r = gseg.segment(points, distToGround=1.723)
     assert r.labels.dtype == np.uint8 and r.labels.shape == (len(points),)
     assert r.num_ground + r.num_nonground == len(points) and r.num_nonfinite == 1 and r.labels[5] == 0
     assert np.array_equal(r.ground_indices, np.flatnonzero(r.labels == 1))
@@ -115,7 +115,8 @@ def test_threads_segment_in_parallel_with_the_same_labels(kitti_scan):
 
 
 def test_params_from_keywords_dicts_and_files_and_bad_keys_name_the_key(tmp_path):
-    assert gseg.Params().distToGround == 1.723
+    assert gseg.Params().distToGround == "auto"  # as a file that does not set it
+    assert gseg.Params() == gseg.Params({}) and gseg.Params(distToGround=1.723).distToGround == 1.723
     assert gseg.Params(distToGround=1.9, heightGate=0.12).heightGate == 0.12
     assert gseg.Params({"distToGround": "auto"}).distToGround == "auto"
     assert gseg.Params(sensorHeight={"maxRange": 20}).sensorHeight["maxRange"] == 20

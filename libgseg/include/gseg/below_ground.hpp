@@ -17,6 +17,13 @@ struct BelowGroundScratch {
     std::vector<float> ground, next;  ///< [m] lowest ground z per column (dense), and its next ring
 };
 
+/// The lowest ground point of one column of Params::cellSizeX x cellSizeY (indexed like the
+/// segmenter's grid: cellCoord()).
+struct GroundColumn {
+    std::int32_t ix = 0, iy = 0;  ///< column index
+    float lowest = 0;             ///< [m] z of its lowest ground point
+};
+
 /// The non-ground points (labels[i] == 0) of `cloud` lying more than Params::belowGroundMargin
 /// below the lowest ground point (labels[i] != 0) of their column of Params::cellSizeX x cellSizeY
 /// (in the cloud's frame, columns indexed like the segmenter's grid), or, in a column without
@@ -26,6 +33,13 @@ struct BelowGroundScratch {
 /// than 2^24 columns (with the border). Points with a NaN or infinite coordinate are never flagged. `labels` holds one byte per
 /// point of `cloud`. Returns ascending point indices.
 std::vector<std::uint32_t> flagBelowGround(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
+                                           const Params& params, BelowGroundScratch& scratch);
+
+/// The same with the ground already gathered per column (as the segmenter has it from its grid; in
+/// any order, a column may come several times) and `finitePoints`, the ascending indices of the
+/// points of `cloud` with finite coordinates: no pass over the whole cloud but the last.
+std::vector<std::uint32_t> flagBelowGround(const PointCloudView& cloud, const std::vector<std::uint32_t>& finitePoints,
+                                           const std::vector<std::uint8_t>& labels, const std::vector<GroundColumn>& groundColumns,
                                            const Params& params, BelowGroundScratch& scratch);
 
 }  // namespace gseg
