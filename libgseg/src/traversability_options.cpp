@@ -20,7 +20,13 @@ const OptionTable<TraversabilityOptions>& table() {
             {"clampMax", &O::clampMax, "-", "upper clamping, in (0.5, 1) (lower: quicker clearing of moved obstacles)"},
             {"occupancyThreshold", &O::occupancyThreshold, "-", "a voxel is occupied above this probability, in (0, 1)"},
             {"clearance", &O::clearance, "m",
-             "obstacle voxels higher than this above the column's ground do not block it (branches, bridges)"},
+             "obstacle voxels higher than this above the column's ground do not block it (branches, bridges); the robot's minimum clearance"},
+            {"minGroundPoints", &O::minGroundPoints, "points", "ground points (whole drive) a cell needs for an elevation, >= 1"},
+            {"maxSlope", &O::maxSlope, "deg", "steepest ground slope that is traversable, in (0, 90)"},
+            {"maxStep", &O::maxStep, "m", "largest height jump (up or down) to a neighbouring cell that is traversable, > 0"},
+            {"maxRoughness", &O::maxRoughness, "m", "largest standard deviation of a cell's ground heights that is traversable, > 0"},
+            {"minObstacleHeight", &O::minObstacleHeight, "m",
+             "obstacle voxels lower than this above the cell's ground do not block it (the step rule judges them), >= 0"},
         });
     return t;
 }
@@ -51,6 +57,15 @@ void TraversabilityOptions::validate() const {
     requireInRange(clampMax, "clampMax", 0.5, 1.0);
     requireInRange(occupancyThreshold, "occupancyThreshold", 0.0, 1.0);
     if (!(clearance > 0)) throw std::invalid_argument("TraversabilityOptions.clearance = " + std::to_string(clearance) + ": must be > 0 m");
+    if (minGroundPoints < 1)
+        throw std::invalid_argument("TraversabilityOptions.minGroundPoints = " + std::to_string(minGroundPoints) + ": must be >= 1");
+    requireInRange(maxSlope, "maxSlope [deg]", 0.0, 90.0);
+    if (!(maxStep > 0)) throw std::invalid_argument("TraversabilityOptions.maxStep = " + std::to_string(maxStep) + ": must be > 0 m");
+    if (!(maxRoughness > 0))
+        throw std::invalid_argument("TraversabilityOptions.maxRoughness = " + std::to_string(maxRoughness) + ": must be > 0 m");
+    if (!(minObstacleHeight >= 0 && minObstacleHeight < clearance))
+        throw std::invalid_argument("TraversabilityOptions.minObstacleHeight = " + std::to_string(minObstacleHeight) +
+                                    ": must lie in [0, clearance) m");
 }
 
 const std::vector<std::string>& TraversabilityOptions::keys() { return table().names(); }

@@ -3,6 +3,7 @@
 #include <gseg/io/ply.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
+#include <gseg/map/terrain_layers.hpp>
 #include <gseg/mrpt/scene.hpp>
 
 #include "brick_map.hpp"
@@ -93,6 +94,16 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
     return gseg::io::labelledPlyBytes(PointCloudView(v.xyz.data(), v.labels.size()), v.labels, colours, options);
 }
 
+/// The costmap's PGM and YAML (files 6 and 7; the YAML names the PGM by its file name).
+void writeCostmap(gseg::io::AtomicFileSet& files, const gseg::io::RosMap& map) {
+    const std::string pgm = gseg::io::encodePgm(map);
+    files[6].write(pgm.data(), pgm.size());
+    const std::string path = files.paths()[6];
+    const std::size_t slash = path.find_last_of('/');
+    const std::string yaml = gseg::io::encodeRosMapYaml(map, slash == std::string::npos ? path : path.substr(slash + 1));
+    files[7].write(yaml.data(), yaml.size());
+}
+
 }  // namespace
 
 Rgb colourOf(CellClass c) {
@@ -114,6 +125,7 @@ TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
     l.clampMin = configured_->getClampingThresMinLog(), l.clampMax = configured_->getClampingThresMaxLog();
     l.occupied = configured_->getOccupancyThresLog();
     voxels_ = std::make_unique<detail::BrickMap>(l);
+    groundCells_ = std::make_unique<GroundCells>();
 }
 
 TraversabilityMap::~TraversabilityMap() = default;
@@ -141,6 +153,7 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
     // ground does not move, so misses never lower an occupied ground voxel (rays to distant
     // ground graze the road near their end and would erode it scan after scan).
     voxels_->applyScan(u.free, u.groundHits, u.obstacleHits);
+    groundCells_->add(u.groundCells);
     groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
     if (!path_.empty()) stats_.pathLength += (u.origin - path_.back()).norm();
     path_.push_back(u.origin);
@@ -212,9 +225,21 @@ MapStats TraversabilityMap::stats() const {
     return s;
 }
 
+LayerGrid TraversabilityMap::layers() const {
+    ObstacleColumns columns;
+    const float occupied = configured_->getOccupancyThresLog();
+    voxels_->forEachVoxel(kObstacles, [&](std::uint64_t code, float v) {
+        if (v < occupied) return;
+        const octomap::OcTreeKey k = detail::keyOfCode(code);
+        columns[(std::uint32_t(k[0]) << 16) | k[1]].push_back(float(configured_->keyToCoord(k[2])));
+    });
+    return terrainLayers(*groundCells_, columns, options_);
+}
+
 std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefix) {
     return {prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
-            prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene"};
+            prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene",
+            prefix + "_costmap.pgm",        prefix + "_costmap.yaml"};
 }
 
 std::string TraversabilityMap::pictureTitle() const {
@@ -242,6 +267,14 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
     detail::writeMapScene(files[5], v.xyz, v.labels, res, path_);
+    if (groundCells_->cells().empty() && v.labels.empty()) {
+        // nothing seen at all: an all-unknown costmap of one cell at the first sensor position
+        const gseg::io::RosMap none = gseg::io::RosMap::unknown(1, 1, res, std::floor(path_.front().x() / res) * res,
+                                                               std::floor(path_.front().y() / res) * res);
+        writeCostmap(files, none);
+    } else {
+        writeCostmap(files, costmapOf(layers()));
+    }
     files.commit();
     return files.paths();
 }
