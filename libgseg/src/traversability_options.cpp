@@ -25,6 +25,9 @@ const OptionTable<TraversabilityOptions>& table() {
             {"maxSlope", &O::maxSlope, "deg", "steepest ground slope that is traversable, in (0, 90)"},
             {"maxStep", &O::maxStep, "m", "largest height jump (up or down) to a neighbouring cell that is traversable, > 0"},
             {"maxRoughness", &O::maxRoughness, "m", "largest standard deviation of a cell's ground heights that is traversable, > 0"},
+            {"obstacleClearProbability", &O::obstacleClearProbability, "-",
+             "an obstacle voxel once hit stays an obstacle in the layers and costmap until its occupancy probability falls to this "
+             "or below (porous vegetation and fences stay, what moved away is cleared), in (0, occupancyThreshold]"},
             {"minObstacleHeight", &O::minObstacleHeight, "m",
              "obstacle voxels lower than this above the cell's ground do not block it (the step rule judges them), >= 0"},
         });
@@ -63,6 +66,9 @@ void TraversabilityOptions::validate() const {
     if (!(maxStep > 0)) throw std::invalid_argument("TraversabilityOptions.maxStep = " + std::to_string(maxStep) + ": must be > 0 m");
     if (!(maxRoughness > 0))
         throw std::invalid_argument("TraversabilityOptions.maxRoughness = " + std::to_string(maxRoughness) + ": must be > 0 m");
+    if (!(obstacleClearProbability > 0 && obstacleClearProbability <= occupancyThreshold))
+        throw std::invalid_argument("TraversabilityOptions.obstacleClearProbability = " + std::to_string(obstacleClearProbability) +
+                                    ": must lie in (0, occupancyThreshold]");
     if (!(minObstacleHeight >= 0 && minObstacleHeight < clearance))
         throw std::invalid_argument("TraversabilityOptions.minObstacleHeight = " + std::to_string(minObstacleHeight) +
                                     ": must lie in [0, clearance) m");

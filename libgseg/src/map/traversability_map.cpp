@@ -228,10 +228,15 @@ MapStats TraversabilityMap::stats() const {
 LayerGrid TraversabilityMap::layers() const {
     ObstacleColumns columns;
     const float occupied = configured_->getOccupancyThresLog();
-    voxels_->forEachVoxel(kObstacles, [&](std::uint64_t code, float v) {
-        if (v < occupied) return;
+    const double p = options_.obstacleClearProbability;
+    const float cleared = float(std::log(p / (1 - p)));  // a voxel once hit is an obstacle above this log-odds
+    auto add = [&](std::uint64_t code) {
         const octomap::OcTreeKey k = detail::keyOfCode(code);
         columns[(std::uint32_t(k[0]) << 16) | k[1]].push_back(float(configured_->keyToCoord(k[2])));
+    };
+    // Only obstacle hits raise an obstacle voxel, so every occupied one was hit at least once.
+    voxels_->forEachEverObstacle([&](std::uint64_t code, float v) {
+        if (v > cleared || v >= occupied) add(code);
     });
     return terrainLayers(*groundCells_, columns, options_);
 }
