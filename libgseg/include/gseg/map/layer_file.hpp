@@ -1,0 +1,45 @@
+#pragma once
+/// \file layer_file.hpp
+/// The 2.5D layers of a map (gseg/map/layer_grid.hpp) as a GeoTIFF: what `gdalinfo`,
+/// `gdal_translate`, QGIS and `gseg eval-map` read. The one writer and reader of gseg for it
+/// (GDAL's GTiff driver).
+///
+/// The file: one float32 band per layer, in the grid's order; the band's description is the
+/// layer's name (`elevation`, `slope`, ...), its unit type (GDAL's `GetUnitType()`) and its
+/// metadata items `UNIT` and `MEANING` the layer's unit and one-line meaning; NaN is the nodata
+/// value (unknown). The geotransform is in map-frame metres, north-up: the image's first row is the
+/// largest y (cells of row cy of the grid are image row height - 1 - cy), its first column the
+/// smallest x, so pixel (col, row) covers x in [originX + col * res, ...) and
+/// y in [originY + (height - 1 - row) * res, ...). The CRS is a local engineering one
+/// (`LOCAL_CS["gseg map frame", UNIT["metre", 1]]`): the map frame is the rawlog's world frame,
+/// tied to no place on Earth, and a local CRS says so and that its unit is the metre, where a file
+/// without a CRS leaves viewers to guess (some assume degrees). Deflate-compressed (floating-point
+/// predictor), band-interleaved; the same grid always gives the same bytes.
+
+#include <gseg/map/layer_grid.hpp>
+
+#include <string>
+
+namespace gseg::map {
+
+/// The GeoTIFF bytes of `grid`. Throws std::invalid_argument on a grid without cells or layers,
+/// a layer whose values are not width * height, an empty or duplicate layer name, and
+/// std::runtime_error with GDAL's message if GDAL fails.
+std::string encodeLayersGeoTiff(const LayerGrid& grid);
+
+/// Writes encodeLayersGeoTiff(grid) to `path` through gseg::io::AtomicFile (complete or absent).
+/// Throws as encodeLayersGeoTiff() (the message naming `path`) and std::runtime_error naming
+/// `path` on a write failure.
+void writeLayersGeoTiff(const std::string& path, const LayerGrid& grid);
+
+/// Reads a GeoTIFF of layers: any file of the format written above, and any single- or
+/// multi-band GeoTIFF whose geotransform is axis-aligned with square pixels (north-up, or with
+/// its first row the smallest y). Band i becomes layer i named by its description ("band N" if
+/// it has none), its unit from the unit type (else the `UNIT` metadata item), its meaning from the
+/// `MEANING` item; values read as float32, a band's nodata value becomes NaN. Throws
+/// std::runtime_error naming `path` and what is wrong: missing or unreadable, not a GeoTIFF,
+/// truncated (a band that cannot be read whole), no geotransform, a rotated or sheared one,
+/// non-square pixels, no bands.
+LayerGrid readLayersGeoTiff(const std::string& path);
+
+}  // namespace gseg::map

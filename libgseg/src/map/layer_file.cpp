@@ -1,0 +1,219 @@
+// The GeoTIFF of a map's 2.5D layers (GDAL's GTiff driver, built in memory under /vsimem/ and
+// written by gseg's atomic writer; read back with GDAL, refusing what is not a layer file).
+#include <gseg/io/atomic_file.hpp>
+#include <gseg/map/layer_file.hpp>
+
+#include <cpl_error.h>
+#include <cpl_vsi.h>
+#include <gdal.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+namespace gseg::map {
+namespace {
+
+/// The map frame as a local engineering CRS: metres, tied to no place on Earth (see the header).
+constexpr const char* kMapFrameWkt =
+    "LOCAL_CS[\"gseg map frame\",UNIT[\"metre\",1,AUTHORITY[\"EPSG\",\"9001\"]],AXIS[\"x\",EAST],AXIS[\"y\",NORTH]]";
+/// [cells] the largest grid the reader accepts (1 GiB of float32 per band): a damaged header
+/// claiming more is refused instead of exhausting memory.
+constexpr std::uint64_t kMaxCells = std::uint64_t(1) << 28;
+
+void registerDrivers() {
+    static std::once_flag once;
+    std::call_once(once, [] { GDALAllRegister(); });
+}
+
+/// While alive, GDAL's errors on this thread are collected here instead of printed (the library
+/// never prints): the first failure's text for the exception.
+class GdalErrors {
+public:
+    GdalErrors() {
+        CPLPushErrorHandlerEx(&GdalErrors::handle, this);
+        CPLErrorReset();
+    }
+    ~GdalErrors() { CPLPopErrorHandler(); }
+    GdalErrors(const GdalErrors&) = delete;
+    GdalErrors& operator=(const GdalErrors&) = delete;
+
+    bool failed() const { return failed_; }
+    /// "GDAL: <first failure>", or `fallback` if GDAL said nothing.
+    std::string text(const std::string& fallback) const { return first_.empty() ? fallback : "GDAL: " + first_; }
+
+private:
+    static void CPL_STDCALL handle(CPLErr level, CPLErrorNum, const char* message) {
+        auto* self = static_cast<GdalErrors*>(CPLGetErrorHandlerUserData());
+        if (!self || level < CE_Failure) return;  // warnings (e.g. of a foreign TIFF's tags) are not ours to show
+        self->failed_ = true;
+        if (self->first_.empty() && message) self->first_ = message;
+    }
+    bool failed_ = false;
+    std::string first_;
+};
+
+/// A dataset closed on scope exit.
+struct Dataset {
+    GDALDatasetH h = nullptr;
+    explicit Dataset(GDALDatasetH d) : h(d) {}
+    ~Dataset() { close(); }
+    Dataset(const Dataset&) = delete;
+    Dataset& operator=(const Dataset&) = delete;
+    void close() {
+        if (h) GDALClose(h);
+        h = nullptr;
+    }
+};
+
+/// A /vsimem/ file name no other call uses at the same time (the name is not part of the bytes).
+std::string memoryFileName() {
+    static std::atomic<unsigned long long> counter{0};
+    return "/vsimem/gseg_layers_" + std::to_string(counter.fetch_add(1)) + ".tif";
+}
+
+void validate(const LayerGrid& grid) {
+    if (grid.cells() == 0) throw std::invalid_argument("layer GeoTIFF: the grid has no cells");
+    if (grid.layers().empty()) throw std::invalid_argument("layer GeoTIFF: the grid has no layers");
+    std::set<std::string> names;
+    for (const auto& l : grid.layers()) {
+        if (l.name.empty()) throw std::invalid_argument("layer GeoTIFF: a layer without a name");
+        if (!names.insert(l.name).second) throw std::invalid_argument("layer GeoTIFF: two layers named '" + l.name + "'");
+        if (l.values.size() != grid.cells())
+            throw std::invalid_argument("layer GeoTIFF: layer '" + l.name + "' has " + std::to_string(l.values.size()) +
+                                        " values for " + std::to_string(grid.cells()) + " cells");
+    }
+}
+
+/// The in-memory (MEM driver) dataset of the grid: bands, names, units, nodata, geotransform, CRS.
+GDALDatasetH memoryDataset(const LayerGrid& grid) {
+    const int w = grid.width(), h = grid.height(), n = int(grid.layers().size());
+    GDALDatasetH ds = GDALCreate(GDALGetDriverByName("MEM"), "", w, h, n, GDT_Float32, nullptr);
+    if (!ds) return nullptr;
+    const double res = grid.resolution();
+    double gt[6] = {grid.originX(), res, 0.0, grid.originY() + h * res, 0.0, -res};  // north-up
+    GDALSetGeoTransform(ds, gt);
+    GDALSetProjection(ds, kMapFrameWkt);
+    GDALSetMetadataItem(ds, "GSEG_CONTENT", "gseg 2.5D map layers: one float32 band per layer, NaN = unknown", nullptr);
+    GDALSetMetadataItem(ds, "GSEG_FRAME", "map frame (the rawlog's world frame): x east, y north in metres; north-up rows", nullptr);
+    for (int b = 0; b < n; ++b) {
+        const LayerGrid::Layer& layer = grid.layers()[std::size_t(b)];
+        GDALRasterBandH band = GDALGetRasterBand(ds, b + 1);
+        GDALSetDescription(band, layer.name.c_str());
+        GDALSetRasterUnitType(band, layer.unit.c_str());
+        GDALSetMetadataItem(band, "UNIT", layer.unit.c_str(), nullptr);
+        GDALSetMetadataItem(band, "MEANING", layer.meaning.c_str(), nullptr);
+        GDALSetRasterNoDataValue(band, std::numeric_limits<double>::quiet_NaN());
+        for (int row = 0; row < h; ++row) {  // image row 0 = the grid's last row (largest y)
+            const float* src = layer.values.data() + grid.index(0, h - 1 - row);
+            if (GDALRasterIO(band, GF_Write, 0, row, w, 1, const_cast<float*>(src), w, 1, GDT_Float32, 0, 0) != CE_None) {
+                GDALClose(ds);
+                return nullptr;
+            }
+        }
+    }
+    return ds;
+}
+
+[[noreturn]] void refuse(const std::string& path, const std::string& what) { throw std::runtime_error(path + ": " + what); }
+
+}  // namespace
+
+std::string encodeLayersGeoTiff(const LayerGrid& grid) {
+    validate(grid);
+    registerDrivers();
+    GdalErrors errors;
+    Dataset source(memoryDataset(grid));
+    if (!source.h || errors.failed()) throw std::runtime_error("layer GeoTIFF: " + errors.text("cannot build the raster in memory"));
+    const std::string name = memoryFileName();
+    const char* options[] = {"COMPRESS=DEFLATE", "PREDICTOR=3", "INTERLEAVE=BAND", nullptr};
+    Dataset copy(GDALCreateCopy(GDALGetDriverByName("GTiff"), name.c_str(), source.h, FALSE, const_cast<char**>(options), nullptr, nullptr));
+    copy.close();  // flushes the file
+    std::string bytes;
+    vsi_l_offset size = 0;
+    if (const GByte* data = VSIGetMemFileBuffer(name.c_str(), &size, FALSE)) bytes.assign(reinterpret_cast<const char*>(data), std::size_t(size));
+    VSIUnlink(name.c_str());
+    if (errors.failed() || bytes.empty()) throw std::runtime_error("layer GeoTIFF: " + errors.text("GDAL wrote no file"));
+    return bytes;
+}
+
+void writeLayersGeoTiff(const std::string& path, const LayerGrid& grid) {
+    std::string bytes;
+    try {
+        bytes = encodeLayersGeoTiff(grid);
+    } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(path + ": " + e.what());
+    } catch (const std::exception& e) {
+        throw std::runtime_error(path + ": " + e.what());
+    }
+    gseg::io::writeFileAtomic(path, bytes.data(), bytes.size());
+}
+
+LayerGrid readLayersGeoTiff(const std::string& path) {
+    {
+        std::ifstream probe(path, std::ios::binary);
+        if (!probe) refuse(path, std::string("cannot open: ") + std::strerror(errno));
+        char magic[4] = {};
+        probe.read(magic, 4);
+        const bool tiff = probe.gcount() == 4 && ((std::memcmp(magic, "II", 2) == 0 && (magic[2] == 42 || magic[2] == 43) && magic[3] == 0) ||
+                                                  (std::memcmp(magic, "MM", 2) == 0 && magic[2] == 0 && (magic[3] == 42 || magic[3] == 43)));
+        if (!tiff) refuse(path, "not a GeoTIFF (no TIFF header)");
+    }
+    registerDrivers();
+    GdalErrors errors;
+    const char* const drivers[] = {"GTiff", nullptr};
+    Dataset ds(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, drivers, nullptr, nullptr));
+    if (!ds.h) refuse(path, "not a readable GeoTIFF (" + errors.text("GDAL cannot open it") + ")");
+    const int w = GDALGetRasterXSize(ds.h), h = GDALGetRasterYSize(ds.h), n = GDALGetRasterCount(ds.h);
+    if (n < 1) refuse(path, "no bands");
+    if (w < 1 || h < 1) refuse(path, "no cells");
+    if (std::uint64_t(w) * std::uint64_t(h) > kMaxCells)
+        refuse(path, "too large (" + std::to_string(w) + " x " + std::to_string(h) + " cells; at most " + std::to_string(kMaxCells) + ")");
+    double gt[6];
+    if (GDALGetGeoTransform(ds.h, gt) != CE_None) refuse(path, "no geotransform (a TIFF, not a GeoTIFF in map-frame metres)");
+    if (gt[2] != 0.0 || gt[4] != 0.0) refuse(path, "rotated or sheared geotransform (only axis-aligned grids are layer files)");
+    const double res = gt[1];
+    if (!(std::isfinite(res) && res > 0) || !(std::fabs(std::fabs(gt[5]) - res) <= 1e-9 * res))
+        refuse(path, "pixels are not square cells with x growing to the right (geotransform " + std::to_string(gt[1]) + ", " +
+                         std::to_string(gt[5]) + ")");
+    const bool northUp = gt[5] < 0;
+    LayerGrid grid;
+    try {
+        grid = LayerGrid(w, h, res, gt[0], northUp ? gt[3] - h * res : gt[3]);
+    } catch (const std::exception& e) {
+        refuse(path, e.what());
+    }
+    std::vector<float> buffer(std::size_t(w) * std::size_t(h));
+    for (int b = 1; b <= n; ++b) {
+        GDALRasterBandH band = GDALGetRasterBand(ds.h, b);
+        std::string name = GDALGetDescription(band);
+        if (name.empty()) name = "band " + std::to_string(b);
+        if (grid.find(name)) refuse(path, "two bands named '" + name + "'");
+        std::string unit = GDALGetRasterUnitType(band);
+        if (unit.empty())
+            if (const char* u = GDALGetMetadataItem(band, "UNIT", nullptr)) unit = u;
+        const char* meaning = GDALGetMetadataItem(band, "MEANING", nullptr);
+        if (GDALRasterIO(band, GF_Read, 0, 0, w, h, buffer.data(), w, h, GDT_Float32, 0, 0) != CE_None || errors.failed())
+            refuse(path, "truncated or damaged: band " + std::to_string(b) + " cannot be read (" + errors.text("no message") + ")");
+        int hasNodata = 0;
+        const double nodata = GDALGetRasterNoDataValue(band, &hasNodata);
+        LayerGrid::Layer& layer = grid.add(name, unit, meaning ? meaning : "");
+        for (int row = 0; row < h; ++row) {
+            const int cy = northUp ? h - 1 - row : row;
+            const float* src = buffer.data() + std::size_t(row) * std::size_t(w);
+            float* dst = layer.values.data() + grid.index(0, cy);
+            for (int cx = 0; cx < w; ++cx)
+                dst[cx] = hasNodata && !std::isnan(nodata) && src[cx] == float(nodata) ? std::numeric_limits<float>::quiet_NaN() : src[cx];
+        }
+    }
+    return grid;
+}
+
+}  // namespace gseg::map
