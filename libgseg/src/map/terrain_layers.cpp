@@ -28,7 +28,13 @@ void GroundCells::add(const std::vector<GroundCellSample>& samples) {
     }
 }
 
-LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& o) {
+const std::vector<std::string>& terrainLayerNames() {
+    static const std::vector<std::string> names{"elevation", "slope", "step", "roughness", "clearance", "class", "cost"};
+    return names;
+}
+
+LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& o,
+                        double emptyX, double emptyY) {
     o.validate();
     const auto minPoints = std::uint64_t(o.minGroundPoints);
     int lo[2] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max()}, hi[2] = {-1, -1};
@@ -40,9 +46,11 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
         if (sums.count >= minPoints) extend(cell);
     for (const auto& [cell, zs] : obstacles)
         if (!zs.empty()) extend(cell);
-    if (hi[0] < 0) throw std::logic_error("terrainLayers: no cell with ground points or obstacles");
-
     const double res = o.resolution;
+    if (hi[0] < 0) {  // nothing seen: one unknown cell
+        lo[0] = hi[0] = int(std::floor(emptyX / res)) + 32768;
+        lo[1] = hi[1] = int(std::floor(emptyY / res)) + 32768;
+    }
     LayerGrid g(hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, res, (lo[0] - 32768) * res, (lo[1] - 32768) * res);
     auto& elevation = g.add("elevation", "m", "mean height of the ground points (map frame z)").values;
     auto& slope = g.add("slope", "deg", "slope of the plane through the elevations of the cell and its 8 neighbours").values;

@@ -3,6 +3,8 @@
 #include <gseg/io/ply.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
+#include <gseg/map/layer_file.hpp>
+#include <gseg/map/layer_picture.hpp>
 #include <gseg/map/terrain_layers.hpp>
 #include <gseg/mrpt/scene.hpp>
 
@@ -238,13 +240,17 @@ LayerGrid TraversabilityMap::layers() const {
     voxels_->forEachEverObstacle([&](std::uint64_t code, float v) {
         if (v > cleared || v >= occupied) add(code);
     });
-    return terrainLayers(*groundCells_, columns, options_);
+    const Eigen::Vector3d first = path_.empty() ? Eigen::Vector3d::Zero() : path_.front();
+    return terrainLayers(*groundCells_, columns, options_, first.x(), first.y());
 }
 
 std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefix) {
-    return {prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
+    std::vector<std::string> paths{prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
             prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene",
             prefix + "_costmap.pgm",        prefix + "_costmap.yaml"};
+    paths.push_back(prefix + "_layers.tif");
+    for (const std::string& name : terrainLayerNames()) paths.push_back(prefix + "_layer_" + name + ".png");
+    return paths;
 }
 
 std::string TraversabilityMap::pictureTitle() const {
@@ -272,13 +278,18 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
     detail::writeMapScene(files[5], v.xyz, v.labels, res, path_);
-    if (groundCells_->cells().empty() && v.labels.empty()) {
-        // nothing seen at all: an all-unknown costmap of one cell at the first sensor position
-        const gseg::io::RosMap none = gseg::io::RosMap::unknown(1, 1, res, std::floor(path_.front().x() / res) * res,
-                                                               std::floor(path_.front().y() / res) * res);
-        writeCostmap(files, none);
-    } else {
-        writeCostmap(files, costmapOf(layers()));
+    const LayerGrid grid = layers();
+    writeCostmap(files, costmapOf(grid));
+    const std::string tif = encodeLayersGeoTiff(grid);
+    files[8].write(tif.data(), tif.size());
+    LayerPictureOptions picture;
+    picture.title = pictureTitle();
+    for (std::size_t i = 0; i < terrainLayerNames().size(); ++i) {
+        const std::string& name = terrainLayerNames()[i];
+        LayerPictureOptions o = picture;
+        if (name == "cost") o.min = 0, o.max = 100;
+        const std::string png = encodeLayerPng(grid, name, o);
+        files[9 + i].write(png.data(), png.size());
     }
     files.commit();
     return files.paths();

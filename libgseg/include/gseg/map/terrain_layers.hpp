@@ -28,6 +28,7 @@
 #include <gseg/traversability_options.hpp>
 
 #include <cstdint>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -57,9 +58,13 @@ private:
 /// The z [m] of the centres of the occupied obstacle voxels of each column (by column key).
 using ObstacleColumns = std::unordered_map<std::uint32_t, std::vector<float>>;
 
+/// The names of the layers, in the order of the table above (and of the GeoTIFF's bands).
+const std::vector<std::string>& terrainLayerNames();
+
 /// The layers of the table above, over the bounding box of every cell with ground points or
-/// obstacle voxels. Throws std::logic_error when there is no such cell.
-LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& options);
+/// obstacle voxels; without any, one unknown cell holding map position (emptyX, emptyY) [m].
+LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& options,
+                        double emptyX = 0, double emptyY = 0);
 
 /// The costmap of a `class` layer in map_server's trinary form: traversable free, not traversable
 /// occupied, the rest unknown; the same cells, resolution and origin.

@@ -175,10 +175,10 @@ public:
     MapStats stats() const;
     /// The 2.5D layers (elevation, slope, step, roughness, clearance, class, cost) from the ground
     /// points of every scan and the occupied obstacle voxels (gseg/map/terrain_layers.hpp).
-    /// Throws std::logic_error when no cell has ground points or obstacles.
+    /// Without any ground point or obstacle: one unknown cell at the first sensor position.
     LayerGrid layers() const;
 
-    /// The eight files write() writes for `prefix`, in this order.
+    /// The files write() writes for `prefix`, in this order.
     static std::vector<std::string> outputPaths(const std::string& prefix);
     /// Writes, all of them or none (temporary files, then renamed; if a rename fails the previous
     /// versions are put back):
@@ -192,7 +192,11 @@ public:
     ///   sensor position, axes at its start;
     /// - `<prefix>_costmap.pgm`, `<prefix>_costmap.yaml`: the `class` layer as a ROS map_server
     ///   map (trinary: traversable free, not traversable occupied, the rest unknown; map frame =
-    ///   the world frame), what Nav2's map_server and MRPT's loadFromROSMapServerYAML load.
+    ///   the world frame), what Nav2's map_server and MRPT's loadFromROSMapServerYAML load;
+    /// - `<prefix>_layers.tif`: the layers as a GeoTIFF (gseg/map/layer_file.hpp), one named
+    ///   float32 band per layer, NaN unknown;
+    /// - `<prefix>_layer_<name>.png` for each layer (terrainLayerNames()): its picture
+    ///   (gseg/map/layer_picture.hpp).
     /// The same map always gives the same bytes. Throws std::runtime_error naming the file on
     /// failure and std::logic_error if no scan was inserted. Returns the paths written.
     std::vector<std::string> write(const std::string& prefix) const;
