@@ -97,6 +97,24 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
             slope[i] = float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
         }
 
+    // Rise above the lowest elevation within groundRiseRadius (a disc of cell centres).
+    std::vector<float> rise(g.cells(), kNaN);
+    const int rr = int(std::ceil(o.groundRiseRadius / res));
+    for (int cy = 0; cy < h; ++cy)
+        for (int cx = 0; cx < w; ++cx) {
+            const float z0 = elevation[g.index(cx, cy)];
+            if (std::isnan(z0)) continue;
+            float lowest = z0;
+            for (int dy = -rr; dy <= rr; ++dy)
+                for (int dx = -rr; dx <= rr; ++dx)
+                    if ((dx * dx + dy * dy) * res * res <= o.groundRiseRadius * o.groundRiseRadius * (1 + 1e-9) &&
+                        g.inside(cx + dx, cy + dy)) {
+                        const float z = elevation[g.index(cx + dx, cy + dy)];
+                        if (z < lowest) lowest = z;  // NaN compares false
+                    }
+            rise[g.index(cx, cy)] = z0 - lowest;
+        }
+
     // Clearance and class.
     const int r = std::max(1, int(std::lround(1.0 / res)));
     std::vector<float> near;
@@ -113,6 +131,7 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
                         if (z > z0 + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
                 clearance[i] = lowest - z0;
                 const bool ok = clearance[i] >= o.clearance && step[i] <= o.maxStep && roughness[i] <= o.maxRoughness &&
+                                rise[i] <= o.maxGroundRise &&
                                 !(slope[i] > o.maxSlope);  // no slope (too few neighbours): not judged by it
                 cls[i] = float(ok ? TerrainClass::Traversable : TerrainClass::NotTraversable);
                 if (ok) {
