@@ -73,7 +73,7 @@ std::string simulatedSequence(const std::string& dir, double height = 1.723) {
 }
 
 const char* const kSuffixes[] = {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png",
-                                 "_traversability.ply", "_traversability.3Dscene"};
+                                 "_traversability.ply", "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"};
 
 /// The YAML that says what an observations2map INI (one gsegTraversabilityMap) says: its `_gseg`
 /// keys at the top level, `_sensorHeight` as `sensorHeight:`, `_creationOpts` as `traversability:`.

@@ -170,7 +170,7 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     std::filesystem::create_directories(dir);
     const auto written = m.write(dir + "/drive");
     ASSERT_EQ(written, TraversabilityMap::outputPaths(dir + "/drive"));
-    ASSERT_EQ(written.size(), 6u);
+    ASSERT_EQ(written.size(), 16u);
     mrpt::img::CImage png;
     ASSERT_TRUE(png.loadFromFile(dir + "/drive_traversability.png"));
     const auto layout = gseg::map::pictureLayout(grid, m.path());
@@ -432,7 +432,7 @@ TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
     fromBytes.write(dir + "/a");
     theDrive().write(dir + "/b");
     for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
-                          "_traversability.3Dscene"})
+                          "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"})
         EXPECT_TRUE(fileBytes(dir + "/a" + f) == fileBytes(dir + "/b" + f)) << f;
     std::filesystem::remove_all(dir);
     // Damaged bytes are an error, not a garbage update.
@@ -454,7 +454,7 @@ TEST(OctomapBuilder, NoOccupiedVoxelStillWritesReadableMaps) {
     EXPECT_EQ(s.groundVoxels + s.obstacleVoxels, 0u);
     EXPECT_GT(s.freeVoxels, 20u);
     const std::string dir = tempDir("empty");
-    ASSERT_EQ(m.write(dir + "/e").size(), 6u);
+    ASSERT_EQ(m.write(dir + "/e").size(), 16u);
     EXPECT_TRUE(gseg::io::readPly(dir + "/e_traversability.ply").empty());
     mrpt::opengl::COpenGLScene scene;
     EXPECT_TRUE(scene.loadFromFile(dir + "/e_traversability.3Dscene"));

@@ -61,7 +61,7 @@ public:
             GroundCellSample& c = it->second;
             const double z = pts.z(i);
             if (added) c.cell = cell, c.minZ = c.maxZ = float(z);
-            ++c.count, c.sumZ += z, c.sumZ2 += z * z;
+            ++c.count, c.sumZ += z, c.sumZ2 += z * z, c.sumX += pts.x(i), c.sumY += pts.y(i);
             c.minZ = std::min(c.minZ, float(z)), c.maxZ = std::max(c.maxZ, float(z));
         }
         std::vector<GroundCellSample> out;
@@ -213,7 +213,7 @@ public:
     }
     std::vector<GroundCellSample> groundCells() {
         const std::uint64_t n = varint();
-        if (n > (s_.size() - pos_) / 25) throw std::runtime_error("scan update: list longer than the data");
+        if (n > (s_.size() - pos_) / 42) throw std::runtime_error("scan update: list longer than the data");
         std::vector<GroundCellSample> out(n);
         std::uint64_t prev = 0;
         for (auto& c : out) {
@@ -223,7 +223,7 @@ public:
             const std::uint64_t count = varint();
             if (count > 0xffffffffULL) throw std::runtime_error("scan update: count out of range");
             c.count = std::uint32_t(count);
-            c.sumZ = real64(), c.sumZ2 = real64(), c.minZ = real32(), c.maxZ = real32();
+            c.sumZ = real64(), c.sumZ2 = real64(), c.sumX = real64(), c.sumY = real64(), c.minZ = real32(), c.maxZ = real32();
         }
         return out;
     }
@@ -299,7 +299,7 @@ std::string serializeScanUpdate(const ScanUpdate& u) {
     for (const GroundCellSample& c : u.groundCells) {
         putVarint(out, c.cell - prev), prev = c.cell;
         putVarint(out, c.count);
-        putDouble(out, c.sumZ), putDouble(out, c.sumZ2), putFloat(out, c.minZ), putFloat(out, c.maxZ);
+        putDouble(out, c.sumZ), putDouble(out, c.sumZ2), putDouble(out, c.sumX), putDouble(out, c.sumY), putFloat(out, c.minZ), putFloat(out, c.maxZ);
     }
     return out;
 }

@@ -23,7 +23,7 @@ void GroundCells::add(const std::vector<GroundCellSample>& samples) {
         auto [it, added] = cells_.try_emplace(s.cell);
         GroundCellSums& c = it->second;
         if (added) c.minZ = s.minZ, c.maxZ = s.maxZ;
-        c.count += s.count, c.sumZ += s.sumZ, c.sumZ2 += s.sumZ2;
+        c.count += s.count, c.sumZ += s.sumZ, c.sumZ2 += s.sumZ2, c.sumX += s.sumX, c.sumY += s.sumY;
         c.minZ = std::min(c.minZ, s.minZ), c.maxZ = std::max(c.maxZ, s.maxZ);
     }
 }
@@ -62,11 +62,14 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
     const int w = g.width(), h = g.height();
     auto at = [&](std::uint32_t cell) { return g.index(keyX(cell) - lo[0], keyY(cell) - lo[1]); };
 
+    std::vector<float> lowZ(g.cells(), kNaN), highZ(g.cells(), kNaN), offX(g.cells(), 0.f), offY(g.cells(), 0.f);
     for (const auto& [cell, s] : ground.cells()) {
         if (s.count < minPoints) continue;
         const double n = double(s.count), mean = s.sumZ / n;
         const std::size_t i = at(cell);
         elevation[i] = float(mean);
+        lowZ[i] = s.minZ, highZ[i] = s.maxZ;
+        offX[i] = float(s.sumX / n - g.centreX(keyX(cell) - lo[0])), offY[i] = float(s.sumY / n - g.centreY(keyY(cell) - lo[1]));
         roughness[i] = float(std::sqrt(std::max(0.0, s.sumZ2 / n - mean * mean)));
     }
 
@@ -80,11 +83,12 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
                     if (!g.inside(cx + dx, cy + dy)) continue;
-                    const float z = elevation[g.index(cx + dx, cy + dy)];
+                    const std::size_t j = g.index(cx + dx, cy + dy);
+                    const float z = elevation[j];
                     if (std::isnan(z)) continue;
-                    const double x = dx * res, y = dy * res;
+                    const double x = dx * res + offX[j], y = dy * res + offY[j];
                     sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z, sx += x, sy += y, sz += z, ++m;
-                    jump = std::max(jump, std::fabs(double(z) - double(z0)));
+                    if (j != i) jump = std::max({jump, double(highZ[j]) - double(lowZ[i]), double(highZ[i]) - double(lowZ[j])});
                 }
             step[i] = float(jump);
             if (m < 3) continue;
@@ -92,7 +96,7 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
             const double cxx = sxx - sx * sx / m, cxy = sxy - sx * sy / m, cyy = syy - sy * sy / m;
             const double cxz = sxz - sx * sz / m, cyz = syz - sy * sz / m;
             const double det = cxx * cyy - cxy * cxy;
-            if (!(det > 1e-9 * res * res * res * res)) continue;  // the cells lie on a line: no plane
+            if (!(det > 0.25 * res * res * res * res)) continue;  // the centroids (nearly) on a line: no plane
             const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
             slope[i] = float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
         }

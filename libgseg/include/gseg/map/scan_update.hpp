@@ -29,10 +29,11 @@ struct GroundCellSample {
     std::uint32_t count = 0; ///< ground points in the cell
     double sumZ = 0;         ///< [m] sum of their world z
     double sumZ2 = 0;        ///< [m^2] sum of their squared world z
+    double sumX = 0, sumY = 0;  ///< [m] sums of their world x and y (the centroid, for the slope)
     float minZ = 0, maxZ = 0;  ///< [m] lowest and highest of them
 
     bool operator==(const GroundCellSample& o) const {
-        return cell == o.cell && count == o.count && sumZ == o.sumZ && sumZ2 == o.sumZ2 && minZ == o.minZ && maxZ == o.maxZ;
+        return cell == o.cell && count == o.count && sumZ == o.sumZ && sumZ2 == o.sumZ2 && sumX == o.sumX && sumY == o.sumY && minZ == o.minZ && maxZ == o.maxZ;
     }
 };
 

@@ -9,8 +9,8 @@
 /// | layer | unit | meaning |
 /// |---|---|---|
 /// | `elevation` | m | mean world z of the cell's ground points (cells with >= minGroundPoints) |
-/// | `slope` | deg | of the least-squares plane through the elevations of the cell and its 8 neighbours (>= 3 cells) |
-/// | `step` | m | largest height jump to a neighbouring cell with an elevation, up or down (a drop is a step) |
+/// | `slope` | deg | of the least-squares plane through the ground-point centroids (mean x, y, z) of the cell and its 8 neighbours (>= 3 cells) |
+/// | `step` | m | largest height difference between a ground point of the cell and one of a neighbouring cell, up or down (a drop is a step) |
 /// | `roughness` | m | standard deviation of the cell's ground point heights |
 /// | `clearance` | m | free height above the elevation up to the bottom of the lowest obstacle voxel that lies at least minObstacleHeight above it; +inf where none |
 /// | `class` | - | 1 traversable, 2 not traversable, NaN unknown |
@@ -41,6 +41,7 @@ enum class TerrainClass : std::uint8_t { Unknown = 0, Traversable = 1, NotTraver
 struct GroundCellSums {
     std::uint64_t count = 0;
     double sumZ = 0, sumZ2 = 0;  ///< [m], [m^2]
+    double sumX = 0, sumY = 0;   ///< [m]
     float minZ = 0, maxZ = 0;    ///< [m]
 };
 
