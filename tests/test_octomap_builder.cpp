@@ -432,8 +432,12 @@ TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
     fromBytes.write(dir + "/a");
     theDrive().write(dir + "/b");
     for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
-                          "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"})
+                          "_traversability.3Dscene", "_costmap.pgm", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png",
+                          "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"})
         EXPECT_TRUE(fileBytes(dir + "/a" + f) == fileBytes(dir + "/b" + f)) << f;
+    std::string yaml = fileBytes(dir + "/a_costmap.yaml");  // names its own PGM
+    yaml.replace(yaml.find("a_costmap.pgm"), 1, "b");
+    EXPECT_EQ(yaml, fileBytes(dir + "/b_costmap.yaml"));
     std::filesystem::remove_all(dir);
     // Damaged bytes are an error, not a garbage update.
     std::string cut = bytes[0].substr(0, bytes[0].size() / 2), bad = bytes[0];
