@@ -550,8 +550,10 @@ TEST(EveryTool, TheRawlogToolsReadAPipe) {
     ASSERT_EQ(r.status, 0) << r.output;
     for (const char* s : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
                           "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"}) {
-        const std::string a = gseg::test::readText((dir / "file").string() + s);
+        std::string a = gseg::test::readText((dir / "file").string() + s);
         EXPECT_GT(a.size(), 100u) << s;
+        if (std::string(s) == "_costmap.yaml" && a.find("file_costmap.pgm") != std::string::npos)  // names its own PGM
+            a.replace(a.find("file_costmap.pgm"), 4, "pipe");
         EXPECT_TRUE(a == gseg::test::readText((dir / "pipe").string() + s)) << s << " differs when read from a pipe";
     }
     r = runCommand("cat " + kVlp16 + " | " + gseg::test::tool("rawlog-gseg") + " -q -i /dev/stdin -o " +
