@@ -173,7 +173,7 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     const std::string dir = tempDir("drive");
     const auto written = m.write(dir + "/drive");
     ASSERT_EQ(written, TraversabilityMap::outputPaths(dir + "/drive"));
-    ASSERT_EQ(written.size(), 6u);
+    ASSERT_EQ(written.size(), 16u);
     mrpt::img::CImage png;
     ASSERT_TRUE(png.loadFromFile(dir + "/drive_traversability.png"));
     const auto layout = gseg::map::pictureLayout(grid, m.path());
@@ -426,8 +426,12 @@ TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
     fromBytes.write(dir + "/a");
     theDrive().write(dir + "/b");
     for (const char* f : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
-                          "_traversability.3Dscene"})
+                          "_traversability.3Dscene", "_costmap.pgm", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png",
+                          "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"})
         EXPECT_TRUE(fileBytes(dir + "/a" + f) == fileBytes(dir + "/b" + f)) << f;
+    std::string yaml = fileBytes(dir + "/a_costmap.yaml");  // names its own PGM
+    yaml.replace(yaml.find("a_costmap.pgm"), 1, "b");
+    EXPECT_EQ(yaml, fileBytes(dir + "/b_costmap.yaml"));
     std::filesystem::remove_all(dir);
     // Damaged bytes are an error, not a garbage update.
     std::string cut = bytes[0].substr(0, bytes[0].size() / 2), bad = bytes[0];
@@ -448,7 +452,7 @@ TEST(OctomapBuilder, NoOccupiedVoxelStillWritesReadableMaps) {
     EXPECT_EQ(s.groundVoxels + s.obstacleVoxels, 0u);
     EXPECT_GT(s.freeVoxels, 20u);
     const std::string dir = tempDir("empty");
-    ASSERT_EQ(m.write(dir + "/e").size(), 6u);
+    ASSERT_EQ(m.write(dir + "/e").size(), 16u);
     EXPECT_TRUE(gseg::io::readPly(dir + "/e_traversability.ply").empty());
     mrpt::opengl::COpenGLScene scene;
     EXPECT_TRUE(scene.loadFromFile(dir + "/e_traversability.3Dscene"));

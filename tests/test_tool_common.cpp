@@ -433,8 +433,9 @@ TEST(EveryTool, ASignalWhileOutputsArePutInPlaceLeavesAllNewNoMix) {
          {"_frames.csv", "_sequences.csv", "_table.md", "_range.png"}, {3}},
         {gseg::test::tool("rawlog-octomap"),
          "-i " + kVlp16 + " -o OUT --poses " + f.tum.string() + " --pose-tolerance 1e12 -c " + cfg + "vlp16.yaml --threads 1",
-         {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply", "_traversability.3Dscene"},
-         {1, 2, 3, 4, 5, 6}},
+         {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply", "_traversability.3Dscene",
+          "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"},
+         {1, 2, 3, 4, 5, 6, 7, 8, 9, 16}},
         {gseg::test::tool("kitti2rawlog"), "-i " + f.sequence.string() + " --poses " + (dir / "kitti_poses.txt").string() +
          " -o OUT.rawlog --simplemap OUT.simplemap", {".rawlog", ".simplemap"}, {1}},
     };
@@ -548,9 +549,11 @@ TEST(EveryTool, TheRawlogToolsReadAPipe) {
     r = runCommand("cat " + kVlp16 + " | " + octomap + " -i /dev/stdin -o " + (dir / "pipe").string() + args + " 2>&1");
     ASSERT_EQ(r.status, 0) << r.output;
     for (const char* s : {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply",
-                          "_traversability.3Dscene"}) {
-        const std::string a = gseg::test::readText((dir / "file").string() + s);
+                          "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"}) {
+        std::string a = gseg::test::readText((dir / "file").string() + s);
         EXPECT_GT(a.size(), 100u) << s;
+        if (std::string(s) == "_costmap.yaml" && a.find("file_costmap.pgm") != std::string::npos)  // names its own PGM
+            a.replace(a.find("file_costmap.pgm"), 4, "pipe");
         EXPECT_TRUE(a == gseg::test::readText((dir / "pipe").string() + s)) << s << " differs when read from a pipe";
     }
     r = runCommand("cat " + kVlp16 + " | " + gseg::test::tool("rawlog-gseg") + " -q -i /dev/stdin -o " +

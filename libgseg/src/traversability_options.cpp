@@ -1,6 +1,7 @@
 #include <gseg/option_table.hpp>
 #include <gseg/traversability_options.hpp>
 
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,7 +21,20 @@ const OptionTable<TraversabilityOptions>& table() {
             {"clampMax", &O::clampMax, "-", "upper clamping, in (0.5, 1) (lower: quicker clearing of moved obstacles)"},
             {"occupancyThreshold", &O::occupancyThreshold, "-", "a voxel is occupied above this probability, in (0, 1)"},
             {"clearance", &O::clearance, "m",
-             "obstacle voxels higher than this above the column's ground do not block it (branches, bridges)"},
+             "obstacle voxels higher than this above the column's ground do not block it (branches, bridges); the robot's minimum clearance"},
+            {"minGroundPoints", &O::minGroundPoints, "points", "ground points (whole drive) a cell needs for an elevation, >= 1"},
+            {"maxSlope", &O::maxSlope, "deg", "steepest ground slope that is traversable, in (0, 90)"},
+            {"maxStep", &O::maxStep, "m", "largest height jump (up or down) to a neighbouring cell that is traversable, > 0"},
+            {"maxRoughness", &O::maxRoughness, "m", "largest standard deviation of a cell's ground heights that is traversable, > 0"},
+            {"maxGroundRise", &O::maxGroundRise, "m",
+             "a cell whose elevation lies more than this above the lowest elevation within groundRiseRadius is not traversable "
+             "(flat tops of hedges and bushes the segmenter calls ground); > groundRiseRadius * tan(maxSlope)"},
+            {"groundRiseRadius", &O::groundRiseRadius, "m", "radius of the neighbourhood of maxGroundRise, >= resolution"},
+            {"obstacleClearProbability", &O::obstacleClearProbability, "-",
+             "an obstacle voxel once hit stays an obstacle in the layers and costmap until its occupancy probability falls to this "
+             "or below (porous vegetation and fences stay, what moved away is cleared), in (0, occupancyThreshold]"},
+            {"minObstacleHeight", &O::minObstacleHeight, "m",
+             "obstacle voxels lower than this above the cell's ground do not block it (the step rule judges them), >= 0"},
         });
     return t;
 }
@@ -51,6 +65,26 @@ void TraversabilityOptions::validate() const {
     requireInRange(clampMax, "clampMax", 0.5, 1.0);
     requireInRange(occupancyThreshold, "occupancyThreshold", 0.0, 1.0);
     if (!(clearance > 0)) throw std::invalid_argument("TraversabilityOptions.clearance = " + std::to_string(clearance) + ": must be > 0 m");
+    if (minGroundPoints < 1)
+        throw std::invalid_argument("TraversabilityOptions.minGroundPoints = " + std::to_string(minGroundPoints) + ": must be >= 1");
+    requireInRange(maxSlope, "maxSlope [deg]", 0.0, 90.0);
+    if (!(maxStep > 0)) throw std::invalid_argument("TraversabilityOptions.maxStep = " + std::to_string(maxStep) + ": must be > 0 m");
+    if (!(maxRoughness > 0))
+        throw std::invalid_argument("TraversabilityOptions.maxRoughness = " + std::to_string(maxRoughness) + ": must be > 0 m");
+    if (!(groundRiseRadius >= resolution && groundRiseRadius <= 100))
+        throw std::invalid_argument("TraversabilityOptions.groundRiseRadius = " + std::to_string(groundRiseRadius) +
+                                    ": must lie in [resolution, 100] m");
+    if (!(maxGroundRise > groundRiseRadius * std::tan(maxSlope * 3.14159265358979323846 / 180.0)))
+        throw std::invalid_argument("TraversabilityOptions.maxGroundRise = " + std::to_string(maxGroundRise) +
+                                    ": must exceed groundRiseRadius * tan(maxSlope) = " +
+                                    std::to_string(groundRiseRadius * std::tan(maxSlope * 3.14159265358979323846 / 180.0)) +
+                                    " m (a ramp within maxSlope would be refused)");
+    if (!(obstacleClearProbability > 0 && obstacleClearProbability <= occupancyThreshold))
+        throw std::invalid_argument("TraversabilityOptions.obstacleClearProbability = " + std::to_string(obstacleClearProbability) +
+                                    ": must lie in (0, occupancyThreshold]");
+    if (!(minObstacleHeight >= 0 && minObstacleHeight < clearance))
+        throw std::invalid_argument("TraversabilityOptions.minObstacleHeight = " + std::to_string(minObstacleHeight) +
+                                    ": must lie in [0, clearance) m");
 }
 
 const std::vector<std::string>& TraversabilityOptions::keys() { return table().names(); }

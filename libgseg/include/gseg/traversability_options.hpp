@@ -19,7 +19,16 @@ struct TraversabilityOptions {
     double clampMin = 0.12;           ///< [-] lower clamping of the occupancy probability
     double clampMax = 0.97;           ///< [-] upper clamping (lower: quicker clearing of moved obstacles)
     double occupancyThreshold = 0.5;  ///< [-] a voxel is occupied above this probability
-    double clearance = 2.0;           ///< [m] obstacle voxels higher than this above the column's ground do not block it (branches, bridges)
+    double clearance = 2.0;           ///< [m] obstacle voxels higher than this above the column's ground do not block it (branches, bridges); also the robot's minimum clearance
+    // ---- the 2.5D layers and the costmap (gseg/map/terrain_layers.hpp); defaults for a car-sized robot ----
+    int minGroundPoints = 3;          ///< [points] ground points (whole drive) a cell needs for an elevation, >= 1
+    double maxSlope = 20.0;           ///< [deg] steepest ground a cell may have and be traversable, (0, 90)
+    double maxStep = 0.25;            ///< [m] largest height jump (up or down) to a neighbouring cell that is traversable, > 0
+    double maxRoughness = 0.1;        ///< [m] largest standard deviation of a cell's ground heights that is traversable, > 0
+    double maxGroundRise = 0.38;      ///< [m] a cell whose elevation lies more than this above the lowest elevation within groundRiseRadius is not traversable (flat tops of hedges and bushes the segmenter calls ground); > groundRiseRadius * tan(maxSlope)
+    double groundRiseRadius = 1.0;    ///< [m] radius of the neighbourhood of maxGroundRise, >= resolution
+    double obstacleClearProbability = 0.12;  ///< [-] in the layers and costmap an obstacle voxel once hit stays an obstacle until its occupancy probability falls to this or below (porous vegetation and fences stay; what moved away is cleared), in (0, occupancyThreshold]
+    double minObstacleHeight = 0.3;   ///< [m] obstacle voxels whose centre lies lower than this above the cell's ground do not block it (the step rules judge it), >= 0
     /// Throws std::invalid_argument naming the first invalid field (also a ray longer than
     /// kMaxRayVoxels voxels: maxRange / resolution).
     void validate() const;

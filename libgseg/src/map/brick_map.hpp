@@ -58,6 +58,16 @@ public:
                 }
         }
     }
+    /// Calls f(code, logOdds) for every obstacle voxel that an obstacle point ever fell in (brick by brick).
+    template <class F>
+    void forEachEverObstacle(F&& f) const {
+        for (std::size_t b = 0; b < bricks_.size(); ++b)
+            for (unsigned w = 0; w < 8; ++w)
+                for (std::uint64_t bits = bricks_[b].everObstacle[w]; bits; bits &= bits - 1) {
+                    const unsigned v = unsigned(__builtin_ctzll(bits));
+                    f((codes_[b] << 9) | (w << 6) | v, valueOf(bricks_[b].map[kObstacles], w, v));
+                }
+    }
     /// Obstacle voxels once occupied by a hit and free now (seen through).
     std::size_t clearedObstacles() const;
     /// Voxels of map m: occupied (>= the occupancy threshold) or free.

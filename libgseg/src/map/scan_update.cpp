@@ -11,6 +11,8 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
+#include <algorithm>
 
 namespace gseg::map {
 namespace {
@@ -45,6 +47,29 @@ public:
     }
 
     BrickSet& groundHits() { return groundHits_; }
+
+    /// Per-cell sums of the ground points within maxRange (sorted by cell).
+    std::vector<GroundCellSample> groundCells(const PointCloudView& pts) {
+        cells_.clear();
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const octomap::point3d p(pts.x(i), pts.y(i), pts.z(i));
+            const double range = (p - origin_).norm();
+            octomap::OcTreeKey key;
+            if (!(range <= maxRange_) || !keyOf(p, key)) continue;
+            const std::uint32_t cell = (std::uint32_t(key[0]) << 16) | key[1];
+            auto [it, added] = cells_.try_emplace(cell);
+            GroundCellSample& c = it->second;
+            const double z = pts.z(i);
+            if (added) c.cell = cell, c.minZ = c.maxZ = float(z);
+            ++c.count, c.sumZ += z, c.sumZ2 += z * z, c.sumX += pts.x(i), c.sumY += pts.y(i);
+            c.minZ = std::min(c.minZ, float(z)), c.maxZ = std::max(c.maxZ, float(z));
+        }
+        std::vector<GroundCellSample> out;
+        out.reserve(cells_.size());
+        for (const auto& kv : cells_) out.push_back(kv.second);
+        std::sort(out.begin(), out.end(), [](const GroundCellSample& a, const GroundCellSample& b) { return a.cell < b.cell; });
+        return out;
+    }
     BrickSet& obstacleHits() { return obstacleHits_; }
 
     /// Hits and ray ends of a point set (the first point of each endpoint voxel ends a ray).
@@ -82,6 +107,7 @@ private:
     BrickSet ends_, groundHits_, obstacleHits_, crossed_;
     std::vector<octomap::point3d> endPoints_;
     std::vector<std::uint64_t> endCodes_;
+    std::unordered_map<std::uint32_t, GroundCellSample> cells_;
 
     bool keyOf(const octomap::point3d& p, octomap::OcTreeKey& key) const {
         for (int a = 0; a < 3; ++a)  // far outside: rejected before OctoMap's int conversion can overflow
@@ -172,6 +198,35 @@ public:
         return out;
     }
     bool atEnd() const { return pos_ == s_.size(); }
+    double real64() {
+        const std::uint64_t bits = raw64();
+        double v = 0;
+        std::memcpy(&v, &bits, sizeof v);
+        return v;
+    }
+    float real32() {
+        std::uint32_t bits = 0;
+        for (int i = 0; i < 4; ++i) bits |= std::uint32_t(byte()) << (8 * i);
+        float v = 0;
+        std::memcpy(&v, &bits, sizeof v);
+        return v;
+    }
+    std::vector<GroundCellSample> groundCells() {
+        const std::uint64_t n = varint();
+        if (n > (s_.size() - pos_) / 42) throw std::runtime_error("scan update: list longer than the data");
+        std::vector<GroundCellSample> out(n);
+        std::uint64_t prev = 0;
+        for (auto& c : out) {
+            prev += varint();
+            if (prev > 0xffffffffULL) throw std::runtime_error("scan update: cell out of range");
+            c.cell = std::uint32_t(prev);
+            const std::uint64_t count = varint();
+            if (count > 0xffffffffULL) throw std::runtime_error("scan update: count out of range");
+            c.count = std::uint32_t(count);
+            c.sumZ = real64(), c.sumZ2 = real64(), c.sumX = real64(), c.sumY = real64(), c.minZ = real32(), c.maxZ = real32();
+        }
+        return out;
+    }
 
 private:
     const std::string& s_;
@@ -182,14 +237,25 @@ private:
     }
 };
 
-const char kMagic[] = "GSU1";
+const char kMagic[] = "GSU2", kMagicV1[] = "GSU1";
+
+void putDouble(std::string& out, double v) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    putRaw64(out, bits);
+}
+void putFloat(std::string& out, float v) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    for (int i = 0; i < 4; ++i) out.push_back(char(std::uint8_t(bits >> (8 * i))));
+}
 
 }  // namespace
 
 bool ScanUpdate::operator==(const ScanUpdate& o) const {
     return origin == o.origin && free == o.free && groundHits == o.groundHits && obstacleHits == o.obstacleHits &&
            groundPoints == o.groundPoints && obstaclePoints == o.obstaclePoints && rays == o.rays &&
-           pointsSkipped == o.pointsSkipped;
+           pointsSkipped == o.pointsSkipped && groundCells == o.groundCells;
 }
 
 ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacles, const Eigen::Vector3d& sensorOrigin,
@@ -211,6 +277,7 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
     u.free = caster.crossed().sortedCodes({&caster.groundHits(), &caster.obstacleHits()});
     u.groundHits = caster.groundHits().sortedCodes();
     u.obstacleHits = caster.obstacleHits().sortedCodes();
+    u.groundCells = caster.groundCells(ground);
     return u;
 }
 
@@ -227,11 +294,19 @@ std::string serializeScanUpdate(const ScanUpdate& u) {
         std::uint64_t prev = 0;
         for (std::uint64_t c : *list) putVarint(out, c - prev), prev = c;
     }
+    putVarint(out, u.groundCells.size());
+    std::uint64_t prev = 0;
+    for (const GroundCellSample& c : u.groundCells) {
+        putVarint(out, c.cell - prev), prev = c.cell;
+        putVarint(out, c.count);
+        putDouble(out, c.sumZ), putDouble(out, c.sumZ2), putDouble(out, c.sumX), putDouble(out, c.sumY), putFloat(out, c.minZ), putFloat(out, c.maxZ);
+    }
     return out;
 }
 
 ScanUpdate deserializeScanUpdate(const std::string& bytes) {
-    if (bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
+    const bool v1 = bytes.compare(0, 4, kMagicV1) == 0;
+    if (!v1 && bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
     ScanUpdate u;
     Reader in(bytes, 4);
     for (int a = 0; a < 3; ++a) {
@@ -242,6 +317,7 @@ ScanUpdate deserializeScanUpdate(const std::string& bytes) {
     u.free = in.codes();
     u.groundHits = in.codes();
     u.obstacleHits = in.codes();
+    if (!v1) u.groundCells = in.groundCells();
     if (!in.atEnd()) throw std::runtime_error("scan update: trailing bytes");
     return u;
 }

@@ -4,6 +4,9 @@
 #include <gseg/palette.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
+#include <gseg/map/layer_file.hpp>
+#include <gseg/map/layer_picture.hpp>
+#include <gseg/map/terrain_layers.hpp>
 #include <gseg/mrpt/scene.hpp>
 
 #include "brick_map.hpp"
@@ -94,6 +97,16 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
     return gseg::io::labelledPlyBytes(PointCloudView(v.xyz.data(), v.labels.size()), v.labels, colours, options);
 }
 
+/// The costmap's PGM and YAML (files 6 and 7; the YAML names the PGM by its file name).
+void writeCostmap(gseg::io::AtomicFileSet& files, const gseg::io::RosMap& map) {
+    const std::string pgm = gseg::io::encodePgm(map);
+    files[6].write(pgm.data(), pgm.size());
+    const std::string path = files.paths()[6];
+    const std::size_t slash = path.find_last_of('/');
+    const std::string yaml = gseg::io::encodeRosMapYaml(map, slash == std::string::npos ? path : path.substr(slash + 1));
+    files[7].write(yaml.data(), yaml.size());
+}
+
 }  // namespace
 
 Rgb colourOf(CellClass c) {
@@ -115,6 +128,7 @@ TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
     l.clampMin = configured_->getClampingThresMinLog(), l.clampMax = configured_->getClampingThresMaxLog();
     l.occupied = configured_->getOccupancyThresLog();
     voxels_ = std::make_unique<detail::BrickMap>(l);
+    groundCells_ = std::make_unique<GroundCells>();
 }
 
 TraversabilityMap::~TraversabilityMap() = default;
@@ -142,6 +156,7 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
     // ground does not move, so misses never lower an occupied ground voxel (rays to distant
     // ground graze the road near their end and would erode it scan after scan).
     voxels_->applyScan(u.free, u.groundHits, u.obstacleHits);
+    groundCells_->add(u.groundCells);
     groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
     if (!path_.empty()) stats_.pathLength += (u.origin - path_.back()).norm();
     path_.push_back(u.origin);
@@ -213,9 +228,30 @@ MapStats TraversabilityMap::stats() const {
     return s;
 }
 
+LayerGrid TraversabilityMap::layers() const {
+    ObstacleColumns columns;
+    const float occupied = configured_->getOccupancyThresLog();
+    const double p = options_.obstacleClearProbability;
+    const float cleared = float(std::log(p / (1 - p)));  // a voxel once hit is an obstacle above this log-odds
+    auto add = [&](std::uint64_t code) {
+        const octomap::OcTreeKey k = detail::keyOfCode(code);
+        columns[(std::uint32_t(k[0]) << 16) | k[1]].push_back(float(configured_->keyToCoord(k[2])));
+    };
+    // Only obstacle hits raise an obstacle voxel, so every occupied one was hit at least once.
+    voxels_->forEachEverObstacle([&](std::uint64_t code, float v) {
+        if (v > cleared || v >= occupied) add(code);
+    });
+    const Eigen::Vector3d first = path_.empty() ? Eigen::Vector3d::Zero() : path_.front();
+    return terrainLayers(*groundCells_, columns, options_, first.x(), first.y());
+}
+
 std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefix) {
-    return {prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
-            prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene"};
+    std::vector<std::string> paths{prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
+            prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene",
+            prefix + "_costmap.pgm",        prefix + "_costmap.yaml"};
+    paths.push_back(prefix + "_layers.tif");
+    for (const std::string& name : terrainLayerNames()) paths.push_back(prefix + "_layer_" + name + ".png");
+    return paths;
 }
 
 std::string TraversabilityMap::pictureTitle() const {
@@ -243,6 +279,19 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
     detail::writeMapScene(files[5], v.xyz, v.labels, res, path_);
+    const LayerGrid grid = layers();
+    writeCostmap(files, costmapOf(grid));
+    const std::string tif = encodeLayersGeoTiff(grid);
+    files[8].write(tif.data(), tif.size());
+    LayerPictureOptions picture;
+    picture.title = pictureTitle();
+    for (std::size_t i = 0; i < terrainLayerNames().size(); ++i) {
+        const std::string& name = terrainLayerNames()[i];
+        LayerPictureOptions o = picture;
+        if (name == "cost") o.min = 0, o.max = 100;
+        const std::string png = encodeLayerPng(grid, name, o);
+        files[9 + i].write(png.data(), png.size());
+    }
     files.commit();
     return files.paths();
 }

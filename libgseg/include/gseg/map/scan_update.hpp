@@ -21,6 +21,22 @@
 
 namespace gseg::map {
 
+/// The ground points of one scan that fall in one map cell (a column of voxels): what the 2.5D
+/// layers (terrain_layers.hpp) accumulate over the drive, so they come from the points' heights,
+/// not from voxel centres, and need no point lists.
+struct GroundCellSample {
+    std::uint32_t cell = 0;  ///< OctoMap key of the column: (key x << 16) | key y (cell ix = key x - 32768)
+    std::uint32_t count = 0; ///< ground points in the cell
+    double sumZ = 0;         ///< [m] sum of their world z
+    double sumZ2 = 0;        ///< [m^2] sum of their squared world z
+    double sumX = 0, sumY = 0;  ///< [m] sums of their world x and y (the centroid, for the slope)
+    float minZ = 0, maxZ = 0;  ///< [m] lowest and highest of them
+
+    bool operator==(const GroundCellSample& o) const {
+        return cell == o.cell && count == o.count && sumZ == o.sumZ && sumZ2 == o.sumZ2 && sumX == o.sumX && sumY == o.sumY && minZ == o.minZ && maxZ == o.maxZ;
+    }
+};
+
 /// The per-scan result: a plain value (serialisable with serializeScanUpdate()).
 struct ScanUpdate {
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
@@ -31,6 +47,7 @@ struct ScanUpdate {
     std::uint64_t obstaclePoints = 0;         ///< obstacle points given
     std::uint64_t rays = 0;                   ///< rays cast (one per endpoint voxel)
     std::uint64_t pointsSkipped = 0;          ///< points not used: NaN/infinite or outside the map's extent
+    std::vector<GroundCellSample> groundCells;  ///< ground points within maxRange per cell (sorted by cell)
 
     bool operator==(const ScanUpdate& o) const;
 };
@@ -44,7 +61,8 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
                     const TraversabilityOptions& options);
 
 /// A compact byte string of the update (sorted codes delta-encoded as varints), for sending the
-/// per-scan result to another process. Little-endian, versioned.
+/// per-scan result to another process. Little-endian, versioned: "GSU2" (with groundCells);
+/// deserializeScanUpdate() also reads "GSU1" (no ground cells).
 std::string serializeScanUpdate(const ScanUpdate& update);
 /// Inverse of serializeScanUpdate(). Throws std::runtime_error on a truncated or malformed string.
 ScanUpdate deserializeScanUpdate(const std::string& bytes);

@@ -7,6 +7,7 @@
 /// Frame: everything is in one world frame (metres, z up). Callers transform points with the
 /// robot pose and the sensor mounting first, and give the sensor's world position as ray origin.
 
+#include <gseg/map/layer_grid.hpp>
 #include <gseg/mrpt/picture.hpp>
 #include <gseg/point_cloud.hpp>
 #include <gseg/traversability_options.hpp>
@@ -34,6 +35,7 @@ class BrickMap;    // the voxels while a drive is integrated (implementation det
 }
 
 struct ScanUpdate;
+class GroundCells;
 
 /// What the top-down grid says about one column of voxels.
 enum class CellClass : std::uint8_t { Unknown = 0, Traversable = 1, Obstacle = 2 };
@@ -171,8 +173,12 @@ public:
     TopDownGrid topDown() const;
     /// Counters and voxel counts (walks both trees).
     MapStats stats() const;
+    /// The 2.5D layers (elevation, slope, step, roughness, clearance, class, cost) from the ground
+    /// points of every scan and the occupied obstacle voxels (gseg/map/terrain_layers.hpp).
+    /// Without any ground point or obstacle: one unknown cell at the first sensor position.
+    LayerGrid layers() const;
 
-    /// The six files write() writes for `prefix`, in this order.
+    /// The files write() writes for `prefix`, in this order.
     static std::vector<std::string> outputPaths(const std::string& prefix);
     /// Writes, all of them or none (temporary files, then renamed; if a rename fails the previous
     /// versions are put back):
@@ -183,7 +189,14 @@ public:
     ///   `label` property (1 ground, 0 obstacle) for CloudCompare and other point-cloud viewers;
     /// - `<prefix>_traversability.3Dscene`: an MRPT scene for SceneViewer3D: the same voxels as
     ///   coloured boxes (COctoMapVoxels), the driven path as a blue line with a blue box at each
-    ///   sensor position, axes at its start.
+    ///   sensor position, axes at its start;
+    /// - `<prefix>_costmap.pgm`, `<prefix>_costmap.yaml`: the `class` layer as a ROS map_server
+    ///   map (trinary: traversable free, not traversable occupied, the rest unknown; map frame =
+    ///   the world frame), what Nav2's map_server and MRPT's loadFromROSMapServerYAML load;
+    /// - `<prefix>_layers.tif`: the layers as a GeoTIFF (gseg/map/layer_file.hpp), one named
+    ///   float32 band per layer, NaN unknown;
+    /// - `<prefix>_layer_<name>.png` for each layer (terrainLayerNames()): its picture
+    ///   (gseg/map/layer_picture.hpp).
     /// The same map always gives the same bytes. Throws std::runtime_error naming the file on
     /// failure and std::logic_error if no scan was inserted. Returns the paths written.
     std::vector<std::string> write(const std::string& prefix) const;
@@ -194,6 +207,7 @@ private:
     TraversabilityOptions options_;
     std::unique_ptr<detail::MapTree> configured_;  ///< an empty tree with the options: OctoMap's own log-odds
     std::unique_ptr<detail::BrickMap> voxels_;
+    std::unique_ptr<GroundCells> groundCells_;  ///< the ground points of every scan, per cell
     mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
     mutable std::unique_ptr<TopDownGrid> topDown_;
     std::vector<Eigen::Vector3d> path_;

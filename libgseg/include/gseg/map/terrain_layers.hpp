@@ -1,0 +1,74 @@
+#pragma once
+/// \file terrain_layers.hpp
+/// The 2.5D layers of a traversability map and the costmap derived from them.
+///
+/// Per map cell (x, y at the map resolution, map = world frame, metres, z up), from the ground
+/// points of the whole drive (summed per cell and scan: GroundCellSample in scan_update.hpp) and
+/// the occupied obstacle voxels at the end of the drive (ray casting has cleared what moved away):
+///
+/// | layer | unit | meaning |
+/// |---|---|---|
+/// | `elevation` | m | mean world z of the cell's ground points (cells with >= minGroundPoints) |
+/// | `slope` | deg | of the least-squares plane through the ground-point centroids (mean x, y, z) of the cell and its 8 neighbours (>= 3 cells) |
+/// | `step` | m | largest height difference between a ground point of the cell and one of a neighbouring cell, up or down (a drop is a step) |
+/// | `roughness` | m | standard deviation of the cell's ground point heights |
+/// | `clearance` | m | free height above the elevation up to the bottom of the lowest obstacle voxel that lies at least minObstacleHeight above it; +inf where none |
+/// | `class` | - | 1 traversable, 2 not traversable, NaN unknown |
+/// | `cost` | - | 0-100 (nav_msgs/OccupancyGrid): traversable cells 0-99 (99 x the largest of slope / maxSlope, step / maxStep, roughness / maxRoughness), 100 not traversable, NaN unknown |
+///
+/// A cell with an elevation is traversable when slope <= maxSlope, step <= maxStep, roughness <=
+/// maxRoughness and clearance >= clearance (TraversabilityOptions). A cell without ground points
+/// but with obstacle voxels is not traversable when one of them lies between minObstacleHeight and
+/// clearance above its reference ground (the median elevation of the cells within 1 m, or else the
+/// bottom of its lowest obstacle voxel); else it stays unknown.
+
+#include <gseg/io/ros_map.hpp>
+#include <gseg/map/layer_grid.hpp>
+#include <gseg/map/scan_update.hpp>
+#include <gseg/traversability_options.hpp>
+
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace gseg::map {
+
+/// The values of the `class` layer.
+enum class TerrainClass : std::uint8_t { Unknown = 0, Traversable = 1, NotTraversable = 2 };
+
+/// The ground points of the drive per cell: sums, so memory follows the mapped area.
+struct GroundCellSums {
+    std::uint64_t count = 0;
+    double sumZ = 0, sumZ2 = 0;  ///< [m], [m^2]
+    double sumX = 0, sumY = 0;   ///< [m]
+    float minZ = 0, maxZ = 0;    ///< [m]
+};
+
+/// Accumulates the GroundCellSample lists of the scans, in scan order.
+class GroundCells {
+public:
+    void add(const std::vector<GroundCellSample>& samples);
+    const std::unordered_map<std::uint32_t, GroundCellSums>& cells() const { return cells_; }
+    void clear() { cells_.clear(); }
+
+private:
+    std::unordered_map<std::uint32_t, GroundCellSums> cells_;  ///< by column key (GroundCellSample::cell)
+};
+
+/// The z [m] of the centres of the occupied obstacle voxels of each column (by column key).
+using ObstacleColumns = std::unordered_map<std::uint32_t, std::vector<float>>;
+
+/// The names of the layers, in the order of the table above (and of the GeoTIFF's bands).
+const std::vector<std::string>& terrainLayerNames();
+
+/// The layers of the table above, over the bounding box of every cell with ground points or
+/// obstacle voxels; without any, one unknown cell holding map position (emptyX, emptyY) [m].
+LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& options,
+                        double emptyX = 0, double emptyY = 0);
+
+/// The costmap of a `class` layer in map_server's trinary form: traversable free, not traversable
+/// occupied, the rest unknown; the same cells, resolution and origin.
+gseg::io::RosMap costmapOf(const LayerGrid& layers);
+
+}  // namespace gseg::map

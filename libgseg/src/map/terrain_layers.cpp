@@ -1,0 +1,188 @@
+#include <gseg/map/terrain_layers.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace gseg::map {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr double kPi = 3.14159265358979323846;
+
+/// Column key parts: OctoMap key x, y (cell index + 32768).
+int keyX(std::uint32_t cell) { return int(cell >> 16); }
+int keyY(std::uint32_t cell) { return int(cell & 0xffffu); }
+
+}  // namespace
+
+void GroundCells::add(const std::vector<GroundCellSample>& samples) {
+    for (const GroundCellSample& s : samples) {
+        auto [it, added] = cells_.try_emplace(s.cell);
+        GroundCellSums& c = it->second;
+        if (added) c.minZ = s.minZ, c.maxZ = s.maxZ;
+        c.count += s.count, c.sumZ += s.sumZ, c.sumZ2 += s.sumZ2, c.sumX += s.sumX, c.sumY += s.sumY;
+        c.minZ = std::min(c.minZ, s.minZ), c.maxZ = std::max(c.maxZ, s.maxZ);
+    }
+}
+
+const std::vector<std::string>& terrainLayerNames() {
+    static const std::vector<std::string> names{"elevation", "slope", "step", "roughness", "clearance", "class", "cost"};
+    return names;
+}
+
+LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& o,
+                        double emptyX, double emptyY) {
+    o.validate();
+    const auto minPoints = std::uint64_t(o.minGroundPoints);
+    int lo[2] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max()}, hi[2] = {-1, -1};
+    auto extend = [&](std::uint32_t cell) {
+        lo[0] = std::min(lo[0], keyX(cell)), hi[0] = std::max(hi[0], keyX(cell));
+        lo[1] = std::min(lo[1], keyY(cell)), hi[1] = std::max(hi[1], keyY(cell));
+    };
+    for (const auto& [cell, sums] : ground.cells())
+        if (sums.count >= minPoints) extend(cell);
+    for (const auto& [cell, zs] : obstacles)
+        if (!zs.empty()) extend(cell);
+    const double res = o.resolution;
+    if (hi[0] < 0) {  // nothing seen: one unknown cell
+        lo[0] = hi[0] = int(std::floor(emptyX / res)) + 32768;
+        lo[1] = hi[1] = int(std::floor(emptyY / res)) + 32768;
+    }
+    LayerGrid g(hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, res, (lo[0] - 32768) * res, (lo[1] - 32768) * res);
+    auto& elevation = g.add("elevation", "m", "mean height of the ground points (map frame z)").values;
+    auto& slope = g.add("slope", "deg", "slope of the plane through the elevations of the cell and its 8 neighbours").values;
+    auto& step = g.add("step", "m", "largest height jump to a neighbouring cell, up or down").values;
+    auto& roughness = g.add("roughness", "m", "standard deviation of the ground point heights in the cell").values;
+    auto& clearance = g.add("clearance", "m", "free height above the ground up to the lowest obstacle (inf: none)").values;
+    auto& cls = g.add("class", "-", "1 traversable, 2 not traversable, NaN unknown").values;
+    auto& cost = g.add("cost", "-", "0-99 traversable (99 = at a robot limit), 100 not traversable, NaN unknown").values;
+    const int w = g.width(), h = g.height();
+    auto at = [&](std::uint32_t cell) { return g.index(keyX(cell) - lo[0], keyY(cell) - lo[1]); };
+
+    std::vector<float> lowZ(g.cells(), kNaN), highZ(g.cells(), kNaN), offX(g.cells(), 0.f), offY(g.cells(), 0.f);
+    for (const auto& [cell, s] : ground.cells()) {
+        if (s.count < minPoints) continue;
+        const double n = double(s.count), mean = s.sumZ / n;
+        const std::size_t i = at(cell);
+        elevation[i] = float(mean);
+        lowZ[i] = s.minZ, highZ[i] = s.maxZ;
+        offX[i] = float(s.sumX / n - g.centreX(keyX(cell) - lo[0])), offY[i] = float(s.sumY / n - g.centreY(keyY(cell) - lo[1]));
+        roughness[i] = float(std::sqrt(std::max(0.0, s.sumZ2 / n - mean * mean)));
+    }
+
+    // Slope and step from the 3 x 3 neighbourhood of each cell with an elevation.
+    for (int cy = 0; cy < h; ++cy)
+        for (int cx = 0; cx < w; ++cx) {
+            const std::size_t i = g.index(cx, cy);
+            const float z0 = elevation[i];
+            if (std::isnan(z0)) continue;
+            double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, sx = 0, sy = 0, sz = 0, m = 0, jump = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if (!g.inside(cx + dx, cy + dy)) continue;
+                    const std::size_t j = g.index(cx + dx, cy + dy);
+                    const float z = elevation[j];
+                    if (std::isnan(z)) continue;
+                    const double x = dx * res + offX[j], y = dy * res + offY[j];
+                    sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z, sx += x, sy += y, sz += z, ++m;
+                    if (j != i) jump = std::max({jump, double(highZ[j]) - double(lowZ[i]), double(highZ[i]) - double(lowZ[j])});
+                }
+            step[i] = float(jump);
+            if (m < 3) continue;
+            // Centred normal equations of z = a + b x + c y.
+            const double cxx = sxx - sx * sx / m, cxy = sxy - sx * sy / m, cyy = syy - sy * sy / m;
+            const double cxz = sxz - sx * sz / m, cyz = syz - sy * sz / m;
+            const double det = cxx * cyy - cxy * cxy;
+            if (!(det > 0.25 * res * res * res * res)) continue;  // the centroids (nearly) on a line: no plane
+            const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
+            slope[i] = float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
+        }
+
+    // Rise above the lowest elevation within groundRiseRadius (a disc of cell centres).
+    std::vector<float> rise(g.cells(), kNaN);
+    const int rr = int(std::ceil(o.groundRiseRadius / res));
+    for (int cy = 0; cy < h; ++cy)
+        for (int cx = 0; cx < w; ++cx) {
+            const float z0 = elevation[g.index(cx, cy)];
+            if (std::isnan(z0)) continue;
+            float lowest = z0;
+            for (int dy = -rr; dy <= rr; ++dy)
+                for (int dx = -rr; dx <= rr; ++dx)
+                    if ((dx * dx + dy * dy) * res * res <= o.groundRiseRadius * o.groundRiseRadius * (1 + 1e-9) &&
+                        g.inside(cx + dx, cy + dy)) {
+                        const float z = elevation[g.index(cx + dx, cy + dy)];
+                        if (z < lowest) lowest = z;  // NaN compares false
+                    }
+            rise[g.index(cx, cy)] = z0 - lowest;
+        }
+
+    // Clearance and class.
+    const int r = std::max(1, int(std::lround(1.0 / res)));
+    std::vector<float> near;
+    for (int cy = 0; cy < h; ++cy)
+        for (int cx = 0; cx < w; ++cx) {
+            const std::size_t i = g.index(cx, cy);
+            const auto col = obstacles.find((std::uint32_t(cx + lo[0]) << 16) | std::uint32_t(cy + lo[1]));
+            const std::vector<float>* zs = col == obstacles.end() ? nullptr : &col->second;
+            const float z0 = elevation[i];
+            if (!std::isnan(z0)) {
+                float lowest = std::numeric_limits<float>::infinity();
+                if (zs)
+                    for (float z : *zs)
+                        if (z > z0 + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
+                clearance[i] = lowest - z0;
+                const bool ok = clearance[i] >= o.clearance && step[i] <= o.maxStep && roughness[i] <= o.maxRoughness &&
+                                rise[i] <= o.maxGroundRise &&
+                                !(slope[i] > o.maxSlope);  // no slope (too few neighbours): not judged by it
+                cls[i] = float(ok ? TerrainClass::Traversable : TerrainClass::NotTraversable);
+                if (ok) {
+                    double worst = std::max(step[i] / o.maxStep, roughness[i] / o.maxRoughness);
+                    if (!std::isnan(slope[i])) worst = std::max(worst, slope[i] / o.maxSlope);
+                    cost[i] = float(std::min(99.0, std::floor(99.0 * worst)));
+                } else {
+                    cost[i] = 100;
+                }
+                continue;
+            }
+            if (!zs || zs->empty()) continue;
+            near.clear();
+            for (int dy = -r; dy <= r; ++dy)
+                for (int dx = -r; dx <= r; ++dx)
+                    if (g.inside(cx + dx, cy + dy) && !std::isnan(elevation[g.index(cx + dx, cy + dy)]))
+                        near.push_back(elevation[g.index(cx + dx, cy + dy)]);
+            float ref = 0;
+            if (!near.empty()) {
+                std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
+                ref = near[near.size() / 2];
+            } else {
+                ref = *std::min_element(zs->begin(), zs->end()) - float(res / 2);
+            }
+            bool blocked = false;
+            float lowest = std::numeric_limits<float>::infinity();
+            for (float z : *zs)
+                if (z > ref + o.minObstacleHeight) {
+                    lowest = std::min(lowest, z - float(res / 2));
+                    blocked |= z < ref + o.clearance;
+                }
+            if (blocked) cls[i] = float(TerrainClass::NotTraversable), cost[i] = 100, clearance[i] = std::max(0.0f, lowest - ref);
+        }
+    return g;
+}
+
+gseg::io::RosMap costmapOf(const LayerGrid& layers) {
+    using gseg::io::RosMap;
+    RosMap m = RosMap::unknown(layers.width(), layers.height(), layers.resolution(), layers.originX(), layers.originY());
+    const auto& cls = layers.layer("class").values;
+    for (int cy = 0; cy < layers.height(); ++cy)
+        for (int cx = 0; cx < layers.width(); ++cx) {
+            const float c = cls[layers.index(cx, cy)];
+            if (c == float(TerrainClass::Traversable)) m.value(cx, cy) = RosMap::kFree;
+            else if (c == float(TerrainClass::NotTraversable)) m.value(cx, cy) = RosMap::kOccupied;
+        }
+    return m;
+}
+
+}  // namespace gseg::map
