@@ -614,8 +614,9 @@ pose: 4 x 4 rigid transform of the vehicle in the world frame [m]; sensor_pose: 
 the sensor on the vehicle (default: identity, the sensor is the vehicle frame). Returns False when
 the scan could not be used (its reason in skipped()). Raises ValueError on bad points or poses.)doc")
         .def("write", &PyMapBuilder::write, py::arg("prefix"), py::arg("overwrite") = false, R"doc(
-Writes PREFIX_ground.bt, PREFIX_obstacles.bt, PREFIX_traversability.ot/.png/.ply/.3Dscene (and every
-other map file rawlog-octomap writes), all or none; returns their paths. Existing files raise
+Writes the files of `rawlog-octomap -o PREFIX`, all or none: PREFIX_ground.bt, PREFIX_obstacles.bt,
+PREFIX_traversability.ot/.png/.ply/.3Dscene, the planner's costmap PREFIX_costmap.pgm + .yaml (ROS
+map_server), the 2.5D layers PREFIX_layers.tif (GeoTIFF) and a picture per layer; returns their paths. Existing files raise
 ValueError unless overwrite=True.)doc")
         .def("stats", &PyMapBuilder::stats, "Counters of the map: scans, points, rays, voxels, cells, path length [m].")
         .def("skipped", &PyMapBuilder::skipped, "Why scans were not used, one line each.");

@@ -125,13 +125,14 @@ void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
     for (const auto& p : path) grow(float(p.x()), float(p.y()), float(p.z()));
     char title[96];
     std::snprintf(title, sizeof title, "gseg traversability map, %.2f m voxels", resolution);
-    gseg::mrpt::addLegendAndCamera(
-        scene, title,
-        {{colours[1], "traversable: ground voxels (" + std::to_string(ground) + ")"},
-         {colours[0], "obstacle voxels (" + std::to_string(labels.size() - ground) + ")"},
-         {Rgb{40, 120, 255}, "driven path: a box at each sensor position (" + std::to_string(path.size()) + ")"},
-         {Rgb{200, 200, 200}, "axes at the start: x red, y green, z up blue, 2 m"}},
-        lo, hi);
+    std::vector<gseg::mrpt::SceneLegendLine> legend;
+    legend.push_back({colours[1], "traversable: ground voxels (" + std::to_string(ground) + ")"});
+    legend.push_back({colours[0], "obstacle voxels (" + std::to_string(labels.size() - ground) + ")"});
+    if (layers && layers->find("elevation"))
+        legend.push_back({Rgb{170, 170, 170}, "2.5D map: a tile per cell at its ground elevation, green traversable, red not"});
+    legend.push_back({Rgb{40, 120, 255}, "driven path: a box at each sensor position (" + std::to_string(path.size()) + ")"});
+    legend.push_back({Rgb{200, 200, 200}, "axes at the start: x red, y green, z up blue, 2 m"});
+    gseg::mrpt::addLegendAndCamera(scene, title, legend, lo, hi);
     gseg::mrpt::writeGzipObject(file, scene);
 }
 

@@ -278,8 +278,8 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
-    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_);
     const LayerGrid grid = layers();
+    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid);
     writeCostmap(files, costmapOf(grid));
     const std::string tif = encodeLayersGeoTiff(grid);
     files[8].write(tif.data(), tif.size());
