@@ -53,8 +53,8 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
     }
     LayerGrid g(hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, res, (lo[0] - 32768) * res, (lo[1] - 32768) * res);
     auto& elevation = g.add("elevation", "m", "mean height of the ground points (map frame z)").values;
-    auto& slope = g.add("slope", "deg", "slope of the plane through the elevations of the cell and its 8 neighbours").values;
-    auto& step = g.add("step", "m", "largest height jump to a neighbouring cell, up or down").values;
+    auto& slope = g.add("slope", "deg", "slope of the least-squares plane through the ground-point centroids of the cell and its 8 neighbours").values;
+    auto& step = g.add("step", "m", "largest height difference between a ground point of the cell and one of a neighbouring cell, up or down").values;
     auto& roughness = g.add("roughness", "m", "standard deviation of the ground point heights in the cell").values;
     auto& clearance = g.add("clearance", "m", "free height above the ground up to the lowest obstacle (inf: none)").values;
     auto& cls = g.add("class", "-", "1 traversable, 2 not traversable, NaN unknown").values;
