@@ -34,6 +34,21 @@ namespace py = pybind11;
 
 namespace {
 
+/// Runs `f`; a library error (std::exception, not a Python one) becomes ValueError with its one-line
+/// reason (MRPT's banner and backtrace left out).
+template <class F>
+auto asValueError(F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const py::builtin_exception&) {
+        throw;
+    } catch (const py::error_already_set&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw py::value_error(gseg::mrpt::errorReason(e));
+    }
+}
+
 // --- numpy helpers ----------------------------------------------------------------------------
 
 /// A vector handed to numpy without a copy (the array owns it through a capsule).
@@ -659,35 +674,19 @@ predicted ground count as true positives), 'without_vegetation' (vegetation don'
 'by_range' (the same within 10, 20, ... 100 m horizontally).)doc");
 
     m.def("read_kitti_bin", [](const std::filesystem::path& path) {
-        try {
-            return rowsToNumpy(gseg::io::readKittiBin(path.string()), 4);
-        } catch (const std::runtime_error& e) {
-            throw py::value_error(e.what());
-        }
+        return asValueError([&] { return rowsToNumpy(gseg::io::readKittiBin(path.string()), 4); });
     }, py::arg("path"), "Reads a KITTI velodyne .bin: float32 array (N, 4) of x, y, z, intensity.");
     m.def("read_kitti_labels", [](const std::filesystem::path& path, py::object expected) {
-        try {
-            return toNumpy(gseg::io::readKittiLabels(path.string(), expected.is_none() ? SIZE_MAX : expected.cast<std::size_t>()));
-        } catch (const std::runtime_error& e) {
-            throw py::value_error(e.what());
-        }
+        const std::size_t n = expected.is_none() ? SIZE_MAX : expected.cast<std::size_t>();
+        return asValueError([&] { return toNumpy(gseg::io::readKittiLabels(path.string(), n)); });
     }, py::arg("path"), py::arg("points") = py::none(),
           "Reads a SemanticKITTI .label file: uint32 array (raw labels; class = value & 0xFFFF). With points=N, "
           "a file that does not hold N labels raises ValueError.");
     m.def("read_ply", [](const std::filesystem::path& path) {
-        try {
-            return rowsToNumpy(gseg::io::readPly(path.string()), 4);
-        } catch (const std::runtime_error& e) {
-            throw py::value_error(e.what());
-        }
+        return asValueError([&] { return rowsToNumpy(gseg::io::readPly(path.string()), 4); });
     }, py::arg("path"), "Reads the vertices of a PLY file: float32 array (N, 4) of x, y, z, intensity (0 where absent).");
     m.def("read_scan", [](const std::filesystem::path& path, int index) {
-        gseg::mrpt::Scan s;
-        try {
-            s = gseg::mrpt::loadScan(path.string(), index);
-        } catch (const std::exception& e) {
-            throw py::value_error(gseg::mrpt::errorReason(e));
-        }
+        gseg::mrpt::Scan s = asValueError([&] { return gseg::mrpt::loadScan(path.string(), index); });
         return py::make_tuple(rowsToNumpy(std::move(s.xyzi), 4), s.description);
     }, py::arg("path"), py::arg("index") = -1, R"doc(
 Reads one scan as the tools do (`gseg segment SCAN`): a KITTI .bin, a PLY, or the index-th LiDAR
@@ -699,11 +698,7 @@ description): points a float32 array (N, 4).)doc");
         for (auto v : l)
             if (v > 1) throw py::value_error("labels must be 0 (non-ground) or 1 (ground)");
         checkNewOutput(path.string(), overwrite);
-        try {
-            gseg::io::writeLabelledPly(path.string(), p.view, l);
-        } catch (const std::exception& e) {
-            throw py::value_error(e.what());
-        }
+        asValueError([&] { gseg::io::writeLabelledPly(path.string(), p.view, l); });
     }, py::arg("path"), py::arg("points"), py::arg("labels"), py::arg("overwrite") = false, R"doc(
 Writes a segmented scan as a binary PLY (x, y, z, colour and the class, as `gseg segment
 --ply-out`), completely or not at all. An existing file raises ValueError unless overwrite=True.)doc");

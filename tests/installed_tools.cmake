@@ -34,8 +34,11 @@ step(${clean} "${bin}/rawlog-octomap" --help)
 # The Python package (where built): importable from the moved prefix with only PYTHONPATH set, and
 # segmenting with the installed libraries (RPATH $ORIGIN/../../..).
 if(PYTHON AND PYTHON_DIR)
-  step(${clean} PYTHONPATH=${WORK}/moved/${PYTHON_DIR} ${PYTHON} -c
-       "import gseg, numpy as n; p = n.zeros((400, 3), n.float32); p[:, 0] = n.arange(400) % 20 - 10; p[:, 1] = n.arange(400) // 20 - 10; p[:, 2] = -1.7; r = gseg.segment(p, distToGround=1.7); assert r.labels.shape == (400,), r; print(gseg.__file__)")
+  file(WRITE "${WORK}/installed.py" "import gseg, numpy as n\np = n.zeros((400, 3), n.float32)\n"
+       "p[:, 0] = n.arange(400) % 20 - 10\np[:, 1] = n.arange(400) // 20 - 10\np[:, 2] = -1.7\n"
+       "r = gseg.segment(p, distToGround=1.7)\nassert r.labels.shape == (400,), r\n"
+       "print(gseg.__file__)\n")
+  step(${clean} PYTHONPATH=${WORK}/moved/${PYTHON_DIR} ${PYTHON} "${WORK}/installed.py")
   if(NOT last_output MATCHES "^${WORK}/moved/${PYTHON_DIR}/gseg/")
     message(FATAL_ERROR "the installed gseg module was not the one imported: ${last_output}")
   endif()

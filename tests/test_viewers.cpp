@@ -279,11 +279,12 @@ TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
     const std::string prefix = writeSmallMap(dir);
     const SceneView v = readScene(prefix + "_traversability.3Dscene");
     EXPECT_TRUE(v.followCamera);
-    ASSERT_EQ(v.legend.size(), 5u);
+    ASSERT_EQ(v.legend.size(), 6u);
     EXPECT_NE(v.legend[0].find("traversability map"), std::string::npos) << v.legend[0];
     EXPECT_NE(v.legend[1].find("traversable"), std::string::npos) << v.legend[1];
     EXPECT_NE(v.legend[2].find("obstacle"), std::string::npos) << v.legend[2];
-    EXPECT_NE(v.legend[3].find("path"), std::string::npos) << v.legend[3];
+    EXPECT_NE(v.legend[3].find("2.5D map"), std::string::npos) << v.legend[3];
+    EXPECT_NE(v.legend[4].find("path"), std::string::npos) << v.legend[4];
     // The box of the voxels shown (the PLY holds their centres) and the path.
     const std::vector<float> xyz = gseg::io::readPly(prefix + "_traversability.ply");
     float lo[3] = {0, 0, 0}, hi[3] = {1, 0, 0};  // the path: (0,0,0) and (1,0,0)
