@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 namespace {
 
@@ -36,6 +37,18 @@ TEST(LayerGrid, LayersStartUnknownAndAreFoundByName) {
     EXPECT_FLOAT_EQ(g.layer("elevation").values[5], 1.5f);
     EXPECT_EQ(g.find("slope"), nullptr);
     EXPECT_THROW(g.layer("slope"), std::out_of_range);
+}
+
+TEST(LayerGrid, ALayerStaysWhereItIsWhileMoreAreAdded) {
+    LayerGrid g(4, 4, 0.2, 0, 0);
+    auto& first = g.add("elevation", "m", "ground height").values;  // as the map layer fills them
+    const float* data = first.data();
+    for (int k = 0; k < 20; ++k) g.add("layer" + std::to_string(k), "-", "more");
+    first[3] = 2.5f;  // still the grid's own layer
+    EXPECT_EQ(&first, &g.layer("elevation").values);
+    EXPECT_EQ(first.data(), data);
+    EXPECT_FLOAT_EQ(g.layer("elevation").values[3], 2.5f);
+    EXPECT_EQ(g.layers().size(), 21u);
 }
 
 TEST(LayerGrid, AbsurdSizesAreRefused) {

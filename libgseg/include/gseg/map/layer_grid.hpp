@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <deque>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -50,7 +51,8 @@ public:
     double centreX(int cx) const { return originX_ + (cx + 0.5) * resolution_; }  ///< [m]
     double centreY(int cy) const { return originY_ + (cy + 0.5) * resolution_; }  ///< [m]
 
-    /// Adds a layer filled with NaN (or returns the existing one of that name, unchanged).
+    /// Adds a layer filled with NaN (or returns the existing one of that name, unchanged). The
+    /// reference (and those to the other layers) stays valid while more layers are added.
     Layer& add(const std::string& name, const std::string& unit, const std::string& meaning) {
         if (Layer* l = find(name)) return *l;
         layers_.push_back({name, unit, meaning, std::vector<float>(cells(), std::numeric_limits<float>::quiet_NaN())});
@@ -68,13 +70,13 @@ public:
         if (const Layer* l = find(name)) return *l;
         throw std::out_of_range("layer grid: no layer '" + name + "'");
     }
-    const std::vector<Layer>& layers() const { return layers_; }
+    const std::deque<Layer>& layers() const { return layers_; }
 
 private:
     double resolution_ = 0.2;
     double originX_ = 0, originY_ = 0;
     int width_ = 0, height_ = 0;
-    std::vector<Layer> layers_;
+    std::deque<Layer> layers_;  ///< a deque: adding a layer moves none (references stay valid)
 };
 
 }  // namespace gseg::map
