@@ -117,18 +117,23 @@ bool scoreAll(Segment&& segment, std::vector<Scored>& out, std::string& missing,
 
 /// Checks every frame against its floor (1 point under what was measured) and returns the means
 /// (P, R, F1) over the frames; `what` names them in the printout, e.g. "drives ".
+/// Means (P, R, F1) over the frames.
+Scored meanOf(const std::vector<Scored>& got) {
+    Scored sum{0, 0, 0};
+    for (const Scored& s : got) sum.p += s.p, sum.r += s.r, sum.f1 += s.f1;
+    const double n = double(got.size());
+    return {sum.p / n, sum.r / n, sum.f1 / n};
+}
+
 template <std::size_t N>
 Scored checkFloors(const std::vector<Scored>& got, const Measured (&frames)[N], const char* what) {
-    Scored sum{0, 0, 0};
     for (std::size_t i = 0; i < got.size(); ++i) {
         const Measured& m = frames[i];
         std::printf("%s%s/%s: P %.2f R %.2f F1 %.2f\n", what, m.seq, m.frame, got[i].p, got[i].r, got[i].f1);
         EXPECT_GE(got[i].p, m.p - 1.0) << m.seq << "/" << m.frame;
         EXPECT_GE(got[i].r, m.r - 1.0) << m.seq << "/" << m.frame;
-        sum.p += got[i].p, sum.r += got[i].r, sum.f1 += got[i].f1;
     }
-    const double n = double(got.size());
-    return {sum.p / n, sum.r / n, sum.f1 / n};
+    return meanOf(got);
 }
 
 TEST(Metrics, HandComputedCounts) {
@@ -195,13 +200,11 @@ TEST(RealKitti, AutoHeightOnBothSharedFoldersNeverRefusesAndStaysPrecise) {
         return std::move(r.result);
     };
     if (!scoreAll(run, got, missing)) GTEST_SKIP() << missing;
-    double sumP = 0, sumF = 0;
-    for (const Scored& s : got) sumP += s.p, sumF += s.f1;
-    const double n = double(got.size());
-    std::printf("auto height, mean over %zu scans: P %.2f F1 %.2f\n", got.size(), sumP / n, sumF / n);
+    const Scored mean = meanOf(got);
+    std::printf("auto height, mean over %zu scans: P %.2f F1 %.2f\n", got.size(), mean.p, mean.f1);
     EXPECT_EQ(estimated, got.size());
-    EXPECT_GE(sumP / n, 97.0);  // measured 97.78
-    EXPECT_GE(sumF / n, 94.5);  // measured 95.25
+    EXPECT_GE(mean.p, 97.0);  // measured 97.78
+    EXPECT_GE(mean.f1, 94.5);  // measured 95.25
 }
 
 TEST(RealKitti, PrecisionAndRecallOnTheThirtyDriveFrames) {
@@ -227,13 +230,11 @@ TEST(RealKitti, AutoHeightOnTheThirtyDriveFramesNeverRefusesAndStaysPrecise) {
         return std::move(r.result);
     };
     if (!scoreAll(run, got, missing, kDrives)) GTEST_SKIP() << missing;
-    double sumP = 0, sumF = 0;
-    for (const Scored& s : got) sumP += s.p, sumF += s.f1;
-    const double n = double(got.size());
-    std::printf("auto height, mean over %zu drive frames: P %.2f F1 %.2f\n", got.size(), sumP / n, sumF / n);
+    const Scored mean = meanOf(got);
+    std::printf("auto height, mean over %zu drive frames: P %.2f F1 %.2f\n", got.size(), mean.p, mean.f1);
     EXPECT_EQ(estimated, got.size());
-    EXPECT_GE(sumP / n, 95.0);  // measured 95.45
-    EXPECT_GE(sumF / n, 95.3);  // measured 95.60
+    EXPECT_GE(mean.p, 95.0);  // measured 95.45
+    EXPECT_GE(mean.f1, 95.3);  // measured 95.60
 }
 
 TEST(RealKitti, ScoresMatchTheIndependentScorer) {
