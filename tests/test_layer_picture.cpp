@@ -2,7 +2,7 @@
 // canvas (long titles too), colours at known cells, x up and y to the left, unknown cells in
 // their own colour.
 #include <gseg/map/layer_picture.hpp>
-#include <gseg/map/traversability_map.hpp>
+#include <gseg/map/map_colours.hpp>
 
 #include <support/child.hpp>
 

@@ -4,7 +4,7 @@
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/layer_grid.hpp>
-#include <gseg/map/traversability_map.hpp>
+#include <gseg/map/map_colours.hpp>
 
 #include <support/child.hpp>
 

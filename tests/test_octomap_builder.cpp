@@ -3,6 +3,8 @@
 #include <gseg/io/ply.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
+#include <gseg/map/map_colours.hpp>
+#include <gseg/map/top_down_picture.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/map/world_scan.hpp>
 #include <support/child.hpp>

@@ -7,6 +7,7 @@
 #include "support/paths.hpp"
 
 #include <gseg/io/ply.hpp>
+#include <gseg/map/map_colours.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>

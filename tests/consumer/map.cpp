@@ -1,12 +1,14 @@
 // gseg::map from an installed prefix: one scan of a floor 1.7 m below the sensor, through the map
 // builder (segmented, moved into the world, ray cast, integrated): the floor under the sensor is
-// ground in the map.
+// ground in the map, and its top-down grid and picture (headers of their own) show it.
 #include <gseg/map/map_builder.hpp>
+#include <gseg/map/top_down_picture.hpp>
 
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 
 #include <cstdio>
+#include <string>
 
 int main() {
     gseg::mrpt::LoadedConfig cfg;
@@ -20,6 +22,10 @@ int main() {
     obs.sensorLabel = "LIDAR";
     const bool used = builder.insert(obs, mrpt::poses::CPose3D(0, 0, 1.7, 0, 0, 0));
     const gseg::map::MapStats s = builder.map().stats();
-    std::printf("gseg::map: scan used %d, %zu ground voxels, %zu obstacle voxels\n", int(used), s.groundVoxels, s.obstacleVoxels);
-    return used && s.groundVoxels > 100 && s.obstacleVoxels == 0 ? 0 : 1;
+    const gseg::map::TopDownGrid grid = builder.map().topDown();
+    const std::string png = gseg::map::encodeTopDownPng(grid, builder.map().path());
+    const std::size_t traversable = grid.count(gseg::map::CellClass::Traversable);
+    std::printf("gseg::map: scan used %d, %zu ground voxels, %zu obstacle voxels, %zu traversable cells, %zu PNG bytes\n",
+                int(used), s.groundVoxels, s.obstacleVoxels, traversable, png.size());
+    return used && s.groundVoxels > 100 && s.obstacleVoxels == 0 && traversable > 100 && png.compare(1, 3, "PNG") == 0 ? 0 : 1;
 }

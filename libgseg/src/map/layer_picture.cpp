@@ -2,7 +2,7 @@
 // legend, unknown cells named, scale bar, axes, a title wrapped to the canvas.
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/layer_picture.hpp>
-#include <gseg/map/traversability_map.hpp>
+#include <gseg/map/map_colours.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 #include <gseg/mrpt/gzip_stream.hpp>
 #include <gseg/map/layer_grid.hpp>
 #include <gseg/mrpt/scene.hpp>
-#include <gseg/map/traversability_map.hpp>
+#include <gseg/map/map_colours.hpp>
 
 #include <mrpt/opengl/COctoMapVoxels.h>
 #include <mrpt/opengl/COpenGLScene.h>

@@ -3,7 +3,7 @@
 #include <gseg/io/kitti.hpp>
 #include <gseg/map/map_score.hpp>
 #include <gseg/map/poses.hpp>
-#include <gseg/map/traversability_map.hpp>  // backgroundColour(): the page around every map picture
+#include <gseg/map/map_colours.hpp>  // backgroundColour(): the page around every map picture
 #include <gseg/mrpt/picture.hpp>
 
 #include <algorithm>

@@ -1,12 +1,13 @@
 #include <gseg/map/traversability_map.hpp>
 
 #include <gseg/io/ply.hpp>
-#include <gseg/palette.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/layer_file.hpp>
 #include <gseg/map/layer_picture.hpp>
+#include <gseg/map/map_colours.hpp>
 #include <gseg/map/terrain_layers.hpp>
+#include <gseg/map/top_down_picture.hpp>
 #include <gseg/mrpt/scene.hpp>
 
 #include "brick_map.hpp"
@@ -108,16 +109,6 @@ void writeCostmap(gseg::io::AtomicFileSet& files, const gseg::io::RosMap& map) {
 }
 
 }  // namespace
-
-Rgb colourOf(CellClass c) {
-    switch (c) {
-        case CellClass::Traversable: return {gseg::palette::kGround[0], gseg::palette::kGround[1], gseg::palette::kGround[2]};
-        case CellClass::Obstacle: return {gseg::palette::kNonGround[0], gseg::palette::kNonGround[1], gseg::palette::kNonGround[2]};
-        default: return {105, 105, 115};
-    }
-}
-
-Rgb backgroundColour() { return {24, 24, 30}; }
 
 TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
     : options_(options) {

@@ -2,7 +2,7 @@
 /// \file layer_picture.hpp
 /// A picture of one layer of a LayerGrid (gseg/map/layer_grid.hpp) as a PNG, drawn with gseg's
 /// picture conventions (gseg/mrpt/picture.hpp) and oriented as the map's other pictures
-/// (pictureLayout() in traversability_map.hpp): map-frame x up, y to the left, with x / y arrows.
+/// (pictureLayout() in top_down_picture.hpp): map-frame x up, y to the left, with x / y arrows.
 ///
 /// Colours: a continuous layer (`elevation`, `slope`, ...) through the viridis colour map
 /// (matplotlib's perceptually uniform map, dark blue at the low end, yellow at the high end),

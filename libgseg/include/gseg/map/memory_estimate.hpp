@@ -16,7 +16,7 @@
 /// the peak resident memory of rawlog-octomap on the six SemanticKITTI sequence-00 scans (README,
 /// Robustness): within 25 % at 0.2, 0.1 and 0.05 m.
 
-#include <gseg/map/traversability_map.hpp>
+#include <gseg/traversability_options.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <Eigen/Core>

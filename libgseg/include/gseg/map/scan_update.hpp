@@ -9,7 +9,7 @@
 /// Voxels are OctoMap keys at the map resolution as Morton codes (see TraversabilityMap): sorted,
 /// so an update is one walk down the trees.
 
-#include <gseg/map/traversability_map.hpp>
+#include <gseg/traversability_options.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <Eigen/Core>

@@ -2,24 +2,22 @@
 /// \file traversability_map.hpp
 /// Traversability OctoMaps built from segmented scans: one occupancy OcTree for the ground, one
 /// for the obstacles (free space from ray casting, occupied from hits), a ColorOcTree with both,
-/// and a top-down grid (traversable / obstacle / unknown) with the driven path.
+/// and a top-down grid (traversable / obstacle / unknown, gseg/map/top_down_grid.hpp) with the
+/// driven path (its picture: gseg/map/top_down_picture.hpp).
 ///
 /// Frame: everything is in one world frame (metres, z up). Callers transform points with the
 /// robot pose and the sensor mounting first, and give the sensor's world position as ray origin.
 
 #include <gseg/map/layer_grid.hpp>
-#include <gseg/mrpt/picture.hpp>
+#include <gseg/map/map_stats.hpp>
+#include <gseg/map/top_down_grid.hpp>
 #include <gseg/point_cloud.hpp>
 #include <gseg/traversability_options.hpp>
 
 #include <Eigen/Core>
 
-#include <cmath>
-#include <cstddef>
-#include <cstdint>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace octomap {
@@ -36,99 +34,6 @@ class BrickMap;    // the voxels while a drive is integrated (implementation det
 
 struct ScanUpdate;
 class GroundCells;
-
-/// What the top-down grid says about one column of voxels.
-enum class CellClass : std::uint8_t { Unknown = 0, Traversable = 1, Obstacle = 2 };
-
-/// Top-down grid: one cell per voxel column, cell (ix, iy) covering world x in
-/// [ix * cell, (ix + 1) * cell) and y likewise. Sparse: only cells with data are stored, in tiles
-/// of 64 x 64 cells, so memory follows the mapped area, not the extent of the path.
-class TopDownGrid {
-public:
-    explicit TopDownGrid(double cell = 0.2) : cell_(cell) {}
-    double cell() const { return cell_; }  ///< [m] cell edge
-
-    std::int64_t cellIndex(double v) const { return std::int64_t(std::floor(v / cell_)); }
-    /// Class at world (x, y); Unknown where nothing was seen.
-    CellClass at(double x, double y) const { return atCell(cellIndex(x), cellIndex(y)); }
-    CellClass atCell(std::int64_t ix, std::int64_t iy) const;
-    void set(std::int64_t ix, std::int64_t iy, CellClass c);
-
-    bool empty() const { return !any_; }  ///< no cell was ever set to a known class
-    std::size_t count(CellClass c) const;  ///< cells of class c (Traversable or Obstacle)
-    /// Cell index ranges of every cell ever set to a known class, inclusive (meaningless when empty()).
-    std::int64_t minX() const { return lo_[0]; }
-    std::int64_t maxX() const { return hi_[0]; }
-    std::int64_t minY() const { return lo_[1]; }
-    std::int64_t maxY() const { return hi_[1]; }
-
-    /// Calls f(ix, iy, class) for every cell with data (tile by tile).
-    template <class F>
-    void forEachCell(F&& f) const {
-        for (const auto& [key, tile] : tiles_)
-            for (int j = 0; j < kTile; ++j)
-                for (int i = 0; i < kTile; ++i) {
-                    const CellClass c = tile[std::size_t(j * kTile + i)];
-                    if (c != CellClass::Unknown) f(tileX(key) * kTile + i, tileY(key) * kTile + j, c);
-                }
-    }
-
-    static constexpr int kTile = 64;  ///< [cells] tile edge
-
-private:
-    double cell_;
-    std::unordered_map<std::uint64_t, std::vector<CellClass>> tiles_;
-    std::int64_t lo_[2] = {0, 0}, hi_[2] = {0, 0};
-    bool any_ = false;
-    std::size_t counts_[3] = {0, 0, 0};  ///< per class; [Unknown] unused
-    static std::uint64_t tileKey(std::int64_t tx, std::int64_t ty);
-    static std::int64_t tileX(std::uint64_t key);
-    static std::int64_t tileY(std::uint64_t key);
-};
-
-/// Where the top-down picture puts the grid. The picture follows the convention of gseg's scan
-/// pictures: world x up, y to the left (for a kitti2rawlog drive, x is the vehicle's forward
-/// direction at the first scan). It frames the cells with data and the driven path, with a margin
-/// of 5 cells: a small map is enlarged (pixelsPerCell, about 640 pixels on its longer side), a
-/// large one reduced to at most maxSide pixels a side (cellsPerPixel, the most blocking class of
-/// the cells a pixel covers wins). Around the map: a title band above, a legend band below.
-struct PictureLayout {
-    std::int64_t topCell = 0;   ///< cell index along x of the map's first row (x up: rows go to smaller x)
-    std::int64_t leftCell = 0;  ///< cell index along y of the map's first column (y left: columns go to smaller y)
-    int cellsPerPixel = 1;      ///< > 1: a large map, reduced
-    int pixelsPerCell = 1;      ///< > 1: a small map, enlarged
-    int mapLeft = 0, mapTop = 0;      ///< [pixels] top-left corner of the map in the picture
-    int mapWidth = 0, mapHeight = 0;  ///< [pixels] the map area
-    int width = 0, height = 0;        ///< [pixels] the whole picture (0: nothing to draw)
-    double cell = 0.2;                ///< [m]
-    std::uint64_t cellsWide = 0, cellsHigh = 0;  ///< [cells] the framed area: along y (across), along x (down)
-
-    /// Top-left pixel (in the picture) of the block that shows world (x, y); false outside the map.
-    bool toPixel(double x, double y, int& col, int& row) const;
-    /// [pixels per metre] of the map area.
-    double pixelsPerMetre() const { return double(pixelsPerCell) / (double(cellsPerPixel) * cell); }
-};
-PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, int maxSide = 4096);
-
-/// Figures of a map, voxels counted at the finest resolution.
-struct MapStats {
-    std::size_t scans = 0;             ///< scans inserted
-    std::size_t groundPoints = 0;      ///< ground points given (all scans)
-    std::size_t obstaclePoints = 0;    ///< obstacle points given (all scans)
-    std::size_t pointsSkipped = 0;     ///< points not used: NaN/infinite or outside the map's extent
-    std::size_t rays = 0;              ///< rays cast (one per endpoint voxel and scan)
-    std::size_t groundVoxels = 0;      ///< occupied voxels of the ground tree
-    std::size_t obstacleVoxels = 0;    ///< occupied voxels of the obstacle tree
-    std::size_t freeVoxels = 0;        ///< voxels known free in the obstacle tree
-    std::size_t clearedObstacleVoxels = 0;  ///< voxels once occupied as obstacle, free by the end (seen through)
-    std::size_t groundUnderObstacle = 0;    ///< occupied in both trees: shown as obstacle
-    std::size_t cellsTraversable = 0, cellsObstacle = 0;  ///< top-down grid
-    std::size_t cellsUnknown = 0;      ///< cells without data inside the picture's frame
-    double pathLength = 0;             ///< [m] length of the sensor path
-    std::size_t bricks = 0;            ///< 8 x 8 x 8 voxel bricks holding the maps while integrating
-    std::size_t brickValueBlocks = 0;  ///< words of 4 x 4 x 4 voxels with a value each (the others hold one)
-    std::size_t mapBytes = 0;          ///< [bytes] memory of the bricks, their index and values
-};
 
 /// Builds the maps scan by scan. Per scan, every voxel crossed by a ray (to a ground or an obstacle
 /// point) gets a miss in both trees, except voxels holding a hit of that scan; ground hits update
@@ -213,23 +118,5 @@ private:
     std::vector<Eigen::Vector3d> path_;
     MapStats stats_;
 };
-
-/// Writes the picture (pictureLayout(): traversable green, obstacle red, unknown grey, the page
-/// around the mapped area darker; the path as a blue line from a white start square to an
-/// arrowhead in the direction of travel; title, legend naming every colour, scale bar and the
-/// x / y axes) as a PNG, atomically. `title` is the first line (e.g. "6 scans, 3.55 m driven").
-/// Throws std::runtime_error naming the file on failure.
-void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
-                     const std::string& title = "");
-/// The same PNG as bytes.
-std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
-                             const std::string& title = "");
-
-/// The one colour type of gseg's pictures and files (8-bit RGB, gseg/mrpt/picture.hpp).
-using Rgb = gseg::mrpt::Colour;
-/// RGB of each class in the PNG (also the voxel colours of the `.ot`, `.ply` and `.3Dscene`).
-Rgb colourOf(CellClass c);
-/// RGB of the page around the mapped area (darker than Unknown).
-Rgb backgroundColour();
 
 }  // namespace gseg::map

@@ -1,20 +1,19 @@
-// The top-down grid (sparse tiles), its picture layout and the PNG (drawn with the shared picture
-// conventions of gseg/mrpt/picture.hpp: x up, y to the left, as the scan pictures).
-#include <gseg/io/atomic_file.hpp>
-#include <gseg/map/traversability_map.hpp>
-#include <gseg/mrpt/picture.hpp>
+// The top-down picture: its layout and the PNG (drawn with the shared picture conventions of
+// gseg/mrpt/picture.hpp: x up, y to the left, as the scan pictures).
+#include <gseg/map/top_down_picture.hpp>
 
-#include "voxel_keys.hpp"
+#include <gseg/io/atomic_file.hpp>
+#include <gseg/map/map_colours.hpp>
+#include <gseg/mrpt/picture.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
 namespace gseg::map {
 namespace {
-
-std::int64_t floorDiv(std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 constexpr int kTitleBand = 56, kMargin = 12, kMinWidth = 760;  // [px] around the map
 constexpr int kEnlargeTo = 640;                                   // [px] longer side of a small map
@@ -69,33 +68,6 @@ void drawPath(gseg::mrpt::Picture& pic, const std::vector<Eigen::Vector3d>& path
 }
 
 }  // namespace
-
-std::uint64_t TopDownGrid::tileKey(std::int64_t tx, std::int64_t ty) { return detail::pairKey(tx, ty); }
-std::int64_t TopDownGrid::tileX(std::uint64_t key) { return detail::splitPairKey(key).first; }
-std::int64_t TopDownGrid::tileY(std::uint64_t key) { return detail::splitPairKey(key).second; }
-
-CellClass TopDownGrid::atCell(std::int64_t ix, std::int64_t iy) const {
-    const auto it = tiles_.find(tileKey(floorDiv(ix, kTile), floorDiv(iy, kTile)));
-    if (it == tiles_.end()) return CellClass::Unknown;
-    const std::int64_t i = ix - floorDiv(ix, kTile) * kTile, j = iy - floorDiv(iy, kTile) * kTile;
-    return it->second[std::size_t(j * kTile + i)];
-}
-
-void TopDownGrid::set(std::int64_t ix, std::int64_t iy, CellClass c) {
-    const std::int64_t tx = floorDiv(ix, kTile), ty = floorDiv(iy, kTile);
-    auto& tile = tiles_[tileKey(tx, ty)];
-    if (tile.empty()) tile.assign(std::size_t(kTile * kTile), CellClass::Unknown);
-    CellClass& cell = tile[std::size_t((iy - ty * kTile) * kTile + (ix - tx * kTile))];
-    if (cell != CellClass::Unknown) --counts_[std::size_t(cell)];
-    if (c != CellClass::Unknown) ++counts_[std::size_t(c)];
-    cell = c;
-    if (c == CellClass::Unknown) return;
-    lo_[0] = any_ ? std::min(lo_[0], ix) : ix, hi_[0] = any_ ? std::max(hi_[0], ix) : ix;
-    lo_[1] = any_ ? std::min(lo_[1], iy) : iy, hi_[1] = any_ ? std::max(hi_[1], iy) : iy;
-    any_ = true;
-}
-
-std::size_t TopDownGrid::count(CellClass c) const { return counts_[std::size_t(c)]; }
 
 bool PictureLayout::toPixel(double x, double y, int& col, int& row) const {
     const std::int64_t across = leftCell - std::int64_t(std::floor(y / cell)), down = topCell - std::int64_t(std::floor(x / cell));
