@@ -127,13 +127,13 @@ TEST(LayerPicture, ColoursAtKnownCellsWithXUpAndYLeft) {
     int col = 0, row = 0;
     // Class 1 at small x (bottom of the map), class 2 at large x (top), unknown at cy 0 (right).
     ASSERT_TRUE(l.toPixel(0, 5, col, row));
-    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::CellClass::Traversable)));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Traversable)));
     EXPECT_EQ(row, l.mapTop + l.mapHeight - l.pixelsPerCell);  // x = smallest: the bottom row
     ASSERT_TRUE(l.toPixel(29, 5, col, row));
-    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::CellClass::Obstacle)));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Obstacle)));
     EXPECT_EQ(row, l.mapTop);  // x = largest: the top row
     ASSERT_TRUE(l.toPixel(29, 0, col, row));
-    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::CellClass::Unknown)));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Unknown)));
     EXPECT_EQ(col, l.mapLeft + l.mapWidth - l.pixelsPerCell);  // y = smallest: the right column
     ASSERT_TRUE(l.toPixel(10, 11, col, row));
     EXPECT_EQ(col, l.mapLeft);  // y = largest: the left column
@@ -150,7 +150,7 @@ TEST(LayerPicture, ColoursAtKnownCellsWithXUpAndYLeft) {
     ASSERT_TRUE(s.toPixel(29, 5, col, row));
     EXPECT_TRUE(sameColour(at(simg, col + c, row + c), gseg::map::viridis(1)));
     ASSERT_TRUE(s.toPixel(29, 0, col, row));
-    EXPECT_TRUE(sameColour(at(simg, col + c, row + c), gseg::map::colourOf(gseg::map::CellClass::Unknown)));
+    EXPECT_TRUE(sameColour(at(simg, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Unknown)));
     // The colour bar: high (yellow) at the top, low (dark blue) at the bottom.
     ASSERT_GT(s.barHeight, 0);
     EXPECT_TRUE(sameColour(at(simg, s.barLeft + 5, s.barTop), gseg::map::viridis(1)));

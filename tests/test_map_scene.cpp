@@ -56,9 +56,9 @@ void expectTilesOf(const mrpt::opengl::CSetOfTriangles& mesh, const LayerGrid& g
         const std::size_t cell = g.index(int(cx), int(cy));
         ++trianglesOfCell[cell];
         ASSERT_TRUE(std::isfinite(e[cell])) << "a tile over an unknown cell " << cx << ", " << cy;
-        const gseg::map::Rgb want = gseg::map::colourOf(c[cell] == 1.0f   ? gseg::map::CellClass::Traversable
-                                                        : c[cell] == 2.0f ? gseg::map::CellClass::Obstacle
-                                                                          : gseg::map::CellClass::Unknown);
+        const gseg::map::Rgb want = gseg::map::colourOf(c[cell] == 1.0f   ? gseg::map::ColumnClass::Traversable
+                                                        : c[cell] == 2.0f ? gseg::map::ColumnClass::Obstacle
+                                                                          : gseg::map::ColumnClass::Unknown);
         for (int k = 0; k < 3; ++k) {
             EXPECT_FLOAT_EQ(t.z(k), e[cell]);
             EXPECT_NEAR(std::fmod(t.x(k) - g.originX() + 10 * g.resolution(), g.resolution()), 0.0, 1e-5);  // on a cell corner

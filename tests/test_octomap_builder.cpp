@@ -35,7 +35,7 @@ namespace {
 /// `<build>/tests/octomap_builder/<name>`, emptied and created.
 std::string tempDir(const std::string& name) { return gseg::test::freshDir("octomap_builder", name).string(); }
 
-using gseg::map::CellClass;
+using gseg::map::ColumnClass;
 using gseg::map::TraversabilityMap;
 using gseg::test::Truth;
 
@@ -157,7 +157,7 @@ TEST(OctomapBuilder, CarThatDroveAwayLeavesNoGhost) {
     const auto s = m.stats();
     EXPECT_GT(s.clearedObstacleVoxels, 0u);
     for (double z : {0.5, 0.9, 1.3}) EXPECT_FALSE(occupied(m.obstacleTree(), 15.0, 2.6, z)) << "ghost at z " << z;
-    EXPECT_EQ(m.topDown().at(15.0, 2.7), CellClass::Traversable);
+    EXPECT_EQ(m.topDown().at(15.0, 2.7), ColumnClass::Traversable);
 }
 
 TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
@@ -165,11 +165,11 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     const auto grid = m.topDown();
     struct Probe {
         double x, y;
-        CellClass want;
+        ColumnClass want;
     };
-    const Probe probes[] = {{6.0, 1.5, CellClass::Traversable}, {26.0, -1.5, CellClass::Traversable},
-                            {10.5, -3.1, CellClass::Obstacle},  {20.0, -8.1, CellClass::Obstacle},
-                            {20.0, -20.0, CellClass::Unknown}};  // behind the wall: never seen
+    const Probe probes[] = {{6.0, 1.5, ColumnClass::Traversable}, {26.0, -1.5, ColumnClass::Traversable},
+                            {10.5, -3.1, ColumnClass::Obstacle},  {20.0, -8.1, ColumnClass::Obstacle},
+                            {20.0, -20.0, ColumnClass::Unknown}};  // behind the wall: never seen
     for (const auto& p : probes) EXPECT_EQ(grid.at(p.x, p.y), p.want) << "at " << p.x << ", " << p.y;
 
     const std::string dir = tempDir("drive");
@@ -201,7 +201,7 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     ASSERT_NE(colour, nullptr);
     const auto* node = colour->search(10.5, -3.1, 0.9);
     ASSERT_NE(node, nullptr);
-    EXPECT_EQ(node->getColor().r, gseg::map::colourOf(CellClass::Obstacle).r);
+    EXPECT_EQ(node->getColor().r, gseg::map::colourOf(ColumnClass::Obstacle).r);
     std::filesystem::remove_all(dir);
 }
 
@@ -221,7 +221,7 @@ TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
     // The map sits inside the page, between a title band and a legend band.
     EXPECT_GT(l.mapTop, 40);
     EXPECT_GT(l.height - (l.mapTop + l.mapHeight), 100);
-    const auto unknown = gseg::map::colourOf(CellClass::Unknown), page = gseg::map::backgroundColour();
+    const auto unknown = gseg::map::colourOf(ColumnClass::Unknown), page = gseg::map::backgroundColour();
     EXPECT_GT(std::abs(int(unknown.r) - int(page.r)) + std::abs(int(unknown.g) - int(page.g)) + std::abs(int(unknown.b) - int(page.b)), 100);
     const std::string dir = tempDir("orient");
     m.write(dir + "/o");
@@ -238,7 +238,7 @@ TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
     ASSERT_TRUE(l.toPixel(20.0, -20.0, c, r));  // behind the wall: never seen
     EXPECT_TRUE(is(r, c, unknown));
     // The legend band names every colour of the map: each appears there as a swatch.
-    for (const CellClass k : {CellClass::Traversable, CellClass::Obstacle, CellClass::Unknown}) {
+    for (const ColumnClass k : {ColumnClass::Traversable, ColumnClass::Obstacle, ColumnClass::Unknown}) {
         bool found = false;
         for (int row = l.mapTop + l.mapHeight + 1; row < l.height && !found; ++row)
             for (int col = 0; col < 40 && !found; ++col) found = is(row, col, gseg::map::colourOf(k));
@@ -264,7 +264,7 @@ TEST(OctomapBuilder, PlyAndSceneHoldTheOccupiedVoxelsAndThePath) {
         const double x = xyz[4 * i], y = xyz[4 * i + 1], z = xyz[4 * i + 2];
         ground += label[i] == 1;
         ASSERT_TRUE(label[i] == 0 || label[i] == 1);
-        EXPECT_EQ(red[i], label[i] == 1 ? gseg::map::colourOf(CellClass::Traversable).r : gseg::map::colourOf(CellClass::Obstacle).r);
+        EXPECT_EQ(red[i], label[i] == 1 ? gseg::map::colourOf(ColumnClass::Traversable).r : gseg::map::colourOf(ColumnClass::Obstacle).r);
         EXPECT_TRUE(occupied(label[i] == 1 ? m.groundTree() : m.obstacleTree(), x, y, z)) << x << " " << y << " " << z;
     }
     EXPECT_EQ(ground, s.groundVoxels - s.groundUnderObstacle);
@@ -293,7 +293,7 @@ TEST(OctomapBuilder, GroundNeverOverwritesAnObstacle) {
     m.insertScan(gseg::PointCloudView(), gseg::PointCloudView(obstacle, 1), Eigen::Vector3d(0, 0, 1.8));
     m.insertScan(gseg::PointCloudView(ground, 1), gseg::PointCloudView(), Eigen::Vector3d(0, 0, 1.8));
     EXPECT_TRUE(occupied(m.obstacleTree(), 5.1, 0.1, 0.1));
-    EXPECT_EQ(m.topDown().at(5.1, 0.1), CellClass::Obstacle);
+    EXPECT_EQ(m.topDown().at(5.1, 0.1), ColumnClass::Obstacle);
     EXPECT_EQ(m.stats().groundUnderObstacle, 1u);
 }
 
@@ -490,7 +490,7 @@ TEST(OctomapBuilder, TopDownPictureOfAPathKilometresLongStaysSmall) {
     m.insertScan(gseg::PointCloudView(a, 1), {}, Eigen::Vector3d(0, 0, 1.8));
     m.insertScan(gseg::PointCloudView(b, 1), {}, Eigen::Vector3d(4243, 4243, 1.8));
     const auto grid = m.topDown();
-    EXPECT_EQ(grid.count(CellClass::Traversable), 2u);
+    EXPECT_EQ(grid.count(ColumnClass::Traversable), 2u);
     const auto layout = gseg::map::pictureLayout(grid, m.path());
     EXPECT_EQ(layout.cellsPerPixel, 6);  // 21226 cells a side in at most 4096 pixels
     EXPECT_LE(std::max(layout.width, layout.height), 4096);
@@ -525,14 +525,14 @@ TEST(OctomapBuilder, TopDownGridIndexesNegativeCellsAndTileBorders) {
     for (const auto& c : cases) {
         EXPECT_EQ(g.cellIndex(c.x), c.ix) << c.x;
         EXPECT_EQ(g.cellIndex(c.y), c.iy) << c.y;
-        g.set(c.ix, c.iy, CellClass::Obstacle);
-        EXPECT_EQ(g.at(c.x, c.y), CellClass::Obstacle) << c.x << ", " << c.y;
+        g.set(c.ix, c.iy, ColumnClass::Obstacle);
+        EXPECT_EQ(g.at(c.x, c.y), ColumnClass::Obstacle) << c.x << ", " << c.y;
     }
-    EXPECT_EQ(g.count(CellClass::Obstacle), 7u);
-    EXPECT_EQ(g.at(-0.4, 31.9), CellClass::Unknown);
-    g.set(-1, 0, CellClass::Traversable);
-    EXPECT_EQ(g.count(CellClass::Obstacle), 6u);
-    EXPECT_EQ(g.count(CellClass::Traversable), 1u);
+    EXPECT_EQ(g.count(ColumnClass::Obstacle), 7u);
+    EXPECT_EQ(g.at(-0.4, 31.9), ColumnClass::Unknown);
+    g.set(-1, 0, ColumnClass::Traversable);
+    EXPECT_EQ(g.count(ColumnClass::Obstacle), 6u);
+    EXPECT_EQ(g.count(ColumnClass::Traversable), 1u);
     EXPECT_EQ(g.minX(), -65);
     EXPECT_EQ(g.maxY(), 63);
 }

@@ -134,7 +134,7 @@ TEST(ViewerPly, MapPlyCarriesTheObstacleClassAsAScalarFieldInThePalette) {
     EXPECT_EQ(props[3], "scalar_obstacle");
     expectClassFieldAgrees(ply, "scalar_obstacle");
     // The palette is the map's colours too.
-    const auto t = gseg::map::colourOf(gseg::map::CellClass::Traversable), o = gseg::map::colourOf(gseg::map::CellClass::Obstacle);
+    const auto t = gseg::map::colourOf(gseg::map::ColumnClass::Traversable), o = gseg::map::colourOf(gseg::map::ColumnClass::Obstacle);
     EXPECT_EQ(std::vector<int>({t.r, t.g, t.b}), std::vector<int>(gseg::palette::kGround, gseg::palette::kGround + 3));
     EXPECT_EQ(std::vector<int>({o.r, o.g, o.b}), std::vector<int>(gseg::palette::kNonGround, gseg::palette::kNonGround + 3));
 }

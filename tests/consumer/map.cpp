@@ -24,7 +24,7 @@ int main() {
     const gseg::map::MapStats s = builder.map().stats();
     const gseg::map::TopDownGrid grid = builder.map().topDown();
     const std::string png = gseg::map::encodeTopDownPng(grid, builder.map().path());
-    const std::size_t traversable = grid.count(gseg::map::CellClass::Traversable);
+    const std::size_t traversable = grid.count(gseg::map::ColumnClass::Traversable);
     std::printf("gseg::map: scan used %d, %zu ground voxels, %zu obstacle voxels, %zu traversable cells, %zu PNG bytes\n",
                 int(used), s.groundVoxels, s.obstacleVoxels, traversable, png.size());
     return used && s.groundVoxels > 100 && s.obstacleVoxels == 0 && traversable > 100 && png.compare(1, 3, "PNG") == 0 ? 0 : 1;

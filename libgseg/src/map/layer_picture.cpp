@@ -68,13 +68,13 @@ const LayerGrid::Layer& checkedLayer(const LayerGrid& grid, const std::string& n
 std::vector<LegendEntry> legendEntries(const LayerPictureLayout& l, const LayerGrid::Layer& layer, bool otherClasses) {
     std::vector<LegendEntry> e;
     if (l.classes) {
-        e.push_back({colourOf(CellClass::Traversable), "1: traversable"});
-        e.push_back({colourOf(CellClass::Obstacle), "2: not traversable"});
+        e.push_back({colourOf(ColumnClass::Traversable), "1: traversable"});
+        e.push_back({colourOf(ColumnClass::Obstacle), "2: not traversable"});
         if (otherClasses) e.push_back({kOtherClass, "another class value"});
     } else if (l.barHeight > 0) {
         e.push_back({{}, "colour map: viridis (low dark blue, high yellow)", false});
     }
-    e.push_back({colourOf(CellClass::Unknown), "unknown (NaN): no data for " + layer.name});
+    e.push_back({colourOf(ColumnClass::Unknown), "unknown (NaN): no data for " + layer.name});
     e.push_back({{}, "the darker page around the map: outside the grid", false});
     e.push_back({{}, "top view: x up, y (left) to the left", false});
     return e;
@@ -96,10 +96,10 @@ std::vector<float> blockValues(const LayerGrid& grid, const LayerGrid::Layer& la
 }
 
 Colour colourFor(float v, const LayerPictureLayout& l) {
-    if (std::isnan(v)) return colourOf(CellClass::Unknown);
+    if (std::isnan(v)) return colourOf(ColumnClass::Unknown);
     if (l.classes) {
         const long c = std::lround(v);
-        return c == 1 ? colourOf(CellClass::Traversable) : c == 2 ? colourOf(CellClass::Obstacle) : kOtherClass;
+        return c == 1 ? colourOf(ColumnClass::Traversable) : c == 2 ? colourOf(ColumnClass::Obstacle) : kOtherClass;
     }
     return viridis(l.high > l.low ? (double(v) - l.low) / (l.high - l.low) : 0.5);
 }

@@ -5,10 +5,10 @@
 
 namespace gseg::map {
 
-Rgb colourOf(CellClass c) {
+Rgb colourOf(ColumnClass c) {
     switch (c) {
-        case CellClass::Traversable: return {gseg::palette::kGround[0], gseg::palette::kGround[1], gseg::palette::kGround[2]};
-        case CellClass::Obstacle: return {gseg::palette::kNonGround[0], gseg::palette::kNonGround[1], gseg::palette::kNonGround[2]};
+        case ColumnClass::Traversable: return {gseg::palette::kGround[0], gseg::palette::kGround[1], gseg::palette::kGround[2]};
+        case ColumnClass::Obstacle: return {gseg::palette::kNonGround[0], gseg::palette::kNonGround[1], gseg::palette::kNonGround[2]};
         default: return {105, 105, 115};
     }
 }

@@ -51,7 +51,7 @@ std::shared_ptr<::mrpt::opengl::CSetOfTriangles> elevationMesh(const LayerGrid& 
             const float h = z(cx, cy);
             if (!std::isfinite(h)) continue;
             const float c = cls ? cls->values[layers.index(cx, cy)] : nan;
-            const Rgb rgb = colourOf(c == 1.0f ? CellClass::Traversable : c == 2.0f ? CellClass::Obstacle : CellClass::Unknown);
+            const Rgb rgb = colourOf(c == 1.0f ? ColumnClass::Traversable : c == 2.0f ? ColumnClass::Obstacle : ColumnClass::Unknown);
             const ::mrpt::math::TVector3Df n(-gradient(z(cx - 1, cy), h, z(cx + 1, cy), res), -gradient(z(cx, cy - 1), h, z(cx, cy + 1), res), 1.0f);
             const float x0 = float(layers.originX() + cx * layers.resolution()), y0 = float(layers.originY() + cy * layers.resolution());
             const ::mrpt::math::TPoint3Df p00(x0, y0, h), p10(x0 + res, y0, h), p11(x0 + res, y0 + res, h), p01(x0, y0 + res, h);
@@ -77,7 +77,7 @@ void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
     // beyond some 40 m from the camera (24-bit depth buffer): the far map turned black.
     voxels->cullFaces(::mrpt::opengl::TCullFace::BACK);
     voxels->enableCubeTransparency(false);
-    const Rgb colours[2] = {colourOf(CellClass::Obstacle), colourOf(CellClass::Traversable)};
+    const Rgb colours[2] = {colourOf(ColumnClass::Obstacle), colourOf(ColumnClass::Traversable)};
     const std::size_t ground = std::size_t(std::count(labels.begin(), labels.end(), std::uint8_t(1)));
     voxels->reserveVoxels(0, ground);  // exactly: no doubling of the largest vectors of the run
     voxels->reserveVoxels(1, labels.size() - ground);

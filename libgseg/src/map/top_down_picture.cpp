@@ -22,9 +22,9 @@ const gseg::mrpt::Colour kPath{40, 120, 255}, kStart{255, 255, 255};
 
 /// The legend under the map.
 std::vector<gseg::mrpt::LegendEntry> legendEntries() {
-    return {{colourOf(CellClass::Traversable), "traversable (ground, nothing within clearance)"},
-            {colourOf(CellClass::Obstacle), "obstacle"},
-            {colourOf(CellClass::Unknown), "unknown: not seen"},
+    return {{colourOf(ColumnClass::Traversable), "traversable (ground, nothing within clearance)"},
+            {colourOf(ColumnClass::Obstacle), "obstacle"},
+            {colourOf(ColumnClass::Unknown), "unknown: not seen"},
             {kPath, "driven path; arrowhead: direction of travel"},
             {kStart, "start of the path"},
             {{}, "top view: x up, y (left) to the left", false},
@@ -34,8 +34,8 @@ std::vector<gseg::mrpt::LegendEntry> legendEntries() {
 /// Class of every map pixel (the most blocking class of the cells it covers), row-major.
 std::vector<std::uint8_t> mapPixels(const TopDownGrid& grid, const PictureLayout& l) {
     const int w = l.mapWidth / l.pixelsPerCell, h = l.mapHeight / l.pixelsPerCell;
-    std::vector<std::uint8_t> px(std::size_t(w) * std::size_t(h), std::uint8_t(CellClass::Unknown));
-    grid.forEachCell([&](std::int64_t ix, std::int64_t iy, CellClass c) {
+    std::vector<std::uint8_t> px(std::size_t(w) * std::size_t(h), std::uint8_t(ColumnClass::Unknown));
+    grid.forEachCell([&](std::int64_t ix, std::int64_t iy, ColumnClass c) {
         const std::size_t col = std::size_t((l.leftCell - iy) / l.cellsPerPixel), row = std::size_t((l.topCell - ix) / l.cellsPerPixel);
         std::uint8_t& p = px[row * std::size_t(w) + col];
         p = std::max(p, std::uint8_t(c));  // Obstacle > Traversable > Unknown
@@ -116,7 +116,7 @@ std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::V
     const int w = l.mapWidth / l.pixelsPerCell, p = l.pixelsPerCell;
     for (int row = 0; row < l.mapHeight; ++row)
         for (int col = 0; col < l.mapWidth; ++col)
-            pic.pixel(l.mapLeft + col, l.mapTop + row, colourOf(CellClass(px[std::size_t(row / p) * std::size_t(w) + std::size_t(col / p)])));
+            pic.pixel(l.mapLeft + col, l.mapTop + row, colourOf(ColumnClass(px[std::size_t(row / p) * std::size_t(w) + std::size_t(col / p)])));
     drawPath(pic, drivenPath, l);
     char scale[96];
     std::snprintf(scale, sizeof scale, "%.2f m cells%s", l.cell,

@@ -54,10 +54,10 @@ using detail::kObstacles;
 template <class F>
 void forEachShownVoxel(const detail::BrickMap& voxels, float occupied, F&& f) {
     voxels.forEachVoxel(kObstacles, [&](std::uint64_t code, float value) {
-        if (value >= occupied) f(code, CellClass::Obstacle);
+        if (value >= occupied) f(code, ColumnClass::Obstacle);
     });
     voxels.forEachVoxel(kGround, [&](std::uint64_t code, float value) {
-        if (value >= occupied && !voxels.occupied(kObstacles, code)) f(code, CellClass::Traversable);
+        if (value >= occupied && !voxels.occupied(kObstacles, code)) f(code, ColumnClass::Traversable);
     });
 }
 
@@ -70,8 +70,8 @@ struct OccupiedVoxels {
 
 OccupiedVoxels occupiedVoxels(const detail::BrickMap& voxels, const detail::MapTree& configured) {
     std::vector<std::pair<std::uint64_t, std::uint8_t>> codes;
-    forEachShownVoxel(voxels, configured.getOccupancyThresLog(), [&](std::uint64_t code, CellClass c) {
-        codes.emplace_back(code, c == CellClass::Traversable ? 1 : 0);
+    forEachShownVoxel(voxels, configured.getOccupancyThresLog(), [&](std::uint64_t code, ColumnClass c) {
+        codes.emplace_back(code, c == ColumnClass::Traversable ? 1 : 0);
     });
     std::sort(codes.begin(), codes.end());  // the files must not depend on the order the bricks were made in
     OccupiedVoxels v;
@@ -88,8 +88,8 @@ OccupiedVoxels occupiedVoxels(const detail::BrickMap& voxels, const detail::MapT
 std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
     gseg::io::PlyColours colours;
     auto set = [](std::uint8_t* rgb, Rgb c) { rgb[0] = c.r, rgb[1] = c.g, rgb[2] = c.b; };
-    set(colours.ground, colourOf(CellClass::Traversable));
-    set(colours.nonGround, colourOf(CellClass::Obstacle));
+    set(colours.ground, colourOf(ColumnClass::Traversable));
+    set(colours.nonGround, colourOf(ColumnClass::Obstacle));
     gseg::io::PlyOptions options;
     char comment[128];
     std::snprintf(comment, sizeof comment, "gseg traversability map: centres of the occupied %.2f m voxels", resolution);
@@ -166,7 +166,7 @@ std::unique_ptr<octomap::ColorOcTree> TraversabilityMap::colouredTree() const {
         tree->updateNode(key, true, true);
         tree->setNodeColor(key, c.r, c.g, c.b);
     };
-    forEachShownVoxel(*voxels_, configured_->getOccupancyThresLog(), [&](std::uint64_t code, CellClass c) { add(code, colourOf(c)); });
+    forEachShownVoxel(*voxels_, configured_->getOccupancyThresLog(), [&](std::uint64_t code, ColumnClass c) { add(code, colourOf(c)); });
     if (tree->size() > 0) tree->updateInnerOccupancy();  // ColorOcTree's crashes on an empty tree
     return tree;
 }
@@ -192,7 +192,7 @@ TopDownGrid TraversabilityMap::topDown() const {
         const bool hasGround = std::isfinite(c.minGround);
         const float reference = hasGround ? c.minGround : c.minObstacle;
         const bool blocked = c.minObstacle <= reference + float(options_.clearance);
-        g.set(ix, iy, blocked ? CellClass::Obstacle : CellClass::Traversable);
+        g.set(ix, iy, blocked ? ColumnClass::Obstacle : ColumnClass::Traversable);
     }
     topDown_ = std::make_unique<TopDownGrid>(g);
     return g;
@@ -212,8 +212,8 @@ MapStats TraversabilityMap::stats() const {
     s.brickValueBlocks = voxels_->blocksInUse();
     s.mapBytes = voxels_->bytes();
     const TopDownGrid g = topDown();
-    s.cellsTraversable = g.count(CellClass::Traversable);
-    s.cellsObstacle = g.count(CellClass::Obstacle);
+    s.cellsTraversable = g.count(ColumnClass::Traversable);
+    s.cellsObstacle = g.count(ColumnClass::Obstacle);
     const PictureLayout layout = pictureLayout(g, path_);
     s.cellsUnknown = std::size_t(layout.cellsWide * layout.cellsHigh) - s.cellsTraversable - s.cellsObstacle;
     return s;
@@ -260,7 +260,7 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     files[1].write([&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
     files[2].write([&](std::ostream& out) {
         const octomap::ColorOcTree defaults(res);  // colouredTree() leaves the hit probability as it is
-        const Rgb g = colourOf(CellClass::Traversable), o = colourOf(CellClass::Obstacle);
+        const Rgb g = colourOf(ColumnClass::Traversable), o = colourOf(ColumnClass::Obstacle);
         const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
         voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
     });

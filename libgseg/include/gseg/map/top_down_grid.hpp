@@ -3,7 +3,7 @@
 /// The top-down grid of a traversability map: one class (traversable / obstacle / unknown) per
 /// voxel column, in the map's world frame (metres, z up; cells index world x and y).
 
-#include <gseg/map/cell_class.hpp>
+#include <gseg/map/column_class.hpp>
 
 #include <cmath>
 #include <cstddef>
@@ -23,12 +23,12 @@ public:
 
     std::int64_t cellIndex(double v) const { return std::int64_t(std::floor(v / cell_)); }
     /// Class at world (x, y); Unknown where nothing was seen.
-    CellClass at(double x, double y) const { return atCell(cellIndex(x), cellIndex(y)); }
-    CellClass atCell(std::int64_t ix, std::int64_t iy) const;
-    void set(std::int64_t ix, std::int64_t iy, CellClass c);
+    ColumnClass at(double x, double y) const { return atCell(cellIndex(x), cellIndex(y)); }
+    ColumnClass atCell(std::int64_t ix, std::int64_t iy) const;
+    void set(std::int64_t ix, std::int64_t iy, ColumnClass c);
 
     bool empty() const { return !any_; }  ///< no cell was ever set to a known class
-    std::size_t count(CellClass c) const;  ///< cells of class c (Traversable or Obstacle)
+    std::size_t count(ColumnClass c) const;  ///< cells of class c (Traversable or Obstacle)
     /// Cell index ranges of every cell ever set to a known class, inclusive (meaningless when empty()).
     std::int64_t minX() const { return lo_[0]; }
     std::int64_t maxX() const { return hi_[0]; }
@@ -41,8 +41,8 @@ public:
         for (const auto& [key, tile] : tiles_)
             for (int j = 0; j < kTile; ++j)
                 for (int i = 0; i < kTile; ++i) {
-                    const CellClass c = tile[std::size_t(j * kTile + i)];
-                    if (c != CellClass::Unknown) f(tileX(key) * kTile + i, tileY(key) * kTile + j, c);
+                    const ColumnClass c = tile[std::size_t(j * kTile + i)];
+                    if (c != ColumnClass::Unknown) f(tileX(key) * kTile + i, tileY(key) * kTile + j, c);
                 }
     }
 
@@ -50,7 +50,7 @@ public:
 
 private:
     double cell_;
-    std::unordered_map<std::uint64_t, std::vector<CellClass>> tiles_;
+    std::unordered_map<std::uint64_t, std::vector<ColumnClass>> tiles_;
     std::int64_t lo_[2] = {0, 0}, hi_[2] = {0, 0};
     bool any_ = false;
     std::size_t counts_[3] = {0, 0, 0};  ///< per class; [Unknown] unused

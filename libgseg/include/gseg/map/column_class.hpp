@@ -1,5 +1,5 @@
 #pragma once
-/// \file cell_class.hpp
+/// \file column_class.hpp
 /// The traversability class of one map cell (a column of voxels of the top-down grid, a cell of
 /// the `class` layer): the one classification every map output shows.
 
@@ -8,6 +8,7 @@
 namespace gseg::map {
 
 /// What the top-down grid says about one column of voxels (also the values of the `class` layer).
-enum class CellClass : std::uint8_t { Unknown = 0, Traversable = 1, Obstacle = 2 };
+/// Not the core's gseg::CellClass (gseg/cell_types.hpp: the eigen class of a segmentation cell).
+enum class ColumnClass : std::uint8_t { Unknown = 0, Traversable = 1, Obstacle = 2 };
 
 }  // namespace gseg::map
