@@ -99,7 +99,8 @@ Colour colourFor(float v, const LayerPictureLayout& l) {
     if (std::isnan(v)) return colourOf(ColumnClass::Unknown);
     if (l.classes) {
         const long c = std::lround(v);
-        return c == 1 ? colourOf(ColumnClass::Traversable) : c == 2 ? colourOf(ColumnClass::Obstacle) : kOtherClass;
+        return c == long(ColumnClass::Traversable) ? colourOf(ColumnClass::Traversable)
+               : c == long(ColumnClass::Obstacle) ? colourOf(ColumnClass::Obstacle) : kOtherClass;
     }
     return viridis(l.high > l.low ? (double(v) - l.low) / (l.high - l.low) : 0.5);
 }

@@ -137,7 +137,7 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
                 const bool ok = clearance[i] >= o.clearance && step[i] <= o.maxStep && roughness[i] <= o.maxRoughness &&
                                 rise[i] <= o.maxGroundRise &&
                                 !(slope[i] > o.maxSlope);  // no slope (too few neighbours): not judged by it
-                cls[i] = float(ok ? TerrainClass::Traversable : TerrainClass::NotTraversable);
+                cls[i] = float(ok ? ColumnClass::Traversable : ColumnClass::Obstacle);
                 if (ok) {
                     double worst = std::max(step[i] / o.maxStep, roughness[i] / o.maxRoughness);
                     if (!std::isnan(slope[i])) worst = std::max(worst, slope[i] / o.maxSlope);
@@ -167,7 +167,7 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
                     lowest = std::min(lowest, z - float(res / 2));
                     blocked |= z < ref + o.clearance;
                 }
-            if (blocked) cls[i] = float(TerrainClass::NotTraversable), cost[i] = 100, clearance[i] = std::max(0.0f, lowest - ref);
+            if (blocked) cls[i] = float(ColumnClass::Obstacle), cost[i] = 100, clearance[i] = std::max(0.0f, lowest - ref);
         }
     return g;
 }
@@ -179,8 +179,8 @@ gseg::io::RosMap costmapOf(const LayerGrid& layers) {
     for (int cy = 0; cy < layers.height(); ++cy)
         for (int cx = 0; cx < layers.width(); ++cx) {
             const float c = cls[layers.index(cx, cy)];
-            if (c == float(TerrainClass::Traversable)) m.value(cx, cy) = RosMap::kFree;
-            else if (c == float(TerrainClass::NotTraversable)) m.value(cx, cy) = RosMap::kOccupied;
+            if (c == float(ColumnClass::Traversable)) m.value(cx, cy) = RosMap::kFree;
+            else if (c == float(ColumnClass::Obstacle)) m.value(cx, cy) = RosMap::kOccupied;
         }
     return m;
 }

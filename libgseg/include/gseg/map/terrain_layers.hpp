@@ -23,6 +23,7 @@
 /// bottom of its lowest obstacle voxel); else it stays unknown.
 
 #include <gseg/io/ros_map.hpp>
+#include <gseg/map/column_class.hpp>
 #include <gseg/map/layer_grid.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/traversability_options.hpp>
@@ -33,9 +34,6 @@
 #include <vector>
 
 namespace gseg::map {
-
-/// The values of the `class` layer.
-enum class TerrainClass : std::uint8_t { Unknown = 0, Traversable = 1, NotTraversable = 2 };
 
 /// The ground points of the drive per cell: sums, so memory follows the mapped area.
 struct GroundCellSums {
