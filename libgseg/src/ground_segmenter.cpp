@@ -365,18 +365,19 @@ private:
         const GridCell& g = cells[c];
         std::uint32_t nb[17];
         int count = 0;
-        for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 0; ++dz) {
-                    if (!dx && !dy && !dz) continue;
-                    const GridCell key{g.ix + dx, g.iy + dy, g.iz + dz, 0, 0};
-                    const auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
-                        return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
-                    });
-                    if (it != cells.end() && it->ix == key.ix && it->iy == key.iy && it->iz == key.iz &&
-                        ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
-                        nb[count++] = std::uint32_t(it - cells.begin());
-                }
+        // The cells (ix + dx, iy - 1 .. iy + 1, iz - 1 .. iz) of each dx follow one another in the
+        // grid's order: one search per dx, then a walk (neighbours come in (dx, dy, dz) order).
+        for (int dx = -1; dx <= 1; ++dx) {
+            const GridCell key{g.ix + dx, g.iy - 1, g.iz - 1, 0, 0};
+            auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
+                return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
+            });
+            for (; it != cells.end() && it->ix == key.ix && it->iy <= g.iy + 1; ++it) {
+                if (it->iz < g.iz - 1 || it->iz > g.iz || (!dx && it->iy == g.iy && it->iz == g.iz)) continue;
+                if (ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
+                    nb[count++] = std::uint32_t(it - cells.begin());
+            }
+        }
         CellState& s = ws.cells[c];
         std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 0);
         s.inliers = 0;
