@@ -35,6 +35,9 @@ const Key kKeys[] = {
     {"stripMinSpread", 0, 2, false, false},        {"seedHeightTolerance", 0.001, 20, true, false},
     {"recoveryThreshold", 0, 5, false, false},     {"belowGroundMargin", 0, 20, false, false},
     {"checkPlaneNormal", 0, 1, false, true},       {"recoverNearGround", 0, 1, false, true},
+    {"sparseRecoveryThreshold", 0, 5, false, false},
+    {"floatingMinHeight", 0, 5, false, false},     {"floatingMaxDepth", 0, 20, false, false},
+    {"floatingIgnoresLowOutliers", 0, 1, false, true},
 };
 
 std::string parametersYaml(gseg::fuzz::FuzzInput& in) {

@@ -106,7 +106,8 @@ TEST(Params, ValidateNamesTheOffendingKey) {
                {"centroidSearchRadius", "nan"}, {"heightGate", "-0.1"},       {"gridGroundLevel", "1"},
                {"sparsityMedium", "0.0001"},  {"minGroundInlierRatio", "1"}, {"distToGround", "inf"},
                {"seedHeightTolerance", "0"},  {"recoveryThreshold", "-1"},   {"stripMinSpread", "nan"},
-               {"belowGroundMargin", "-0.5"}};
+               {"belowGroundMargin", "-0.5"}, {"sparseRecoveryThreshold", "-0.1"}, {"floatingMinHeight", "inf"},
+               {"floatingMaxDepth", "-1"}};
     for (const auto& b : bad) {
         gseg::Params p;
         p.set(b.key, b.value);

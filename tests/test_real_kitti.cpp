@@ -29,7 +29,9 @@ const Frame kFrames[] = {
 };
 
 // Every labelled scan of both shared folders, with floors 1 point under what this version measures
-// (config/kitti_hdl64.yaml = the library defaults; `gseg eval` gives the same figures).
+// (config/kitti_hdl64.yaml = the library defaults; `gseg eval` gives the same figures). Issue #20
+// raised them where a frame gained and kept them where it lost up to 0.9 point (09/000009 and
+// 10/000000 recall -0.1 / -0.2, 10/000009 -0.9, drive 00/000007 -0.7, 07 precision -0.1 / -0.2).
 struct Measured {
     const char* root;
     const char* seq;
@@ -37,51 +39,51 @@ struct Measured {
     double p, r;  ///< [%] measured precision and recall
 };
 const Measured kAll[] = {
-    {"semantickitti", "00", "000000", 99.3, 94.1},       {"semantickitti", "00", "000001", 99.2, 93.9},
-    {"semantickitti", "00", "000002", 99.0, 94.4},       {"semantickitti", "08", "000000", 98.0, 91.8},
-    {"semantickitti-extra", "02", "000000", 99.0, 94.8}, {"semantickitti-extra", "02", "000009", 98.0, 92.5},
-    {"semantickitti-extra", "03", "000000", 97.1, 91.8}, {"semantickitti-extra", "03", "000009", 97.2, 88.5},
-    {"semantickitti-extra", "04", "000000", 99.5, 92.9}, {"semantickitti-extra", "04", "000009", 99.2, 94.8},
-    {"semantickitti-extra", "05", "000000", 96.4, 97.0}, {"semantickitti-extra", "05", "000009", 96.3, 95.0},
-    {"semantickitti-extra", "06", "000000", 99.5, 94.4}, {"semantickitti-extra", "06", "000009", 98.7, 93.4},
-    {"semantickitti-extra", "07", "000000", 92.3, 98.0}, {"semantickitti-extra", "07", "000009", 91.8, 98.3},
-    {"semantickitti-extra", "09", "000000", 98.6, 91.4}, {"semantickitti-extra", "09", "000009", 98.5, 91.7},
-    {"semantickitti-extra", "10", "000000", 99.9, 84.2}, {"semantickitti-extra", "10", "000009", 99.8, 85.2},
+    {"semantickitti", "00", "000000", 99.4, 94.4},       {"semantickitti", "00", "000001", 99.3, 94.0},
+    {"semantickitti", "00", "000002", 99.1, 94.5},       {"semantickitti", "08", "000000", 98.2, 92.5},
+    {"semantickitti-extra", "02", "000000", 99.1, 95.0}, {"semantickitti-extra", "02", "000009", 98.4, 92.7},
+    {"semantickitti-extra", "03", "000000", 97.1, 92.3}, {"semantickitti-extra", "03", "000009", 97.3, 88.6},
+    {"semantickitti-extra", "04", "000000", 99.6, 93.3}, {"semantickitti-extra", "04", "000009", 99.2, 95.5},
+    {"semantickitti-extra", "05", "000000", 96.4, 97.3}, {"semantickitti-extra", "05", "000009", 96.3, 95.4},
+    {"semantickitti-extra", "06", "000000", 99.5, 94.7}, {"semantickitti-extra", "06", "000009", 99.0, 94.0},
+    {"semantickitti-extra", "07", "000000", 92.4, 98.2}, {"semantickitti-extra", "07", "000009", 91.8, 98.5},
+    {"semantickitti-extra", "09", "000000", 99.0, 91.5}, {"semantickitti-extra", "09", "000009", 98.9, 91.7},
+    {"semantickitti-extra", "10", "000000", 99.9, 84.2}, {"semantickitti-extra", "10", "000009", 99.9, 85.2},
 };
 
 // The 30 consecutive frames of ../shared/data/semantickitti-drives (sequences 00 urban, 05
 // residential, 07 dense urban: frames 0-9 each), measured likewise (issue #20).
 const Measured kDrives[] = {
-    {"semantickitti-drives", "00", "000000", 99.3, 94.1},
-    {"semantickitti-drives", "00", "000001", 99.2, 93.9},
-    {"semantickitti-drives", "00", "000002", 99.0, 94.4},
-    {"semantickitti-drives", "00", "000003", 98.9, 93.7},
-    {"semantickitti-drives", "00", "000004", 98.5, 94.2},
-    {"semantickitti-drives", "00", "000005", 98.7, 94.3},
-    {"semantickitti-drives", "00", "000006", 98.3, 92.7},
-    {"semantickitti-drives", "00", "000007", 98.4, 94.5},
-    {"semantickitti-drives", "00", "000008", 98.1, 94.3},
-    {"semantickitti-drives", "00", "000009", 97.7, 95.1},
-    {"semantickitti-drives", "05", "000000", 96.4, 97.0},
-    {"semantickitti-drives", "05", "000001", 95.6, 96.7},
-    {"semantickitti-drives", "05", "000002", 95.6, 95.5},
-    {"semantickitti-drives", "05", "000003", 95.5, 95.2},
-    {"semantickitti-drives", "05", "000004", 95.5, 95.2},
-    {"semantickitti-drives", "05", "000005", 95.6, 95.3},
-    {"semantickitti-drives", "05", "000006", 95.5, 95.3},
-    {"semantickitti-drives", "05", "000007", 95.5, 95.2},
-    {"semantickitti-drives", "05", "000008", 95.9, 95.3},
-    {"semantickitti-drives", "05", "000009", 96.3, 95.0},
-    {"semantickitti-drives", "07", "000000", 92.3, 98.0},
-    {"semantickitti-drives", "07", "000001", 91.9, 98.2},
-    {"semantickitti-drives", "07", "000002", 91.3, 98.0},
-    {"semantickitti-drives", "07", "000003", 91.4, 98.0},
-    {"semantickitti-drives", "07", "000004", 91.9, 98.1},
-    {"semantickitti-drives", "07", "000005", 92.2, 98.4},
-    {"semantickitti-drives", "07", "000006", 91.3, 98.0},
-    {"semantickitti-drives", "07", "000007", 91.2, 98.1},
-    {"semantickitti-drives", "07", "000008", 91.8, 98.0},
-    {"semantickitti-drives", "07", "000009", 91.8, 98.3},
+    {"semantickitti-drives", "00", "000000", 99.4, 94.4},
+    {"semantickitti-drives", "00", "000001", 99.3, 94.0},
+    {"semantickitti-drives", "00", "000002", 99.1, 94.5},
+    {"semantickitti-drives", "00", "000003", 99.0, 94.0},
+    {"semantickitti-drives", "00", "000004", 98.6, 94.3},
+    {"semantickitti-drives", "00", "000005", 99.1, 94.4},
+    {"semantickitti-drives", "00", "000006", 98.4, 92.9},
+    {"semantickitti-drives", "00", "000007", 98.7, 94.5},
+    {"semantickitti-drives", "00", "000008", 98.5, 94.5},
+    {"semantickitti-drives", "00", "000009", 98.1, 95.3},
+    {"semantickitti-drives", "05", "000000", 96.4, 97.3},
+    {"semantickitti-drives", "05", "000001", 95.7, 97.0},
+    {"semantickitti-drives", "05", "000002", 95.7, 95.8},
+    {"semantickitti-drives", "05", "000003", 95.6, 95.4},
+    {"semantickitti-drives", "05", "000004", 95.6, 95.4},
+    {"semantickitti-drives", "05", "000005", 95.6, 95.5},
+    {"semantickitti-drives", "05", "000006", 95.6, 95.6},
+    {"semantickitti-drives", "05", "000007", 95.6, 95.6},
+    {"semantickitti-drives", "05", "000008", 96.0, 95.6},
+    {"semantickitti-drives", "05", "000009", 96.3, 95.4},
+    {"semantickitti-drives", "07", "000000", 92.4, 98.2},
+    {"semantickitti-drives", "07", "000001", 91.9, 98.3},
+    {"semantickitti-drives", "07", "000002", 91.4, 98.1},
+    {"semantickitti-drives", "07", "000003", 91.6, 98.0},
+    {"semantickitti-drives", "07", "000004", 92.1, 98.3},
+    {"semantickitti-drives", "07", "000005", 92.4, 98.6},
+    {"semantickitti-drives", "07", "000006", 91.5, 98.3},
+    {"semantickitti-drives", "07", "000007", 91.2, 98.3},
+    {"semantickitti-drives", "07", "000008", 91.8, 98.2},
+    {"semantickitti-drives", "07", "000009", 91.8, 98.5},
 };
 
 gseg::Params kittiParams() { return gseg::Params(); }  // = config/kitti_hdl64.yaml

@@ -52,11 +52,18 @@ double volumePerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std:
     return m == 0 ? 0.0 : double(box.volume()) / double(m);
 }
 
-// Per-cell working state of one phase.
+// A column's key that sorts like the signed pair (ix, iy), the grid's order: the sign bit flipped.
 std::uint64_t columnKey(const GridCell& g) {
-    return (std::uint64_t(std::uint32_t(g.ix)) << 32) | std::uint32_t(g.iy);
+    return (std::uint64_t(std::uint32_t(g.ix) ^ 0x80000000u) << 32) | (std::uint32_t(g.iy) ^ 0x80000000u);
 }
 
+// The z range of the points of one Phase I cell that Phase I did not accept.
+struct RejectedSpan {
+    std::uint64_t key;  // columnKey of the cell
+    float low, high;    // [m]
+};
+
+// Per-cell working state of one phase.
 struct CellState {
     CellClass cellClass = CellClass::TooFewPoints;
     CellOutcome outcome = CellOutcome::TooFewPoints;
@@ -80,10 +87,10 @@ struct detail::Workspace {
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
-    // Per column (ix, iy), ascending: the lowest z of a point Phase I called non-ground (points of
-    // cells too small to classify excepted). Phase II sees only Phase I's ground, so this is how it
+    // Per Phase I cell, in the grid's order: the z range of its points Phase I called non-ground
+    // (cells too small to classify excepted). Phase II sees only Phase I's ground, so this is how it
     // knows what stands below its cells.
-    std::vector<std::pair<std::uint64_t, float>> lowestRejected;
+    std::vector<RejectedSpan> rejected;
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
     BelowGroundScratch belowGround;
@@ -105,7 +112,9 @@ struct PhaseSettings {
     double cellSizeZ = 0;      ///< [m] cell height
     double heightGate = 0;     ///< [m] expansion's height gate (tau; infinite: none)
     bool recover = false;      ///< recover the points of non-ground cells on a ground neighbour's plane (ours, after the authors' implementation)
-    bool recordRejected = false;  ///< record per column the lowest point this phase rejected (for the next phase)
+    bool recoverSparseOnly = false;  ///< recover only the points of cells too small to classify
+    double recoveryThreshold = 0;    ///< [m] point-to-plane distance of a recovered point
+    bool recordRejected = false;  ///< record per cell the z range of the points this phase rejected (for the next phase)
     bool belowRejected = false;   ///< a cell above a point the previous phase rejected is floating
 
     /// Phase I: tall cells over the whole cloud, no height gate.
@@ -115,6 +124,7 @@ struct PhaseSettings {
         s.cellSizeZ = p.cellSizeZPhase1;
         s.heightGate = std::numeric_limits<double>::infinity();
         s.recover = p.recoverNearGround;
+        s.recoveryThreshold = p.recoveryThreshold;
         s.recordRejected = true;
         return s;
     }
@@ -125,6 +135,9 @@ struct PhaseSettings {
         s.cellSizeZ = p.cellSizeZPhase2;
         s.heightGate = p.heightGate;
         s.belowRejected = true;
+        s.recover = p.sparseRecoveryThreshold > 0;  // their points are final ground
+        s.recoverSparseOnly = true;
+        s.recoveryThreshold = p.sparseRecoveryThreshold;
         return s;
     }
 };
@@ -264,11 +277,16 @@ private:
             if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
         }
         if (!set_.belowRejected) return false;
+        // Only points between floatingMinHeight and floatingMaxDepth below the cell's bottom count:
+        // closer, a step of the ground; deeper, a reflection under it.
         const std::uint64_t key = columnKey(g[c]);
-        const auto it = std::lower_bound(ws.lowestRejected.begin(), ws.lowestRejected.end(),
-                                         std::pair<std::uint64_t, float>(key, -std::numeric_limits<float>::infinity()));
         const double bottom = originZ() + double(g[c].iz) * set_.cellSizeZ;
-        return it != ws.lowestRejected.end() && it->first == key && double(it->second) < bottom;
+        const double top = bottom - p_.floatingMinHeight, deep = bottom - p_.floatingMaxDepth;
+        for (auto it = std::lower_bound(ws.rejected.begin(), ws.rejected.end(), key,
+                                        [](const RejectedSpan& a, std::uint64_t k) { return a.key < k; });
+             it != ws.rejected.end() && it->key == key; ++it)
+            if (double(it->low) < top && double(it->high) >= deep) return true;
+        return false;
     }
 
     double originZ() const { return -p_.distToGround - p_.gridGroundLevel * set_.cellSizeZ; }
@@ -311,11 +329,13 @@ private:
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
-        if (set_.recordRejected) ws.lowestRejected.clear();
+        if (set_.recordRejected) ws.rejected.clear();
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
-            if (set_.recover && s.outcome != CellOutcome::Ground) recover(ws, c);
+            if (set_.recover && s.outcome != CellOutcome::Ground &&
+                (!set_.recoverSparseOnly || s.outcome == CellOutcome::TooFewPoints))
+                recover(ws, c);
             if (set_.recordRejected && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
             if (s.outcome == CellOutcome::Ground || s.recovered) {
                 if (s.outcome == CellOutcome::Ground)
@@ -345,23 +365,24 @@ private:
         const GridCell& g = cells[c];
         std::uint32_t nb[17];
         int count = 0;
-        for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 0; ++dz) {
-                    if (!dx && !dy && !dz) continue;
-                    const GridCell key{g.ix + dx, g.iy + dy, g.iz + dz, 0, 0};
-                    const auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
-                        return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
-                    });
-                    if (it != cells.end() && it->ix == key.ix && it->iy == key.iy && it->iz == key.iz &&
-                        ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
-                        nb[count++] = std::uint32_t(it - cells.begin());
-                }
+        // The cells (ix + dx, iy - 1 .. iy + 1, iz - 1 .. iz) of each dx follow one another in the
+        // grid's order: one search per dx, then a walk (neighbours come in (dx, dy, dz) order).
+        for (int dx = -1; dx <= 1; ++dx) {
+            const GridCell key{g.ix + dx, g.iy - 1, g.iz - 1, 0, 0};
+            auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
+                return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
+            });
+            for (; it != cells.end() && it->ix == key.ix && it->iy <= g.iy + 1; ++it) {
+                if (it->iz < g.iz - 1 || it->iz > g.iz || (!dx && it->iy == g.iy && it->iz == g.iz)) continue;
+                if (ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
+                    nb[count++] = std::uint32_t(it - cells.begin());
+            }
+        }
         CellState& s = ws.cells[c];
         std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 0);
         s.inliers = 0;
         if (count == 0) return;
-        const float thr = float(p_.recoveryThreshold);
+        const float thr = float(set_.recoveryThreshold);
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             const Eigen::Vector3f& q = ws.pts[k];
             // The plane of the neighbour whose ground centroid is horizontally nearest.
@@ -385,21 +406,25 @@ private:
         return parent < 0 ? parent : std::int32_t(ws.candidateCell[std::size_t(parent)]);
     }
 
-    // Phase I: lowest point of cell c's column that Phase I did not accept (cells arrive column by
-    // column). Recovered points count too: they sit in a cell Phase I rejected, so what Phase II
-    // finds above them is not ground either.
+    // Phase I: the z range of the points of cell c that Phase I did not accept (cells arrive column by
+    // column, bottom to top). Recovered points count too: they sit in a cell Phase I rejected. Not
+    // counted: cells too small to classify; a ground cell's outliers below its plane
+    // (floatingIgnoresLowOutliers), which are lower ground (the road beside a sidewalk, a rut), not
+    // something standing below the cells above; and in a recovered cell, points more than
+    // floatingMaxDepth below the plane it was recovered onto (reflections under the road).
     void recordRejected(detail::Workspace& ws, std::size_t c) const {
         const GridCell& g = ws.grid.cells()[c];
-        const bool ground = ws.cells[c].outcome == CellOutcome::Ground;
-        float lowest = std::numeric_limits<float>::infinity();
-        for (std::uint32_t k = g.begin; k < g.end; ++k)
-            if (!ground || !ws.inlier[k]) lowest = std::min(lowest, ws.pts[k].z());
-        if (lowest == std::numeric_limits<float>::infinity()) return;
-        const std::uint64_t key = columnKey(g);
-        if (!ws.lowestRejected.empty() && ws.lowestRejected.back().first == key)
-            ws.lowestRejected.back().second = std::min(ws.lowestRejected.back().second, lowest);
-        else
-            ws.lowestRejected.emplace_back(key, lowest);
+        const CellState& s = ws.cells[c];
+        const bool ground = s.outcome == CellOutcome::Ground;
+        RejectedSpan span{columnKey(g), std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+        for (std::uint32_t k = g.begin; k < g.end; ++k) {
+            if (ground && ws.inlier[k]) continue;
+            if (ground && p_.floatingIgnoresLowOutliers && s.normal.dot(ws.pts[k] - s.ground) < 0) continue;
+            if (s.recovered && s.normal.dot(ws.pts[k] - s.ground) < -p_.floatingMaxDepth) continue;
+            span.low = std::min(span.low, ws.pts[k].z());
+            span.high = std::max(span.high, ws.pts[k].z());
+        }
+        if (span.low <= span.high) ws.rejected.push_back(span);
     }
 
     const Params& p_;

@@ -35,9 +35,13 @@ const OptionTable<Params>& table() {
         {"heightGate", &Params::heightGate},
         {"recoverNearGround", &Params::recoverNearGround},
         {"recoveryThreshold", &Params::recoveryThreshold},
+        {"sparseRecoveryThreshold", &Params::sparseRecoveryThreshold},
         {"sparsityLow", &Params::sparsityLow},
         {"sparsityMedium", &Params::sparsityMedium},
         {"maxGroundHeightDeviation", &Params::maxGroundHeightDeviation},
+        {"floatingMinHeight", &Params::floatingMinHeight},
+        {"floatingMaxDepth", &Params::floatingMaxDepth},
+        {"floatingIgnoresLowOutliers", &Params::floatingIgnoresLowOutliers},
         {"belowGroundMargin", &Params::belowGroundMargin},
     });
     return t;
@@ -85,9 +89,13 @@ void Params::validate() const {
     require(finite(stripMinSpread) && stripMinSpread >= 0, "stripMinSpread", stripMinSpread, "must be >= 0");
     require(finite(recoveryThreshold) && recoveryThreshold >= 0, "recoveryThreshold", recoveryThreshold,
             "must be >= 0");
+    require(finite(sparseRecoveryThreshold) && sparseRecoveryThreshold >= 0, "sparseRecoveryThreshold",
+            sparseRecoveryThreshold, "must be >= 0");
     require(finite(sparsityLow) && sparsityLow >= 0, "sparsityLow", sparsityLow, "must be >= 0");
     require(finite(sparsityMedium) && sparsityMedium >= sparsityLow, "sparsityMedium", sparsityMedium,
             "must be >= sparsityLow");
+    require(finite(floatingMinHeight) && floatingMinHeight >= 0, "floatingMinHeight", floatingMinHeight, "must be >= 0");
+    require(finite(floatingMaxDepth) && floatingMaxDepth >= 0, "floatingMaxDepth", floatingMaxDepth, "must be >= 0");
     require(finite(belowGroundMargin) && belowGroundMargin >= 0, "belowGroundMargin", belowGroundMargin,
             "must be >= 0");
     require(finite(maxGroundHeightDeviation) && maxGroundHeightDeviation >= 0, "maxGroundHeightDeviation",

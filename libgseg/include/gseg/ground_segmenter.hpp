@@ -49,7 +49,7 @@ struct PhaseReport {
     std::size_t groundCells = 0;     ///< cells accepted as ground
     std::size_t unlabelledCellPoints = 0;  ///< points in cells with too few points (labelled non-ground)
     std::size_t unreachedCellPoints = 0;   ///< points in candidate cells the expansion never reached (non-ground)
-    std::size_t recoveredPoints = 0;       ///< Phase I: points of non-ground cells on an adjacent ground cell's plane (passed to Phase II)
+    std::size_t recoveredPoints = 0;       ///< Phase I: points of non-ground cells on an adjacent ground cell's plane (passed to Phase II); Phase II: points of cells too small to classify on an adjacent ground cell's plane (ground)
     StepTimes ms;                          ///< time per step
     std::vector<CellDiagnostics> cells;    ///< one entry per occupied cell, sorted by (ix, iy, iz)
 };

@@ -46,11 +46,15 @@ struct Params {
     double heightGate = 0.1;            ///< [m] Phase II (tau): a neighbour is taken only if the step between the two ground centroids, measured along both cells' fitted ground planes (height for line and small cells), is at most this
     bool recoverNearGround = true;      ///< Phase I: points of non-ground cells that lie on the ground plane of a ground cell beside them (or one level below) go on to Phase II
     double recoveryThreshold = 0.1;     ///< [m] point-to-plane distance of such a recovered point
+    double sparseRecoveryThreshold = 0.1;  ///< [m] Phase II: points of cells with fewer than minPointsPerCell points that lie within this of the ground plane of a ground cell beside them (or one level below) are ground (0: never)
 
     // --- per-cell refinement ----------------------------------------------------------------------
     double sparsityLow = 0.001;              ///< [m^3/point] bounding-box volume per point below this: Low sparsity
     double sparsityMedium = 0.01;            ///< [m^3/point] below this (and not Low): Medium; otherwise High
     double maxGroundHeightDeviation = 0.3;   ///< [m] ambiguous cell rejected if its ground is higher than this above the lowest neighbour (above a curb)
+    double floatingMinHeight = 0.1;          ///< [m] Phase II: a cell is floating (not ground) if a point Phase I rejected lies more than this below its bottom in the same column (a car roof above the car's side); a point closer below is a step of the ground (the road under a sidewalk's edge)
+    double floatingMaxDepth = 0.5;           ///< [m] ... and at most this below it; deeper points are reflections under the ground (a rejected cell recovered onto a neighbour's plane does not count its points more than this below that plane either)
+    bool floatingIgnoresLowOutliers = true;  ///< ... not counting the outliers of a Phase I ground cell that lie below its plane (lower ground beside it); false: every outlier counts
     double belowGroundMargin = 0.5;          ///< [m] non-ground points this far below the local ground are flagged as reflections (Result::belowGround; 0: never)
 
     /// Throws std::invalid_argument naming the first invalid key and its value.
