@@ -67,6 +67,51 @@ TEST(Grid, SparseFallbackMatchesDensePath) {
     }
 }
 
+// The ColumnIndex form of Grid::build (#21: columns numbered once per scan) gives the cells and the
+// point order of the plain form, on a shuffled subset with negative coordinates, tall columns
+// (z-cell ranges beyond the counting sort's), a column with one z cell, and the sparse column ids
+// of points spread absurdly far; columnCells() and find() agree with the cells.
+TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
+    for (const bool far : {false, true}) {
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<float> u(-20, 20);
+        std::vector<float> xyz;
+        for (int i = 0; i < 3000; ++i) xyz.insert(xyz.end(), {u(rng), u(rng), u(rng) * 0.1f});
+        for (int i = 0; i < 50; ++i) xyz.insert(xyz.end(), {3.2f, -4.1f, u(rng) * 40.f});  // a tall column
+        for (int i = 0; i < 5; ++i) xyz.insert(xyz.end(), {-7.3f, 8.6f, 0.05f});          // one z cell
+        if (far) xyz.insert(xyz.end(), {1e7f, -1e7f, 1e6f});
+        const std::uint32_t n = std::uint32_t(xyz.size() / 3);
+        const gseg::PointCloudView cloud(xyz.data(), n);
+        std::vector<std::uint32_t> idx;
+        for (std::uint32_t i = 0; i < n; ++i)
+            if (i % 7 != 3) idx.push_back(i);
+        std::shuffle(idx.begin(), idx.end(), rng);
+        gseg::ColumnIndex columns;
+        std::vector<std::uint32_t> columnOf;
+        columns.build(cloud, idx, 1.5, 1.0, columnOf);
+        gseg::Grid plain, byColumn;
+        plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
+        byColumn.build(cloud, idx, columns, columnOf, 0.2, -1.9);
+        ASSERT_EQ(plain.cells().size(), byColumn.cells().size()) << far;
+        EXPECT_EQ(plain.order(), byColumn.order()) << far;
+        for (std::size_t c = 0; c < plain.cells().size(); ++c) {
+            const auto &a = plain.cells()[c], &b = byColumn.cells()[c];
+            ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
+            const std::int64_t col = columns.find(a.ix, a.iy);
+            ASSERT_GE(col, 0);
+            EXPECT_EQ(columns.ix(std::uint32_t(col)), a.ix);
+            EXPECT_EQ(columns.iy(std::uint32_t(col)), a.iy);
+            EXPECT_GE(c, byColumn.columnCells()[std::size_t(col)]);
+            EXPECT_LT(c, byColumn.columnCells()[std::size_t(col) + 1]);
+        }
+        for (std::size_t k = 0; k < idx.size(); ++k) {
+            const float* p = cloud.point(byColumn.order()[k]);
+            EXPECT_EQ(byColumn.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
+        }
+        EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
+    }
+}
+
 // --- params ------------------------------------------------------------------------------------
 
 TEST(Params, DefaultsAreValidAndRoundTripThroughText) {

@@ -52,11 +52,12 @@ double volumePerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std:
     return m == 0 ? 0.0 : double(box.volume()) / double(m);
 }
 
-// Per-cell working state of one phase.
+// Key of a cell's column in Workspace::lowestRejected (unsigned order: see floating()).
 std::uint64_t columnKey(const GridCell& g) {
     return (std::uint64_t(std::uint32_t(g.ix)) << 32) | std::uint32_t(g.iy);
 }
 
+// Per-cell working state of one phase.
 struct CellState {
     CellClass cellClass = CellClass::TooFewPoints;
     CellOutcome outcome = CellOutcome::TooFewPoints;
@@ -72,17 +73,18 @@ struct CellState {
 }  // namespace
 
 struct detail::Workspace {
-    Grid grid;
+    Grid grid;  // its points(): the points grouped by cell, aligned with grid.order()
+    ColumnIndex columns;                  // the columns (ix, iy) of the finite points, shared by both phases
+    std::vector<std::uint32_t> columnOf;  // per cloud point: its column id (finite points only)
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
-    std::vector<Eigen::Vector3f> pts;  // points grouped by cell, aligned with grid.order()
     std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
     std::vector<std::uint8_t> mask;    // plane-fit scratch
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
-    // Per column (ix, iy), ascending: the lowest z of a point Phase I called non-ground (points of
-    // cells too small to classify excepted). Phase II sees only Phase I's ground, so this is how it
-    // knows what stands below its cells.
+    // Per column (ix, iy), in the cells' (signed) column order: the lowest z of a point Phase I
+    // called non-ground (points of cells too small to classify excepted). Phase II sees only Phase
+    // I's ground, so this is how it knows what stands below its cells.
     std::vector<std::pair<std::uint64_t, float>> lowestRejected;
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
@@ -162,9 +164,9 @@ public:
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, set_.cellSizeZ, originZ());
+        ws.grid.build(cloud, input, ws.columns, ws.columnOf, set_.cellSizeZ, originZ());
         report.ms.grid = msSince(t);
-        classifyCells(cloud, ws);  // Step 2: local eigen classification
+        classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
         fitPlanes(ws);  // Step 3: surface gradient analysis
         report.ms.planeFit = msSince(t);
@@ -177,18 +179,13 @@ public:
     }
 
 private:
-    void classifyCells(const PointCloudView& cloud, detail::Workspace& ws) const {
-        const auto& order = ws.grid.order();
-        ws.pts.resize(order.size());
-        for (std::size_t k = 0; k < order.size(); ++k) {
-            const float* q = cloud.point(order[k]);
-            ws.pts[k] = Eigen::Vector3f(q[0], q[1], q[2]);
-        }
-        ws.inlier.assign(order.size(), 0);
+    void classifyCells(detail::Workspace& ws) const {
+        const auto& pts = ws.grid.points();
+        ws.inlier.assign(pts.size(), 0);
         ws.cells.assign(ws.grid.cells().size(), CellState());
         for (std::size_t c = 0; c < ws.cells.size(); ++c) {
             const GridCell& g = ws.grid.cells()[c];
-            const CellClassification cls = classifyCell(&ws.pts[g.begin], g.size(), p_);
+            const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_);
             CellState& s = ws.cells[c];
             s.cellClass = cls.cellClass;
             s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
@@ -214,7 +211,7 @@ private:
                 s.outcome = CellOutcome::Steep;
                 continue;
             }
-            const PlaneFitResult fit = fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
+            const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
                                                 ws.mask, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
             if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
                 s.outcome = CellOutcome::Steep;
@@ -223,7 +220,7 @@ private:
             Eigen::Vector3f sum = Eigen::Vector3f::Zero();
             for (std::uint32_t i = 0; i < g.size(); ++i) {
                 ws.inlier[g.begin + i] = ws.mask[i];
-                if (ws.mask[i]) sum += ws.pts[g.begin + i];
+                if (ws.mask[i]) sum += ws.grid.points()[g.begin + i];
             }
             s.inliers = std::uint32_t(fit.numInliers);
             s.ground = sum / float(fit.numInliers);
@@ -242,8 +239,8 @@ private:
             // A handful of outliers has no meaningful bounding box: only a population of at least
             // minPointsPerCell outliers can compete with the inliers.
             if (g.size() - s.inliers >= std::uint32_t(p_.minPointsPerCell)) {
-                const Sparsity in = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
-                const Sparsity out = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
+                const Sparsity in = sparsityBucket(volumePerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
+                const Sparsity out = sparsityBucket(volumePerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
                 s.ambiguous = in == out;
             }
             s.candidate = std::int32_t(ws.candidateCell.size());
@@ -264,6 +261,9 @@ private:
             if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
         }
         if (!set_.belowRejected) return false;
+        // A binary search by the unsigned key over a list in signed column order (as main at
+        // 8a37f34 does: with negative ix or iy it can miss the column; kept so that the labels do
+        // not change, see issue #21's report).
         const std::uint64_t key = columnKey(g[c]);
         const auto it = std::lower_bound(ws.lowestRejected.begin(), ws.lowestRejected.end(),
                                          std::pair<std::uint64_t, float>(key, -std::numeric_limits<float>::infinity()));
@@ -342,28 +342,29 @@ private:
     // sidewalk in a cell that a pedestrian made steep. Phase II judges them like any other point.
     void recover(detail::Workspace& ws, std::size_t c) const {
         const auto& cells = ws.grid.cells();
+        const auto& columnCells = ws.grid.columnCells();
         const GridCell& g = cells[c];
         std::uint32_t nb[17];
         int count = 0;
+        // The occupied cells (ix + dx, iy + dy, iz + dz), dz = -1 then 0 (not the cell itself), in
+        // (dx, dy, dz) order, found in their column's cells (sorted by iz).
         for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 0; ++dz) {
-                    if (!dx && !dy && !dz) continue;
-                    const GridCell key{g.ix + dx, g.iy + dy, g.iz + dz, 0, 0};
-                    const auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
-                        return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
-                    });
-                    if (it != cells.end() && it->ix == key.ix && it->iy == key.iy && it->iz == key.iz &&
-                        ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
-                        nb[count++] = std::uint32_t(it - cells.begin());
+            for (int dy = -1; dy <= 1; ++dy) {
+                const std::int64_t column = ws.columns.find(g.ix + dx, g.iy + dy);
+                if (column < 0) continue;
+                for (std::uint32_t b = columnCells[std::size_t(column)], e = columnCells[std::size_t(column) + 1]; b < e; ++b) {
+                    if (cells[b].iz > g.iz) break;
+                    if (cells[b].iz < g.iz - 1 || b == c) continue;
+                    if (ws.cells[b].outcome == CellOutcome::Ground) nb[count++] = b;
                 }
+            }
         CellState& s = ws.cells[c];
         std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 0);
         s.inliers = 0;
         if (count == 0) return;
         const float thr = float(p_.recoveryThreshold);
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = ws.pts[k];
+            const Eigen::Vector3f& q = ws.grid.points()[k];
             // The plane of the neighbour whose ground centroid is horizontally nearest.
             const CellState* best = nullptr;
             float bestD = std::numeric_limits<float>::infinity();
@@ -393,7 +394,7 @@ private:
         const bool ground = ws.cells[c].outcome == CellOutcome::Ground;
         float lowest = std::numeric_limits<float>::infinity();
         for (std::uint32_t k = g.begin; k < g.end; ++k)
-            if (!ground || !ws.inlier[k]) lowest = std::min(lowest, ws.pts[k].z());
+            if (!ground || !ws.inlier[k]) lowest = std::min(lowest, ws.grid.points()[k].z());
         if (lowest == std::numeric_limits<float>::infinity()) return;
         const std::uint64_t key = columnKey(g);
         if (!ws.lowestRejected.empty() && ws.lowestRejected.back().first == key)
@@ -431,6 +432,7 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     for (std::uint32_t i = 0; i < cloud.size(); ++i)
         if (finitePoint(cloud.point(i))) ws.input.push_back(i);
     r.numNonFinite = cloud.size() - ws.input.size();
+    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.columnOf);
     ws.phase1Ground.clear();
     ws.phase2Ground.clear();
 
@@ -451,7 +453,7 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
         if (ws.cells[c].outcome != CellOutcome::Ground) continue;
         float lowest = std::numeric_limits<float>::infinity();
         for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) lowest = std::min(lowest, ws.pts[k].z());
+            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid.points()[k].z());
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);

@@ -4,6 +4,7 @@
 
 #include <gseg/point_cloud.hpp>
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -25,6 +26,35 @@ struct GridCell {
     std::uint32_t size() const { return end - begin; }
 };
 
+/// The columns (ix, iy) of cells sx * sy of a scan's points, numbered once per scan so that both
+/// phases of the segmenter bin into them without recomputing a column per point. Column ids
+/// follow (ix, iy) order. Where the points' columns fit a box of a few times their number (every
+/// real scan), the ids are the box's dense index (empty columns have ids too); otherwise (points
+/// spread absurdly far) they are the ranks of the occupied columns. Reuses its memory.
+class ColumnIndex {
+public:
+    /// Numbers the columns of the points `indices` of `cloud`; `columnOf[i]` receives the column
+    /// id of cloud point i for every i in `indices` (resized to cloud.size(); other entries unset).
+    void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
+               std::vector<std::uint32_t>& columnOf);
+
+    /// Number of column ids (ids are 0 .. size() - 1).
+    std::uint32_t size() const { return size_; }
+    /// Id of column (ix, iy), or -1 where it holds no point (dense ids: outside the box).
+    std::int64_t find(std::int32_t ix, std::int32_t iy) const;
+    /// Column index along x and y of the column `id`.
+    std::int32_t ix(std::uint32_t id) const;
+    std::int32_t iy(std::uint32_t id) const;
+
+private:
+    bool dense_ = true;
+    std::int32_t lo_[2] = {0, 0};
+    std::int64_t extY_ = 1;
+    std::uint32_t size_ = 0;
+    std::vector<std::uint64_t> keys_;    // sparse ids: sorted keys of the occupied columns
+    std::vector<std::int32_t> coords_;   // ix, iy per input position (scratch)
+};
+
 /// A 3-D grid of occupied cells, rebuilt per scan. Cells come sorted by (ix, iy, iz), so the cells
 /// of one vertical column are adjacent and ordered bottom to top. Reuses its memory across builds.
 class Grid {
@@ -34,7 +64,19 @@ public:
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx,
                double sy, double sz, double originZ = 0.0);
 
+    /// The same cells as build() (same order, same order() within each cell), from the points'
+    /// columns numbered by `columns` (`columnOf`: ColumnIndex::build()'s) and sx, sy the columns'
+    /// sizes: points are binned per column and only their z cell is computed here. Also fills
+    /// points() and columnCells().
+    void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
+               const std::vector<std::uint32_t>& columnOf, double sz, double originZ = 0.0);
+
     const std::vector<GridCell>& cells() const { return cells_; }
+    /// [m] The points (x, y, z) aligned with order() (filled by the ColumnIndex form of build()).
+    const std::vector<Eigen::Vector3f>& points() const { return points_; }
+    /// The cells of column id c are cells()[columnCells()[c] .. columnCells()[c + 1]) (filled by
+    /// the ColumnIndex form of build(); size ColumnIndex::size() + 1).
+    const std::vector<std::uint32_t>& columnCells() const { return columnCells_; }
     /// Point indices (into the cloud) grouped by cell: cell c owns order()[c.begin .. c.end).
     const std::vector<std::uint32_t>& order() const { return order_; }
 
@@ -44,6 +86,9 @@ private:
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
     std::vector<std::uint32_t> keys_, counts_;
     std::vector<std::uint64_t> sortKeys_;
+    std::vector<Eigen::Vector3f> points_;
+    std::vector<std::uint32_t> columnCells_, byColumn_;
+    std::vector<std::int32_t> iz_, sortedIz_;
 };
 
 }  // namespace gseg
