@@ -153,7 +153,8 @@ std::int32_t ColumnIndex::iy(std::uint32_t id) const {
 // Stable counting sort by column, then within each column a stable sort by z cell: the order of
 // build()'s stable sort by (ix, iy, iz).
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
-                 const std::vector<std::uint32_t>& columnOf, double sz, double originZ) {
+                 const std::vector<std::uint32_t>& columnOf, double sz, double originZ,
+                 const Eigen::Vector3f* pointsOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
     cells_.clear();
@@ -165,13 +166,20 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[indices[k]] + 1];
     for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
     byColumn_.resize(n);
+    byColumnPoints_.resize(n);
     iz_.resize(n);
     sortedIz_.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
         const std::uint32_t i = indices[k];
         const std::uint32_t at = counts_[columnOf[i]]++;
         byColumn_[at] = i;
-        iz_[at] = cellCoord(cloud.point(i)[2], sz, originZ);
+        if (pointsOfIndices) {
+            byColumnPoints_[at] = pointsOfIndices[k];
+        } else {
+            const float* p = cloud.point(i);
+            byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+        }
+        iz_[at] = cellCoord(byColumnPoints_[at].z(), sz, originZ);
     }
     // counts_[c] is now the end of column c (and the start of column c + 1).
     std::uint32_t start = 0;
@@ -184,6 +192,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         for (std::uint32_t k = start + 1; k < end; ++k) lo = std::min(lo, iz_[k]), hi = std::max(hi, iz_[k]);
         if (lo == hi) {
             std::copy(byColumn_.begin() + start, byColumn_.begin() + end, order_.begin() + start);
+            std::copy(byColumnPoints_.begin() + start, byColumnPoints_.begin() + end, points_.begin() + start);
             cells_.push_back({ix, iy, lo, start, end});
             start = end;
             continue;
@@ -198,6 +207,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             for (std::uint32_t k = start; k < end; ++k) {
                 const std::uint32_t at = start + keys_[std::size_t(iz_[k] - lo)]++;
                 order_[at] = byColumn_[k];
+                points_[at] = byColumnPoints_[k];
                 sortedIz_[at] = iz_[k];
             }
         } else {
@@ -208,6 +218,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             for (std::uint32_t k = start; k < end; ++k) {
                 const std::uint32_t from = start + std::uint32_t(sortKeys_[k - start] & 0xffffffffull);
                 order_[k] = byColumn_[from];
+                points_[k] = byColumnPoints_[from];
                 sortedIz_[k] = iz_[from];
             }
         }
@@ -220,10 +231,6 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         start = end;
     }
     columnCells_[numColumns] = std::uint32_t(cells_.size());
-    for (std::size_t k = 0; k < n; ++k) {
-        const float* p = cloud.point(order_[k]);
-        points_[k] = Eigen::Vector3f(p[0], p[1], p[2]);
-    }
 }
 
 }  // namespace gseg

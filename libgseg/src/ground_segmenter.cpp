@@ -77,8 +77,10 @@ struct detail::Workspace {
     ColumnIndex columns;                  // the columns (ix, iy) of the finite points, shared by both phases
     std::vector<std::uint32_t> columnOf;  // per cloud point: its column id (finite points only)
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
+    std::vector<Eigen::Vector3f> phase1GroundPoints;  // the points of phase1Ground (Phase II's input), in its order
     std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
-    std::vector<std::uint8_t> mask;    // plane-fit scratch
+    std::vector<std::uint8_t> mask;    // plane-fit scratch: a cell's inlier mask
+    PlaneFitScratch planeFit;          // plane-fit scratch
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
@@ -157,14 +159,17 @@ class Phase {
 public:
     Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings) {}
 
-    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, std::vector<std::uint32_t>& ground,
-             detail::Workspace& ws, PhaseReport& report, bool keepCells) {
+    /// `inputPoints` (optional): the points of `input` in its order; `groundPoints` (optional)
+    /// receives the points of `ground` likewise (Phase I hands them to Phase II).
+    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const Eigen::Vector3f* inputPoints,
+             std::vector<std::uint32_t>& ground, std::vector<Eigen::Vector3f>* groundPoints, detail::Workspace& ws,
+             PhaseReport& report, bool keepCells) {
         report.inputPoints = input.size();
         auto t = Clock::now();
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, ws.columns, ws.columnOf, set_.cellSizeZ, originZ());
+        ws.grid.build(cloud, input, ws.columns, ws.columnOf, set_.cellSizeZ, originZ(), inputPoints);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -174,7 +179,7 @@ public:
         report.ms.refinement = msSince(t);
         expand(ws);  // Step 4: ground region expansion with per-cell checks
         report.ms.expansion = msSince(t);
-        collect(ws, ground, report, keepCells);
+        collect(ws, ground, groundPoints, report, keepCells);
         report.ms.refinement += msSince(t);
     }
 
@@ -212,7 +217,7 @@ private:
                 continue;
             }
             const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
-                                                ws.mask, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
+                                                ws.mask, ws.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
             if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
                 s.outcome = CellOutcome::Steep;
                 continue;
@@ -304,8 +309,8 @@ private:
         expandRegion(ws.centroids, es, accept, &ws.parents);
     }
 
-    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, PhaseReport& r,
-                 bool keepCells) const {
+    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<Eigen::Vector3f>* groundPoints,
+                 PhaseReport& r, bool keepCells) const {
         const auto& order = ws.grid.order();
         const auto& grid = ws.grid.cells();
         r.occupiedCells = grid.size();
@@ -323,7 +328,10 @@ private:
                 else
                     r.recoveredPoints += s.inliers;
                 for (std::uint32_t k = g.begin; k < g.end; ++k)
-                    if (ws.inlier[k]) ground.push_back(order[k]);
+                    if (ws.inlier[k]) {
+                        ground.push_back(order[k]);
+                        if (groundPoints) groundPoints->push_back(ws.grid.points()[k]);
+                    }
             } else if (s.outcome == CellOutcome::TooFewPoints) {
                 r.unlabelledCellPoints += g.size();
             } else if (s.outcome == CellOutcome::NotReached) {
@@ -437,9 +445,13 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
-    Phase(params, PhaseSettings::first(params)).run(cloud, ws.input, ws.phase1Ground, ws, r.phase1, keepCellDiagnostics);
+    ws.phase1GroundPoints.clear();
+    Phase(params, PhaseSettings::first(params))
+        .run(cloud, ws.input, nullptr, ws.phase1Ground, &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
-    Phase(params, PhaseSettings::second(params)).run(cloud, ws.phase1Ground, ws.phase2Ground, ws, r.phase2, keepCellDiagnostics);
+    Phase(params, PhaseSettings::second(params))
+        .run(cloud, ws.phase1Ground, ws.phase1GroundPoints.data(), ws.phase2Ground, nullptr, ws, r.phase2,
+             keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
     for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);

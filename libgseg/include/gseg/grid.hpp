@@ -13,10 +13,15 @@ namespace gseg {
 
 /// Integer index of a cell along one axis: floor((v - origin) / size), clamped to +-2^30 so that absurdly
 /// far points land in a far cell of their own instead of overflowing.
+/// (The floor is taken by truncation and a correction, which x86-64 without SSE4.1 does without a
+/// call to floor(): the same value for every finite input.)
 inline std::int32_t cellCoord(float v, double size, double origin = 0.0) {
-    const double c = std::floor((static_cast<double>(v) - origin) / size);
+    const double q = (static_cast<double>(v) - origin) / size;
     constexpr double lim = 1073741824.0;  // 2^30
-    return static_cast<std::int32_t>(c < -lim ? -lim : (c > lim ? lim : c));
+    if (!(q > -lim)) return -1073741824;  // floor(q) <= -2^30, and NaN
+    if (!(q < lim)) return 1073741824;    // floor(q) >= 2^30
+    const std::int64_t t = static_cast<std::int64_t>(q);  // towards zero
+    return static_cast<std::int32_t>(static_cast<double>(t) > q ? t - 1 : t);
 }
 
 /// One occupied cell: its index and the range [begin, end) of its points in Grid::order().
@@ -68,8 +73,11 @@ public:
     /// columns numbered by `columns` (`columnOf`: ColumnIndex::build()'s) and sx, sy the columns'
     /// sizes: points are binned per column and only their z cell is computed here. Also fills
     /// points() and columnCells().
+    /// `pointsOfIndices`, if given, holds the points of `indices` in their order (a copy the caller
+    /// has at hand, read sequentially instead of the cloud).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
-               const std::vector<std::uint32_t>& columnOf, double sz, double originZ = 0.0);
+               const std::vector<std::uint32_t>& columnOf, double sz, double originZ = 0.0,
+               const Eigen::Vector3f* pointsOfIndices = nullptr);
 
     const std::vector<GridCell>& cells() const { return cells_; }
     /// [m] The points (x, y, z) aligned with order() (filled by the ColumnIndex form of build()).
@@ -86,7 +94,7 @@ private:
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
     std::vector<std::uint32_t> keys_, counts_;
     std::vector<std::uint64_t> sortKeys_;
-    std::vector<Eigen::Vector3f> points_;
+    std::vector<Eigen::Vector3f> points_, byColumnPoints_;
     std::vector<std::uint32_t> columnCells_, byColumn_;
     std::vector<std::int32_t> iz_, sortedIz_;
 };
