@@ -1,7 +1,8 @@
 // The label lock (issue #21): the segmenter's labels, byte for byte, on every shared labelled scan
 // (semantickitti, semantickitti-extra, the 30 frames of semantickitti-drives), on mrpt-common's
 // VLP-16 rawlog scan and on every simulated scene of tests/support/scenes.cpp, each with a fixed
-// and with an estimated (`distToGround: auto`) sensor height, against the golden FNV-1a 64 hashes
+// and with an estimated (`distToGround: auto`) sensor height, each with 1, 2 and 3 threads
+// (Params::threads: the labels must not depend on the count), against the golden FNV-1a 64 hashes
 // in tests/label_hashes.txt (how to regenerate them: see that file's header). A speed-up must not
 // change a label; a deliberate change of the rules regenerates the file and says why in its commit.
 #include <gseg/ground_segmenter.hpp>
@@ -61,7 +62,7 @@ std::map<std::string, std::string> readGolden() {
 }
 
 /// The thread counts every case is run with (Params::threads); the labels must not depend on it.
-const std::vector<int> kThreads = {1};
+const std::vector<int> kThreads = {1, 2, 3};
 
 /// Computes the labels' hashes of one case with every thread count; `label(params)` segments.
 template <class Segment>
@@ -108,7 +109,7 @@ std::string scanName(const std::string& bin) {
 
 /// Segments a real scan as the tools do (gseg::mrpt::ScanSegmenter) with `config` and `threads`.
 std::vector<std::uint8_t> segmentReal(const gseg::mrpt::Scan& scan, gseg::mrpt::LoadedConfig config, int threads) {
-    (void)threads;
+    config.params.threads = threads;
     gseg::mrpt::ScanSegmenter seg(config);
     return seg.segment(gseg::PointCloudView(scan.xyzi.data(), scan.size(), 16), false, gseg::mrpt::HeightCheck::Never)
         .result.labels;
@@ -164,13 +165,13 @@ TEST(LabelLock, SimulatedScenesFixedAndAutoHeight) {
             gseg::Params p;
             p.distToGround = n.sensorHeight;
             p.centroidSearchRadius = n.searchRadius;
-            (void)threads;
+            p.threads = threads;
             return gseg::GroundSegmenter(p).segment(view).labels;
         });
         check("scene/" + n.name + "/auto", golden, write, [&](int threads) {
             gseg::Params p;
             p.centroidSearchRadius = n.searchRadius;
-            (void)threads;
+            p.threads = threads;
             return gseg::AutoHeightSegmenter(p).segment(view).result.labels;
         });
     }

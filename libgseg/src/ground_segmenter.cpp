@@ -1,4 +1,5 @@
 #include <gseg/below_ground.hpp>
+#include <gseg/fork_join_pool.hpp>
 #include <gseg/cell_classifier.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/ground_segmenter.hpp>
@@ -79,8 +80,22 @@ struct detail::Workspace {
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
     std::vector<Eigen::Vector3f> phase1GroundPoints;  // the points of phase1Ground (Phase II's input), in its order
     std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
-    std::vector<std::uint8_t> mask;    // plane-fit scratch: a cell's inlier mask
-    PlaneFitScratch planeFit;          // plane-fit scratch
+    // Per thread (Params::threads; [0]: the calling thread): the plane fit's scratch.
+    struct ThreadScratch {
+        std::vector<std::uint8_t> mask;  // a cell's inlier mask
+        PlaneFitScratch planeFit;
+    };
+    std::vector<ThreadScratch> perThread;
+    std::unique_ptr<ForkJoinPool> pool;  // Params::threads > 1: the threads of one scan's cells (persistent)
+
+    // Runs body(begin, end, thread) over [0, n): in chunks on the pool's threads, or all at once.
+    template <class Body>
+    void forCells(std::size_t n, Body&& body) {
+        if (pool)
+            pool->forRange(n, 128, body);
+        else
+            body(std::size_t(0), n, 0u);
+    }
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
@@ -96,6 +111,8 @@ struct detail::Workspace {
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
     params_.validate();
+    ws_->perThread.resize(std::size_t(params_.threads));
+    if (params_.threads > 1) ws_->pool = std::make_unique<ForkJoinPool>(unsigned(params_.threads));
 }
 GroundSegmenter::~GroundSegmenter() = default;
 GroundSegmenter::GroundSegmenter(GroundSegmenter&&) noexcept = default;
@@ -188,49 +205,60 @@ private:
         const auto& pts = ws.grid.points();
         ws.inlier.assign(pts.size(), 0);
         ws.cells.assign(ws.grid.cells().size(), CellState());
-        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
-            const GridCell& g = ws.grid.cells()[c];
-            const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_);
-            CellState& s = ws.cells[c];
-            s.cellClass = cls.cellClass;
-            s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
-            s.steepNormal = cls.steepNormal;
-            if (cls.groundCandidate && cls.cellClass != CellClass::Plane) {
-                // Line and small cells have no plane: all their points are ground candidates.
-                std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 1);
-                s.inliers = g.size();
-                s.ground = cls.mean;
-                s.normal = cls.normal;
-            }
+        // Cells are independent: each writes its own state and its own points' flags.
+        ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
+            for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
+        });
+    }
+
+    void classifyOne(detail::Workspace& ws, std::size_t c) const {
+        const auto& pts = ws.grid.points();
+        const GridCell& g = ws.grid.cells()[c];
+        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_);
+        CellState& s = ws.cells[c];
+        s.cellClass = cls.cellClass;
+        s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
+        s.steepNormal = cls.steepNormal;
+        if (cls.groundCandidate && cls.cellClass != CellClass::Plane) {
+            // Line and small cells have no plane: all their points are ground candidates.
+            std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 1);
+            s.inliers = g.size();
+            s.ground = cls.mean;
+            s.normal = cls.normal;
         }
     }
 
     // Planar cells: the best plane within the slope limit must hold most of the cell's points;
     // otherwise the cell is dominated by something steeper (a wall, a car side) and is not ground.
+    // Each cell's RANSAC generator is seeded from the cell's index, so the fits are independent.
     void fitPlanes(detail::Workspace& ws) const {
-        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
-            CellState& s = ws.cells[c];
-            if (s.cellClass != CellClass::Plane) continue;
-            const GridCell& g = ws.grid.cells()[c];
-            if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
-                s.outcome = CellOutcome::Steep;
-                continue;
-            }
-            const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
-                                                ws.mask, ws.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
-            if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
-                s.outcome = CellOutcome::Steep;
-                continue;
-            }
-            Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-            for (std::uint32_t i = 0; i < g.size(); ++i) {
-                ws.inlier[g.begin + i] = ws.mask[i];
-                if (ws.mask[i]) sum += ws.grid.points()[g.begin + i];
-            }
-            s.inliers = std::uint32_t(fit.numInliers);
-            s.ground = sum / float(fit.numInliers);
-            s.normal = fit.normal;
+        ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned thread) {
+            for (std::size_t c = begin; c < end; ++c) fitOne(ws, c, ws.perThread[thread]);
+        });
+    }
+
+    void fitOne(detail::Workspace& ws, std::size_t c, detail::Workspace::ThreadScratch& scratch) const {
+        CellState& s = ws.cells[c];
+        if (s.cellClass != CellClass::Plane) return;
+        const GridCell& g = ws.grid.cells()[c];
+        if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
+            s.outcome = CellOutcome::Steep;
+            return;
         }
+        const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
+                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
+        if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
+            s.outcome = CellOutcome::Steep;
+            return;
+        }
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        for (std::uint32_t i = 0; i < g.size(); ++i) {
+            ws.inlier[g.begin + i] = scratch.mask[i];
+            if (scratch.mask[i]) sum += ws.grid.points()[g.begin + i];
+        }
+        s.inliers = std::uint32_t(fit.numInliers);
+        s.ground = sum / float(fit.numInliers);
+        s.normal = fit.normal;
     }
 
     void markAmbiguous(detail::Workspace& ws) const {
@@ -288,6 +316,7 @@ private:
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
         es.fewSeeds = 4;  // real scans give dozens (KITTI: 85-169); one or two may be a car's wheels
+        es.pool = ws.pool.get();
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
             const std::size_t c = ws.candidateCell[cand];
             CellState& s = ws.cells[c];
@@ -317,10 +346,15 @@ private:
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
         if (set_.recordRejected) ws.lowestRejected.clear();
+        // recover() reads only the ground cells, which it never changes: every cell on its own.
+        if (set_.recover)
+            ws.forCells(grid.size(), [&](std::size_t begin, std::size_t end, unsigned) {
+                for (std::size_t c = begin; c < end; ++c)
+                    if (ws.cells[c].outcome != CellOutcome::Ground) recover(ws, c);
+            });
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
-            if (set_.recover && s.outcome != CellOutcome::Ground) recover(ws, c);
             if (set_.recordRejected && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
             if (s.outcome == CellOutcome::Ground || s.recovered) {
                 if (s.outcome == CellOutcome::Ground)

@@ -39,6 +39,7 @@ const OptionTable<Params>& table() {
         {"sparsityMedium", &Params::sparsityMedium},
         {"maxGroundHeightDeviation", &Params::maxGroundHeightDeviation},
         {"belowGroundMargin", &Params::belowGroundMargin},
+        {"threads", &Params::threads},
     });
     return t;
 }
@@ -90,6 +91,7 @@ void Params::validate() const {
             "must be >= sparsityLow");
     require(finite(belowGroundMargin) && belowGroundMargin >= 0, "belowGroundMargin", belowGroundMargin,
             "must be >= 0");
+    require(threads >= 1 && threads <= 256, "threads", threads, "must be between 1 and 256");
     require(finite(maxGroundHeightDeviation) && maxGroundHeightDeviation >= 0, "maxGroundHeightDeviation",
             maxGroundHeightDeviation, "must be >= 0");
 }

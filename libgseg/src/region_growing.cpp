@@ -94,13 +94,44 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         if (!queue.empty()) break;
     }
 
+    // Each candidate's neighbours (the search's order, itself excluded, within the gate): searched
+    // when the walk reaches it, or all before the walk on several threads (independent searches).
+    const auto neighboursOf = [&](std::uint32_t c, std::vector<std::uint32_t>& hits, std::vector<std::uint32_t>& out) {
+        search(centroids[c], s.radius, hits);
+        out.clear();
+        for (std::uint32_t j : hits)
+            if (j != c && gated(c, j)) out.push_back(j);
+    };
+    std::vector<std::uint32_t> listStart, lists;  // CSR of the precomputed neighbours
+    if (s.pool && s.pool->threads() > 1) {
+        constexpr std::size_t chunk = 64;
+        const std::size_t n = centroids.size(), parts = (n + chunk - 1) / chunk;
+        std::vector<std::vector<std::uint32_t>> partLists(parts), partCounts(parts);
+        std::vector<std::vector<std::uint32_t>> hits(s.pool->threads()), out(s.pool->threads());
+        s.pool->forRange(n, chunk, [&](std::size_t b, std::size_t e, unsigned t) {
+            auto& list = partLists[b / chunk];
+            auto& counts = partCounts[b / chunk];
+            for (std::size_t c = b; c < e; ++c) {
+                neighboursOf(std::uint32_t(c), hits[t], out[t]);
+                list.insert(list.end(), out[t].begin(), out[t].end());
+                counts.push_back(std::uint32_t(out[t].size()));
+            }
+        });
+        listStart.reserve(n + 1);
+        listStart.push_back(0);
+        for (std::size_t p = 0; p < parts; ++p) {
+            lists.insert(lists.end(), partLists[p].begin(), partLists[p].end());
+            for (std::uint32_t k : partCounts[p]) listStart.push_back(listStart.back() + k);
+        }
+    }
+
     while (!queue.empty()) {
         const std::uint32_t c = queue.front();
         queue.pop_front();
-        search(centroids[c], s.radius, found);
-        neighbours.clear();
-        for (std::uint32_t j : found)
-            if (j != c && gated(c, j)) neighbours.push_back(j);
+        if (listStart.empty())
+            neighboursOf(c, found, neighbours);
+        else
+            neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
         if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
         state[c] = 2;
         for (std::uint32_t j : neighbours)

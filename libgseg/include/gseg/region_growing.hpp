@@ -2,6 +2,8 @@
 /// \file region_growing.hpp
 /// KD-tree ground region expansion over tentative-ground cell centroids (paper step 4).
 
+#include <gseg/fork_join_pool.hpp>
+
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
@@ -27,6 +29,10 @@ struct ExpansionSettings {
     /// sensor whose blind zone hides the ground near the robot); 0: the seed disc only.
     std::size_t fewSeeds = 0;
     double seedSlope = 0.0;  ///< [-] if no candidate passes the seed's gate, it widens by this much per metre of horizontal distance (the robot stands on a slope)
+    /// Optional: with two or more threads, every candidate's neighbours are searched in parallel
+    /// before the (sequential) breadth-first walk; the same neighbours in the same order, so the
+    /// same result as searching each reached candidate during the walk.
+    ForkJoinPool* pool = nullptr;
 };
 
 /// Decides a reached candidate: given its index and its neighbours (candidate indices within
