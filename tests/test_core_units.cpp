@@ -94,7 +94,7 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         columns.build(cloud, idx, 1.5, 1.0, columnOf);
         gseg::Grid plain, byColumn;
         plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
-        byColumn.build(cloud, idx, columns, columnOf, 0.2, -1.9);
+        byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);
         ASSERT_EQ(plain.cells().size(), byColumn.cells().size()) << far;
         EXPECT_EQ(plain.order(), byColumn.order()) << far;
         for (std::size_t c = 0; c < plain.cells().size(); ++c) {
@@ -106,6 +106,7 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
             EXPECT_EQ(columns.iy(std::uint32_t(col)), a.iy);
             EXPECT_GE(c, byColumn.columnCells()[std::size_t(col)]);
             EXPECT_LT(c, byColumn.columnCells()[std::size_t(col) + 1]);
+            EXPECT_EQ(byColumn.cellColumns()[c], std::uint32_t(col));
         }
         for (std::size_t k = 0; k < idx.size(); ++k) {
             const float* p = cloud.point(byColumn.order()[k]);

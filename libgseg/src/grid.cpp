@@ -93,7 +93,7 @@ std::uint64_t columnKey(std::int32_t ix, std::int32_t iy) {
 void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
                         std::vector<std::uint32_t>& columnOf) {
     const std::size_t n = indices.size();
-    columnOf.resize(cloud.size());
+    columnOf.resize(n);
     coords_.resize(2 * n);
     std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
     std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
@@ -116,7 +116,7 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         extY_ = std::int64_t(hi[1]) - lo[1] + 1;
         size_ = std::uint32_t(area);
         for (std::size_t k = 0; k < n; ++k)
-            columnOf[indices[k]] =
+            columnOf[k] =
                 std::uint32_t((std::int64_t(coords_[2 * k]) - lo[0]) * extY_ + (std::int64_t(coords_[2 * k + 1]) - lo[1]));
         return;
     }
@@ -126,7 +126,7 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
     keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
     size_ = std::uint32_t(keys_.size());
     for (std::size_t k = 0; k < n; ++k)
-        columnOf[indices[k]] = std::uint32_t(
+        columnOf[k] = std::uint32_t(
             std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[2 * k], coords_[2 * k + 1])) - keys_.begin());
 }
 
@@ -153,17 +153,18 @@ std::int32_t ColumnIndex::iy(std::uint32_t id) const {
 // Stable counting sort by column, then within each column a stable sort by z cell: the order of
 // build()'s stable sort by (ix, iy, iz).
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
-                 const std::vector<std::uint32_t>& columnOf, double sz, double originZ,
+                 const std::uint32_t* columnOf, double sz, double originZ,
                  const Eigen::Vector3f* pointsOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
     cells_.clear();
+    cellColumns_.clear();
     order_.resize(n);
     points_.resize(n);
     columnCells_.assign(std::size_t(numColumns) + 1, 0);
     if (n == 0) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
-    for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[indices[k]] + 1];
+    for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
     for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
     byColumn_.resize(n);
     byColumnPoints_.resize(n);
@@ -171,7 +172,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     sortedIz_.resize(n);
     for (std::size_t k = 0; k < n; ++k) {
         const std::uint32_t i = indices[k];
-        const std::uint32_t at = counts_[columnOf[i]]++;
+        const std::uint32_t at = counts_[columnOf[k]]++;
         byColumn_[at] = i;
         if (pointsOfIndices) {
             byColumnPoints_[at] = pointsOfIndices[k];
@@ -194,6 +195,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             std::copy(byColumn_.begin() + start, byColumn_.begin() + end, order_.begin() + start);
             std::copy(byColumnPoints_.begin() + start, byColumnPoints_.begin() + end, points_.begin() + start);
             cells_.push_back({ix, iy, lo, start, end});
+            cellColumns_.push_back(c);
             start = end;
             continue;
         }
@@ -226,6 +228,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             std::uint32_t e = s + 1;
             while (e < end && sortedIz_[e] == sortedIz_[s]) ++e;
             cells_.push_back({ix, iy, sortedIz_[s], s, e});
+            cellColumns_.push_back(c);
             s = e;
         }
         start = end;

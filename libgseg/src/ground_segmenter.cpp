@@ -76,9 +76,10 @@ struct CellState {
 struct detail::Workspace {
     Grid grid;  // its points(): the points grouped by cell, aligned with grid.order()
     ColumnIndex columns;                  // the columns (ix, iy) of the finite points, shared by both phases
-    std::vector<std::uint32_t> columnOf;  // per cloud point: its column id (finite points only)
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
+    std::vector<std::uint32_t> inputColumns;          // the column id of each point of input, in its order
     std::vector<Eigen::Vector3f> phase1GroundPoints;  // the points of phase1Ground (Phase II's input), in its order
+    std::vector<std::uint32_t> phase1GroundColumns;   // their column ids
     std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
     // Per thread (Params::threads; [0]: the calling thread): the plane fit's scratch.
     struct ThreadScratch {
@@ -178,15 +179,16 @@ public:
 
     /// `inputPoints` (optional): the points of `input` in its order; `groundPoints` (optional)
     /// receives the points of `ground` likewise (Phase I hands them to Phase II).
-    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const Eigen::Vector3f* inputPoints,
-             std::vector<std::uint32_t>& ground, std::vector<Eigen::Vector3f>* groundPoints, detail::Workspace& ws,
-             PhaseReport& report, bool keepCells) {
+    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const std::uint32_t* inputColumns,
+             const Eigen::Vector3f* inputPoints, std::vector<std::uint32_t>& ground,
+             std::vector<std::uint32_t>* groundColumns, std::vector<Eigen::Vector3f>* groundPoints,
+             detail::Workspace& ws, PhaseReport& report, bool keepCells) {
         report.inputPoints = input.size();
         auto t = Clock::now();
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, ws.columns, ws.columnOf, set_.cellSizeZ, originZ(), inputPoints);
+        ws.grid.build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -196,7 +198,7 @@ public:
         report.ms.refinement = msSince(t);
         expand(ws);  // Step 4: ground region expansion with per-cell checks
         report.ms.expansion = msSince(t);
-        collect(ws, ground, groundPoints, report, keepCells);
+        collect(ws, ground, groundColumns, groundPoints, report, keepCells);
         report.ms.refinement += msSince(t);
     }
 
@@ -338,8 +340,8 @@ private:
         expandRegion(ws.centroids, es, accept, &ws.parents);
     }
 
-    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<Eigen::Vector3f>* groundPoints,
-                 PhaseReport& r, bool keepCells) const {
+    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
+                 std::vector<Eigen::Vector3f>* groundPoints, PhaseReport& r, bool keepCells) const {
         const auto& order = ws.grid.order();
         const auto& grid = ws.grid.cells();
         r.occupiedCells = grid.size();
@@ -365,6 +367,7 @@ private:
                     if (ws.inlier[k]) {
                         ground.push_back(order[k]);
                         if (groundPoints) groundPoints->push_back(ws.grid.points()[k]);
+                        if (groundColumns) groundColumns->push_back(ws.grid.cellColumns()[c]);
                     }
             } else if (s.outcome == CellOutcome::TooFewPoints) {
                 r.unlabelledCellPoints += g.size();
@@ -474,18 +477,20 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     for (std::uint32_t i = 0; i < cloud.size(); ++i)
         if (finitePoint(cloud.point(i))) ws.input.push_back(i);
     r.numNonFinite = cloud.size() - ws.input.size();
-    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.columnOf);
+    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns);
     ws.phase1Ground.clear();
     ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
     ws.phase1GroundPoints.clear();
+    ws.phase1GroundColumns.clear();
     Phase(params, PhaseSettings::first(params))
-        .run(cloud, ws.input, nullptr, ws.phase1Ground, &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
+        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.phase1Ground, &ws.phase1GroundColumns,
+             &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
     Phase(params, PhaseSettings::second(params))
-        .run(cloud, ws.phase1Ground, ws.phase1GroundPoints.data(), ws.phase2Ground, nullptr, ws, r.phase2,
-             keepCellDiagnostics);
+        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), ws.phase2Ground,
+             nullptr, nullptr, ws, r.phase2, keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
     for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);

@@ -38,8 +38,8 @@ struct GridCell {
 /// spread absurdly far) they are the ranks of the occupied columns. Reuses its memory.
 class ColumnIndex {
 public:
-    /// Numbers the columns of the points `indices` of `cloud`; `columnOf[i]` receives the column
-    /// id of cloud point i for every i in `indices` (resized to cloud.size(); other entries unset).
+    /// Numbers the columns of the points `indices` of `cloud`; `columnOf[k]` receives the column
+    /// id of point indices[k] (resized to indices.size()).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
                std::vector<std::uint32_t>& columnOf);
 
@@ -70,13 +70,13 @@ public:
                double sy, double sz, double originZ = 0.0);
 
     /// The same cells as build() (same order, same order() within each cell), from the points'
-    /// columns numbered by `columns` (`columnOf`: ColumnIndex::build()'s) and sx, sy the columns'
-    /// sizes: points are binned per column and only their z cell is computed here. Also fills
-    /// points() and columnCells().
+    /// columns numbered by `columns` (`columnOf[k]`: the column id of indices[k]) and sx, sy the
+    /// columns' sizes: points are binned per column and only their z cell is computed here. Also
+    /// fills points(), columnCells() and cellColumns().
     /// `pointsOfIndices`, if given, holds the points of `indices` in their order (a copy the caller
     /// has at hand, read sequentially instead of the cloud).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
-               const std::vector<std::uint32_t>& columnOf, double sz, double originZ = 0.0,
+               const std::uint32_t* columnOf, double sz, double originZ = 0.0,
                const Eigen::Vector3f* pointsOfIndices = nullptr);
 
     const std::vector<GridCell>& cells() const { return cells_; }
@@ -85,6 +85,8 @@ public:
     /// The cells of column id c are cells()[columnCells()[c] .. columnCells()[c + 1]) (filled by
     /// the ColumnIndex form of build(); size ColumnIndex::size() + 1).
     const std::vector<std::uint32_t>& columnCells() const { return columnCells_; }
+    /// The column id of each cell (filled by the ColumnIndex form of build()).
+    const std::vector<std::uint32_t>& cellColumns() const { return cellColumns_; }
     /// Point indices (into the cloud) grouped by cell: cell c owns order()[c.begin .. c.end).
     const std::vector<std::uint32_t>& order() const { return order_; }
 
@@ -95,7 +97,7 @@ private:
     std::vector<std::uint32_t> keys_, counts_;
     std::vector<std::uint64_t> sortKeys_;
     std::vector<Eigen::Vector3f> points_, byColumnPoints_;
-    std::vector<std::uint32_t> columnCells_, byColumn_;
+    std::vector<std::uint32_t> columnCells_, cellColumns_, byColumn_;
     std::vector<std::int32_t> iz_, sortedIz_;
 };
 
