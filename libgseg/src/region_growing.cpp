@@ -20,13 +20,14 @@ inline float squaredDistance(const Eigen::Vector3f& q, const Eigen::Vector3f& p)
     return r;
 }
 
-// The centroids binned in square columns a little wider than the search radius (x, y): every
-// neighbour of a centroid lies in the 3 x 3 columns around its own. Dense over the centroids'
-// bounding box, or, where that box is absurdly large for their number, a sorted list of occupied
-// columns searched by bisection.
+// The centroids binned in square columns of half the search radius (a little more) in x, y: every
+// neighbour of a centroid lies in the 5 x 5 columns around its own. Their coordinates are kept
+// column by column in separate x, y, z arrays (a column's distance tests read contiguous memory).
+// Columns are found in a dense table over the centroids' bounding box or, where that box is
+// absurdly large for their number, by bisection in the sorted column keys.
 class CentroidColumns {
 public:
-    CentroidColumns(const std::vector<Eigen::Vector3f>& pts, double radius) : pts_(pts), size_(radius * 1.001) {
+    CentroidColumns(const std::vector<Eigen::Vector3f>& pts, double radius) : size_(radius * 0.5 * 1.001) {
         const std::size_t n = pts.size();
         std::int64_t lo[2] = {std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max()};
         std::int64_t hi[2] = {std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::min()};
@@ -40,38 +41,50 @@ public:
         lo_[0] = lo[0], lo_[1] = lo[1];
         w_ = hi[0] - lo[0] + 1, h_ = hi[1] - lo[1] + 1;
         dense_ = double(w_) * double(h_) <= 4.0 * double(n) + 4096.0;
+        items_.resize(n);
         if (dense_) {
             start_.assign(std::size_t(w_ * h_) + 1, 0);
             for (const auto& k : keys_) ++start_[std::size_t(index(k.first, k.second)) + 1];
             for (std::size_t b = 1; b < start_.size(); ++b) start_[b] += start_[b - 1];
-            items_.resize(n);
             std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
             for (std::uint32_t i = 0; i < n; ++i) items_[fill[std::size_t(index(keys_[i].first, keys_[i].second))]++] = i;
         } else {
-            sorted_.resize(n);
-            for (std::uint32_t i = 0; i < n; ++i) sorted_[i] = {keys_[i], i};
-            std::sort(sorted_.begin(), sorted_.end());
+            for (std::uint32_t i = 0; i < n; ++i) items_[i] = i;
+            std::stable_sort(items_.begin(), items_.end(), [&](std::uint32_t a, std::uint32_t b) { return keys_[a] < keys_[b]; });
+            sortedKeys_.resize(n);
+            for (std::size_t t = 0; t < n; ++t) sortedKeys_[t] = keys_[items_[t]];
+        }
+        x_.resize(n), y_.resize(n), z_.resize(n);
+        for (std::size_t t = 0; t < n; ++t) {
+            const Eigen::Vector3f& p = pts[items_[t]];
+            x_[t] = p.x(), y_[t] = p.y(), z_[t] = p.z();
         }
     }
 
-    /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, q being
+    /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
     /// centroid `from` (radiusSq at most the square of the radius given at construction).
     template <class F>
-    void near(std::uint32_t from, float radiusSq, F&& f) const {
-        const Eigen::Vector3f& q = pts_[from];
+    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
         const auto& k = keys_[from];
-        for (std::int64_t cx = k.first - 1; cx <= k.first + 1; ++cx)
-            for (std::int64_t cy = k.second - 1; cy <= k.second + 1; ++cy) {
+        for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
+            for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
+                std::size_t b = 0, e = 0;
                 if (dense_) {
                     if (cx < lo_[0] || cy < lo_[1] || cx >= lo_[0] + w_ || cy >= lo_[1] + h_) continue;
-                    const std::size_t b = std::size_t(index(cx, cy));
-                    for (std::uint32_t t = start_[b]; t < start_[b + 1]; ++t)
-                        if (squaredDistance(q, pts_[items_[t]]) < radiusSq) f(items_[t]);
+                    const std::size_t c = std::size_t(index(cx, cy));
+                    b = start_[c], e = start_[c + 1];
                 } else {
-                    const std::pair<std::int64_t, std::int64_t> key{cx, cy};
-                    for (auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::make_pair(key, std::uint32_t(0)));
-                         it != sorted_.end() && it->first == key; ++it)
-                        if (squaredDistance(q, pts_[it->second]) < radiusSq) f(it->second);
+                    const auto range = std::equal_range(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy));
+                    b = std::size_t(range.first - sortedKeys_.begin()), e = std::size_t(range.second - sortedKeys_.begin());
+                }
+                for (std::size_t t = b; t < e; ++t) {
+                    // squaredDistance(q, p), term by term in the same order
+                    const float dx = q.x() - x_[t], dy = q.y() - y_[t], dz = q.z() - z_[t];
+                    float r = 0.f;
+                    r += dx * dx;
+                    r += dy * dy;
+                    r += dz * dz;
+                    if (r < radiusSq) f(items_[t]);
                 }
             }
     }
@@ -83,13 +96,12 @@ private:
     }
     std::int64_t index(std::int64_t cx, std::int64_t cy) const { return (cx - lo_[0]) * h_ + (cy - lo_[1]); }
 
-    const std::vector<Eigen::Vector3f>& pts_;
     double size_;
     bool dense_ = true;
     std::int64_t lo_[2] = {0, 0}, w_ = 0, h_ = 0;
-    std::vector<std::pair<std::int64_t, std::int64_t>> keys_;
+    std::vector<std::pair<std::int64_t, std::int64_t>> keys_, sortedKeys_;
     std::vector<std::uint32_t> start_, items_;
-    std::vector<std::pair<std::pair<std::int64_t, std::int64_t>, std::uint32_t>> sorted_;
+    std::vector<float> x_, y_, z_;
 };
 
 }  // namespace
@@ -160,7 +172,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     // through accepted ones is reached in any order.
     const auto neighboursOf = [&](std::uint32_t c, std::vector<std::uint32_t>& out) {
         out.clear();
-        columns.near(c, radiusSq, [&](std::uint32_t j) {
+        columns.near(centroids[c], c, radiusSq, [&](std::uint32_t j) {
             if (j != c && gated(c, j)) out.push_back(j);
         });
     };
