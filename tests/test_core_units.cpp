@@ -79,7 +79,7 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         std::mt19937 rng(11);
         std::uniform_real_distribution<float> u(-20, 20);
         std::vector<float> xyz;
-        for (int i = 0; i < 3000; ++i) xyz.insert(xyz.end(), {u(rng), u(rng), u(rng) * 0.1f});
+        for (int i = 0; i < 20000; ++i) xyz.insert(xyz.end(), {u(rng), u(rng), u(rng) * 0.1f});  // several chunks of the pool
         for (int i = 0; i < 50; ++i) xyz.insert(xyz.end(), {3.2f, -4.1f, u(rng) * 40.f});  // a tall column
         for (int i = 0; i < 5; ++i) xyz.insert(xyz.end(), {-7.3f, 8.6f, 0.05f});          // one z cell
         if (far) xyz.insert(xyz.end(), {1e7f, -1e7f, 1e6f});
@@ -92,6 +92,12 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         gseg::ColumnIndex columns;
         std::vector<std::uint32_t> columnOf;
         columns.build(cloud, idx, 1.5, 1.0, columnOf);
+        gseg::ForkJoinPool pool(3);  // the same ids with the per-point work on three threads
+        std::vector<std::uint32_t> columnOfPooled;
+        gseg::ColumnIndex pooled;
+        pooled.build(cloud, idx, 1.5, 1.0, columnOfPooled, &pool);
+        EXPECT_EQ(columnOfPooled, columnOf) << far;
+        EXPECT_EQ(pooled.size(), columns.size()) << far;
         gseg::Grid plain, byColumn;
         plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
         byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);

@@ -91,18 +91,39 @@ std::uint64_t columnKey(std::int32_t ix, std::int32_t iy) {
 }  // namespace
 
 void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
-                        std::vector<std::uint32_t>& columnOf) {
+                        std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool) {
     const std::size_t n = indices.size();
     columnOf.resize(n);
     coords_.resize(2 * n);
+    // Runs body(begin, end) over [0, n), in chunks on the pool's threads where there is one.
+    constexpr std::size_t kChunk = 8192;
+    const auto forPoints = [&](auto&& body) {
+        if (pool && pool->threads() > 1)
+            pool->forRange(n, kChunk, [&](std::size_t b, std::size_t e, unsigned) { body(b, e); });
+        else
+            body(std::size_t(0), n);
+    };
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    bounds_.assign(4 * std::max<std::size_t>(chunks, 1), 0);
+    for (std::size_t c = 0; c < bounds_.size(); c += 4) {
+        bounds_[c] = bounds_[c + 1] = std::numeric_limits<std::int32_t>::max();
+        bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
+    }
+    forPoints([&](std::size_t b, std::size_t e) {
+        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
+        for (std::size_t k = b; k < e; ++k) {
+            const float* p = cloud.point(indices[k]);
+            const std::int32_t cx = cellCoord(p[0], sx), cy = cellCoord(p[1], sy);
+            coords_[2 * k] = cx, coords_[2 * k + 1] = cy;
+            box[0] = std::min(box[0], cx), box[2] = std::max(box[2], cx);
+            box[1] = std::min(box[1], cy), box[3] = std::max(box[3], cy);
+        }
+    });
     std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
     std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
-    for (std::size_t k = 0; k < n; ++k) {
-        const float* p = cloud.point(indices[k]);
-        const std::int32_t cx = cellCoord(p[0], sx), cy = cellCoord(p[1], sy);
-        coords_[2 * k] = cx, coords_[2 * k + 1] = cy;
-        lo[0] = std::min(lo[0], cx), hi[0] = std::max(hi[0], cx);
-        lo[1] = std::min(lo[1], cy), hi[1] = std::max(hi[1], cy);
+    for (std::size_t c = 0; c < bounds_.size(); c += 4) {
+        lo[0] = std::min(lo[0], bounds_[c]), lo[1] = std::min(lo[1], bounds_[c + 1]);
+        hi[0] = std::max(hi[0], bounds_[c + 2]), hi[1] = std::max(hi[1], bounds_[c + 3]);
     }
     keys_.clear();
     if (n == 0) {
@@ -115,9 +136,11 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         lo_[0] = lo[0], lo_[1] = lo[1];
         extY_ = std::int64_t(hi[1]) - lo[1] + 1;
         size_ = std::uint32_t(area);
-        for (std::size_t k = 0; k < n; ++k)
-            columnOf[k] =
-                std::uint32_t((std::int64_t(coords_[2 * k]) - lo[0]) * extY_ + (std::int64_t(coords_[2 * k + 1]) - lo[1]));
+        forPoints([&](std::size_t b, std::size_t e) {
+            for (std::size_t k = b; k < e; ++k)
+                columnOf[k] = std::uint32_t((std::int64_t(coords_[2 * k]) - lo[0]) * extY_ +
+                                            (std::int64_t(coords_[2 * k + 1]) - lo[1]));
+        });
         return;
     }
     keys_.resize(n);

@@ -175,7 +175,7 @@ struct PhaseSettings {
 /// taking part, and reflections below the ground flagged (below_ground.hpp).
 class Phase {
 public:
-    Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings) {}
+    Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings), slope_(p) {}
 
     /// `inputPoints` (optional): the points of `input` in its order; `groundPoints` (optional)
     /// receives the points of `ground` likewise (Phase I hands them to Phase II).
@@ -216,7 +216,7 @@ private:
     void classifyOne(detail::Workspace& ws, std::size_t c) const {
         const auto& pts = ws.grid.points();
         const GridCell& g = ws.grid.cells()[c];
-        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_);
+        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_);
         CellState& s = ws.cells[c];
         s.cellClass = cls.cellClass;
         s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
@@ -450,6 +450,7 @@ private:
 
     const Params& p_;
     const PhaseSettings set_;
+    const SlopeLimit slope_;
 };
 
 }  // namespace
@@ -477,7 +478,7 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     for (std::uint32_t i = 0; i < cloud.size(); ++i)
         if (finitePoint(cloud.point(i))) ws.input.push_back(i);
     r.numNonFinite = cloud.size() - ws.input.size();
-    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns);
+    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
     ws.phase1Ground.clear();
     ws.phase2Ground.clear();
 

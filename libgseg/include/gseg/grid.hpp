@@ -2,6 +2,7 @@
 /// \file grid.hpp
 /// Binning of points into axis-aligned cells, indexed with floor (never truncation).
 
+#include <gseg/fork_join_pool.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <Eigen/Core>
@@ -40,8 +41,9 @@ class ColumnIndex {
 public:
     /// Numbers the columns of the points `indices` of `cloud`; `columnOf[k]` receives the column
     /// id of point indices[k] (resized to indices.size()).
+    /// `pool` (optional): the per-point work in parallel (the same ids).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
-               std::vector<std::uint32_t>& columnOf);
+               std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool = nullptr);
 
     /// Number of column ids (ids are 0 .. size() - 1).
     std::uint32_t size() const { return size_; }
@@ -58,6 +60,7 @@ private:
     std::uint32_t size_ = 0;
     std::vector<std::uint64_t> keys_;    // sparse ids: sorted keys of the occupied columns
     std::vector<std::int32_t> coords_;   // ix, iy per input position (scratch)
+    std::vector<std::int32_t> bounds_;   // per chunk of points: their columns' bounding box (scratch)
 };
 
 /// A 3-D grid of occupied cells, rebuilt per scan. Cells come sorted by (ix, iy, iz), so the cells
