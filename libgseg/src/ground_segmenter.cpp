@@ -99,7 +99,7 @@ struct detail::Workspace {
     }
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
-    std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
+    std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (the expansion's points)
     // Per column (ix, iy), in the cells' (signed) column order: the lowest z of a point Phase I
     // called non-ground (points of cells too small to classify excepted). Phase II sees only Phase
     // I's ground, so this is how it knows what stands below its cells.
@@ -163,7 +163,8 @@ struct PhaseSettings {
 ///   slope limit must hold more than minGroundInlierRatio of the cell.
 /// - Algorithm 1 sparsity buckets and the ambiguous-cell rule [paper; bucket limits: authors']. Ours: only
 ///   a population of at least minPointsPerCell outliers can make a cell ambiguous.
-/// - Step 4, region expansion over a KD-tree of centroids [paper]. Ours: the seed is the candidates
+/// - Step 4, region expansion over the centroids within a radius [paper: a KD-tree; ours: columns of
+///   centroids, the same neighbours, region_growing.cpp]. Ours: the seed is the candidates
 ///   near the robot at ground level (seedHeightTolerance) instead of synthetic points, with the
 ///   few-seeds disc (fewer than 4 seeds: also those just beyond the nearest candidate) and the
 ///   tolerance widening with the slope; the height gate measured along the fitted planes.

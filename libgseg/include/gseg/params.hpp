@@ -42,7 +42,7 @@ struct Params {
 
     // --- ground region expansion ------------------------------------------------------------------
     double seedHeightTolerance = 0.3;   ///< [m] expansion starts from the candidates within robotRadius + centroidSearchRadius whose ground lies within this of -distToGround (both phases; if fewer than 4 do, also those within robotRadius + centroidSearchRadius beyond the nearest candidate: a sensor whose blind zone hides the ground near the robot; if none does, the tolerance widens at slopeThresholdDegrees with the distance: the robot stands on a slope)
-    double centroidSearchRadius = 5.0;  ///< [m] radius of the KD-tree search between ground-candidate centroids
+    double centroidSearchRadius = 5.0;  ///< [m] radius of the neighbour search between ground-candidate centroids (the paper's KD-tree search)
     double heightGate = 0.1;            ///< [m] Phase II (tau): a neighbour is taken only if the step between the two ground centroids, measured along both cells' fitted ground planes (height for line and small cells), is at most this
     bool recoverNearGround = true;      ///< Phase I: points of non-ground cells that lie on the ground plane of a ground cell beside them (or one level below) go on to Phase II
     double recoveryThreshold = 0.1;     ///< [m] point-to-plane distance of such a recovered point

@@ -1,6 +1,8 @@
 #pragma once
 /// \file region_growing.hpp
-/// KD-tree ground region expansion over tentative-ground cell centroids (paper step 4).
+/// Ground region expansion over tentative-ground cell centroids (paper step 4): the paper's KD-tree
+/// radius search, done in columns of centroids (the same neighbours: the squared distance in float
+/// below the squared radius, as nanoflann's L2 metric).
 
 #include <gseg/fork_join_pool.hpp>
 
