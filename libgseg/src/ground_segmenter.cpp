@@ -320,6 +320,8 @@ private:
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
         es.fewSeeds = 4;  // real scans give dozens (KITTI: 85-169); one or two may be a car's wheels
         es.pool = ws.pool.get();
+        // Only the ambiguous-cell rule reads the neighbours (the lowest of them).
+        es.needsNeighbours = [&](std::uint32_t cand) { return ws.cells[ws.candidateCell[cand]].ambiguous; };
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
             const std::size_t c = ws.candidateCell[cand];
             CellState& s = ws.cells[c];

@@ -65,6 +65,12 @@ public:
     /// centroid `from` (radiusSq at most the square of the radius given at construction).
     template <class F>
     void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
+        near(q, from, radiusSq, [](std::uint32_t) { return false; }, f);
+    }
+
+    /// The same, leaving out the centroids j with skip(j) true before their distance is computed.
+    template <class Skip, class F>
+    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, Skip&& skip, F&& f) const {
         const auto& k = keys_[from];
         for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
             for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
@@ -78,6 +84,7 @@ public:
                     b = std::size_t(range.first - sortedKeys_.begin()), e = std::size_t(range.second - sortedKeys_.begin());
                 }
                 for (std::size_t t = b; t < e; ++t) {
+                    if (skip(items_[t])) continue;
                     // squaredDistance(q, p), term by term in the same order
                     const float dx = q.x() - x_[t], dy = q.y() - y_[t], dz = q.z() - z_[t];
                     float r = 0.f;
@@ -186,7 +193,10 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
             auto& list = partLists[b / chunk];
             auto& counts = partCounts[b / chunk];
             for (std::size_t c = b; c < e; ++c) {
-                neighboursOf(std::uint32_t(c), out[t]);
+                if (s.needsNeighbours && !s.needsNeighbours(std::uint32_t(c)))
+                    out[t].clear();  // searched during the walk, if ever
+                else
+                    neighboursOf(std::uint32_t(c), out[t]);
                 list.insert(list.end(), out[t].begin(), out[t].end());
                 counts.push_back(std::uint32_t(out[t].size()));
             }
@@ -199,21 +209,36 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         }
     }
 
+    const auto reach = [&](std::uint32_t c, std::uint32_t j) {
+        state[j] = 1;
+        queue.push_back(j);
+        if (parents) (*parents)[j] = std::int32_t(c);
+    };
     while (!queue.empty()) {
         const std::uint32_t c = queue.front();
         queue.pop_front();
-        if (listStart.empty())
-            neighboursOf(c, neighbours);
-        else
-            neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
+        if (!s.needsNeighbours || s.needsNeighbours(c)) {
+            if (!listStart.empty())
+                neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
+            else
+                neighboursOf(c, neighbours);
+        } else {
+            // accept() does not look at this candidate's neighbours: decide first, then visit only
+            // the neighbours not reached yet (the same ones, in the same order, as from the list).
+            neighbours.clear();
+            if (!accept(c, neighbours)) continue;
+            state[c] = 2;
+            columns.near(
+                centroids[c], c, radiusSq, [&](std::uint32_t j) { return state[j] != 0; },
+                [&](std::uint32_t j) {
+                    if (j != c && gated(c, j)) reach(c, j);
+                });
+            continue;
+        }
         if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
         state[c] = 2;
         for (std::uint32_t j : neighbours)
-            if (state[j] == 0) {
-                state[j] = 1;
-                queue.push_back(j);
-                if (parents) (*parents)[j] = std::int32_t(c);
-            }
+            if (state[j] == 0) reach(c, j);
     }
     return state;
 }

@@ -31,10 +31,15 @@ struct ExpansionSettings {
     /// sensor whose blind zone hides the ground near the robot); 0: the seed disc only.
     std::size_t fewSeeds = 0;
     double seedSlope = 0.0;  ///< [-] if no candidate passes the seed's gate, it widens by this much per metre of horizontal distance (the robot stands on a slope)
-    /// Optional: with two or more threads, every candidate's neighbours are searched in parallel
+    /// Optional: with two or more threads, the candidates' neighbours are searched in parallel
     /// before the (sequential) breadth-first walk; the same neighbours in the same order, so the
     /// same result as searching each reached candidate during the walk.
     ForkJoinPool* pool = nullptr;
+    /// Optional: whether `accept` looks at a candidate's neighbours (only those get a list, searched
+    /// beforehand where there is a pool). A candidate
+    /// for which it returns false is decided with an empty list, and only if accepted are its
+    /// neighbours searched, skipping those already reached: the same walk, with less searching.
+    std::function<bool(std::uint32_t candidate)> needsNeighbours;
 };
 
 /// Decides a reached candidate: given its index and its neighbours (candidate indices within
