@@ -11,7 +11,7 @@ e.g. tools/bench_compare.py build/bin/gseg /work/ref/build/bin/gseg --rounds 5 -
 Rounds alternate which build runs first (A B, B A, ...), so a slow spell of the machine hits both.
 Each build is named by its `--version` and the commit of the source tree its build folder was
 configured from (CMakeCache.txt's CMAKE_HOME_DIRECTORY; "+changes" if that tree has uncommitted
-changes). Per build: "median" is the median over rounds of each run's median (bench's "all scans"
+changes, Markdown files aside). Per build: "median" is the median over rounds of each run's median (bench's "all scans"
 line), "p90" likewise, "min" the minimum over rounds; steps are medians over rounds of each run's
 step medians; peak memory the largest of the runs. Exit code: 0 done, 1 a run failed (its output
 is shown), 2 bad usage.
@@ -42,8 +42,8 @@ def name_of(gseg):
         src = next((l.split("=", 1)[1].strip() for l in open(cache) if l.startswith("CMAKE_HOME_DIRECTORY")), None)
         if src:
             rev = subprocess.run(["git", "-C", src, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
-            dirty = subprocess.run(["git", "-C", src, "status", "--porcelain", "--untracked-files=no"],
-                                   capture_output=True, text=True).stdout.strip()
+            dirty = subprocess.run(["git", "-C", src, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                    ":(exclude)*.md"], capture_output=True, text=True).stdout.strip()
             if rev.returncode == 0:
                 commit = f"commit {rev.stdout.strip()}{'+changes' if dirty else ''} ({src})"
     return f"{version}, {commit}"
@@ -86,7 +86,10 @@ def main():
     if len(mine) != 2 or rounds < 1:
         usage("give two gseg executables and --rounds >= 1")
     builds = [{"gseg": g, "name": name_of(g), "runs": []} for g in mine]
-    print(f"bench_compare: {rounds} round(s) of `gseg bench {' '.join(bench_args)}`, alternating")
+    scans = [a for a in bench_args if os.path.isfile(a) and a.endswith((".bin", ".ply", ".rawlog"))]
+    others = [a for a in bench_args if a not in scans]
+    print(f"bench_compare: {rounds} round(s) of `gseg bench` on {len(scans)} scan(s) ({' '.join(others)}), "
+          "alternating")
     for i, b in enumerate(builds):
         print(f"  build {'AB'[i]}: {b['gseg']}: {b['name']}")
     for r in range(rounds):
