@@ -1,6 +1,7 @@
 // The core's search steps checked against brute force on seeded random inputs (#17 item 7): the
 // region growing's KD-tree neighbour search and breadth-first expansion against an O(n^2) search,
 // and the RANSAC plane fit against an exhaustive search over every triple of a small input.
+#include <gseg/fork_join_pool.hpp>
 #include <gseg/params.hpp>
 #include <gseg/plane_fit.hpp>
 #include <gseg/region_growing.hpp>
@@ -35,11 +36,21 @@ bool acceptRule(std::uint32_t c) { return c % 3 != 0; }
 
 }  // namespace
 
+// Four ways (#21): as it is; with a centroid absurdly far away (the sparse column search); with
+// every neighbour list searched beforehand on a pool of three threads; with the neighbours of odd
+// candidates searched only once they are accepted (needsNeighbours).
 TEST(RegionGrowingReference, NeighboursAndReachedCellsEqualAnExhaustiveSearch) {
-    for (std::uint32_t seed = 1; seed <= 20; ++seed) {
+    gseg::ForkJoinPool pool(3);
+    for (std::uint32_t run = 0; run < 80; ++run) {
+        const std::uint32_t seed = 1 + run % 20;
+        const int mode = int(run / 20);  // 0 plain, 1 far centroid, 2 pool, 3 lazy
         std::mt19937 rng(seed);
-        const std::vector<Eigen::Vector3f> c = randomCentroids(rng, 300 + 20 * seed);
+        std::vector<Eigen::Vector3f> c = randomCentroids(rng, 300 + 20 * seed);
+        if (mode == 1) c.emplace_back(1e7f, -1e7f, -1.73f);
         gseg::ExpansionSettings s;
+        if (mode == 2) s.pool = &pool;
+        if (mode == 3) s.needsNeighbours = [](std::uint32_t i) { return i % 2 == 0; };
+        if (mode == 3 && seed % 2) s.pool = &pool;  // lists searched beforehand for the even ones
         s.seed = {0.f, 0.f, -1.73f};
         s.seedRadius = 7.7;
         s.radius = 4.0;
@@ -75,11 +86,15 @@ TEST(RegionGrowingReference, NeighboursAndReachedCellsEqualAnExhaustiveSearch) {
         EXPECT_EQ(state, expected) << "seed " << seed;
         std::size_t accepted = 0;
         for (const auto& [i, nb] : seen) {
+            accepted += acceptRule(i);
+            if (mode == 3 && i % 2) {
+                EXPECT_TRUE(nb.empty()) << "a candidate that needs no neighbours got some";
+                continue;
+            }
             const std::set<std::uint32_t> got(nb.begin(), nb.end());
             const std::vector<std::uint32_t> ref = neighbours(i);
             EXPECT_EQ(got, std::set<std::uint32_t>(ref.begin(), ref.end())) << "seed " << seed << ", candidate " << i;
             EXPECT_EQ(got.size(), nb.size()) << "a neighbour listed twice";
-            accepted += acceptRule(i);
         }
         EXPECT_EQ(seen.size(), std::size_t(std::count_if(expected.begin(), expected.end(), [](std::uint8_t v) { return v > 0; })))
             << "every reached candidate is decided exactly once";

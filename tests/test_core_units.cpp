@@ -2,6 +2,7 @@
 // ground in isolation.
 #include <gseg/below_ground.hpp>
 #include <gseg/cell_classifier.hpp>
+#include <gseg/fork_join_pool.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/params.hpp>
 #include <gseg/plane_fit.hpp>
@@ -13,6 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
+#include <stdexcept>
 #include <random>
 
 // --- grid --------------------------------------------------------------------------------------
@@ -65,6 +68,95 @@ TEST(Grid, SparseFallbackMatchesDensePath) {
         const auto &a = dense.cells()[c], &b = sparse.cells()[c];
         EXPECT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end));
     }
+}
+
+// The ColumnIndex form of Grid::build (#21: columns numbered once per scan) gives the cells and the
+// point order of the plain form, on a shuffled subset with negative coordinates, tall columns
+// (z-cell ranges beyond the counting sort's), a column with one z cell, and the sparse column ids
+// of points spread absurdly far; columnCells() and find() agree with the cells.
+TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
+    for (const bool far : {false, true}) {
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<float> u(-20, 20);
+        std::vector<float> xyz;
+        for (int i = 0; i < 20000; ++i) xyz.insert(xyz.end(), {u(rng), u(rng), u(rng) * 0.1f});  // several chunks of the pool
+        for (int i = 0; i < 50; ++i) xyz.insert(xyz.end(), {3.2f, -4.1f, u(rng) * 40.f});  // a tall column
+        for (int i = 0; i < 5; ++i) xyz.insert(xyz.end(), {-7.3f, 8.6f, 0.05f});          // one z cell
+        if (far) xyz.insert(xyz.end(), {1e7f, -1e7f, 1e6f});
+        const std::uint32_t n = std::uint32_t(xyz.size() / 3);
+        const gseg::PointCloudView cloud(xyz.data(), n);
+        std::vector<std::uint32_t> idx;
+        for (std::uint32_t i = 0; i < n; ++i)
+            if (i % 7 != 3) idx.push_back(i);
+        std::shuffle(idx.begin(), idx.end(), rng);
+        gseg::ColumnIndex columns;
+        std::vector<std::uint32_t> columnOf;
+        columns.build(cloud, idx, 1.5, 1.0, columnOf);
+        gseg::ForkJoinPool pool(3);  // the same ids with the per-point work on three threads
+        std::vector<std::uint32_t> columnOfPooled;
+        gseg::ColumnIndex pooled;
+        pooled.build(cloud, idx, 1.5, 1.0, columnOfPooled, &pool);
+        EXPECT_EQ(columnOfPooled, columnOf) << far;
+        EXPECT_EQ(pooled.size(), columns.size()) << far;
+        gseg::Grid plain, byColumn;
+        plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
+        byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);
+        ASSERT_EQ(plain.cells().size(), byColumn.cells().size()) << far;
+        EXPECT_EQ(plain.order(), byColumn.order()) << far;
+        for (std::size_t c = 0; c < plain.cells().size(); ++c) {
+            const auto &a = plain.cells()[c], &b = byColumn.cells()[c];
+            ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
+            const std::int64_t col = columns.find(a.ix, a.iy);
+            ASSERT_GE(col, 0);
+            EXPECT_EQ(columns.ix(std::uint32_t(col)), a.ix);
+            EXPECT_EQ(columns.iy(std::uint32_t(col)), a.iy);
+            EXPECT_GE(c, byColumn.columnCells()[std::size_t(col)]);
+            EXPECT_LT(c, byColumn.columnCells()[std::size_t(col) + 1]);
+            EXPECT_EQ(byColumn.cellColumns()[c], std::uint32_t(col));
+        }
+        for (std::size_t k = 0; k < idx.size(); ++k) {
+            const float* p = cloud.point(byColumn.order()[k]);
+            EXPECT_EQ(byColumn.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
+        }
+        EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
+    }
+}
+
+// --- the intra-scan pool -----------------------------------------------------------------------
+
+TEST(ForkJoinPool, RunsEveryPartOnceOnEveryThreadCountAndAgain) {
+    for (unsigned threads : {1u, 2u, 3u, 8u}) {
+        gseg::ForkJoinPool pool(threads);
+        EXPECT_EQ(pool.threads(), threads);
+        for (int round = 0; round < 50; ++round) {  // the same threads, run after run
+            std::vector<int> hits(1000, 0);
+            std::vector<unsigned> by(1000, 99);
+            pool.forRange(hits.size(), 7, [&](std::size_t b, std::size_t e, unsigned t) {
+                for (std::size_t i = b; i < e; ++i) ++hits[i], by[i] = t;
+            });
+            ASSERT_EQ(std::count(hits.begin(), hits.end(), 1), 1000) << threads;
+            ASSERT_TRUE(std::all_of(by.begin(), by.end(), [&](unsigned t) { return t < threads; }));
+        }
+        pool.run(0, [](std::size_t, unsigned) { FAIL() << "no part to run"; });
+    }
+}
+
+TEST(ForkJoinPool, RethrowsTheLowestFailingPartAfterAllParts) {
+    gseg::ForkJoinPool pool(3);
+    std::vector<int> ran(64, 0);
+    try {
+        pool.run(64, [&](std::size_t p, unsigned) {
+            ran[p] = 1;
+            if (p == 40 || p == 9 || p == 63) throw std::runtime_error("part " + std::to_string(p));
+        });
+        FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "part 9");
+    }
+    EXPECT_EQ(std::count(ran.begin(), ran.end(), 1), 64);
+    int after = 0;
+    pool.run(5, [&](std::size_t, unsigned) { static std::mutex m; std::lock_guard<std::mutex> l(m); ++after; });
+    EXPECT_EQ(after, 5);  // usable after an error
 }
 
 // --- params ------------------------------------------------------------------------------------

@@ -162,7 +162,7 @@ TEST(Scenes, OtherSensorHeights) {
 
 // A fixed distToGround that the scan contradicts is said (the tools check their first scan). On
 // these flat scenes the seed's widening tolerance still finds the ground; on real scans it often
-// does not (the VLP-16 scan of mrpt-common with the KITTI height: 0.7 % ground, test_ground_filter).
+// does not (the VLP-16 scan of mrpt-common with the KITTI height: 0.6 % ground, test_ground_filter).
 TEST(Scenes, AWrongFixedSensorHeightIsSaid) {
     for (const double h : {0.8, 2.5}) {
         Scene s;

@@ -59,10 +59,11 @@ struct Input {
 /// scan, outside the timing; points with NaN or infinite coordinates are labelled non-ground by
 /// the segmenter, uncounted in its work). A scan with no point cannot be timed and is listed in
 /// `skipped`.
-std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config,
+std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config, int threadsPerScan,
                               std::vector<std::string>& skipped) {
     ::gseg::mrpt::LoadedConfig cfg;
     if (!config.empty()) cfg = ::gseg::mrpt::loadConfig(config);
+    if (threadsPerScan > 0) cfg.params.threads = threadsPerScan;
     tools::detail("parameters (%s):\n%s", config.empty() ? "library defaults" : config.c_str(),
                   ::gseg::mrpt::toYaml(cfg).c_str());
     std::vector<Input> inputs;
@@ -169,18 +170,19 @@ void printSteps(const std::vector<Sample>& all) {
                 column(all, [](const Sample& s) { return s.p2.total(); }).median);
 }
 
-int run(const std::vector<std::string>& paths, const std::string& config, int repeat, int threads) {
+int run(const std::vector<std::string>& paths, const std::string& config, int repeat, int threads, int threadsPerScan) {
     std::vector<std::string> skipped;
-    const std::vector<Input> inputs = loadInputs(paths, config, skipped);
+    const std::vector<Input> inputs = loadInputs(paths, config, threadsPerScan, skipped);
     if (inputs.empty()) throw std::runtime_error("no scan to time (" + std::to_string(skipped.size()) + " skipped)");
     std::size_t points = 0;
     for (const auto& in : inputs) points += in.scan.size();
     const bool perScanParams = std::any_of(inputs.begin(), inputs.end(), [&](const Input& in) {
         return in.params.distToGround != inputs.front().params.distToGround;
     });
-    tools::say("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s); build: %s; "
+    tools::say("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s), %d thread(s) per scan; build: %s; "
                 "%u hardware threads\n",
-                inputs.size(), points, repeat, threads, kBuild, std::thread::hardware_concurrency());
+                inputs.size(), points, repeat, threads, inputs.front().params.threads, kBuild,
+                std::thread::hardware_concurrency());
 
     double wallS = 0;
     const auto perScan = timeAll(inputs, repeat, threads, perScanParams, wallS);
@@ -217,7 +219,10 @@ int runBench(int argc, char** argv) {
     TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameter file", false, "", "FILE", cmd);
     TCLAP::ValueArg<int> rep("", "repeat", "timed passes over all scans (default 20)", false, 20, "N", cmd);
     TCLAP::ValueArg<int> thr("", "threads", "N independent segmenters on N threads, each timing every scan "
-                             "(default 1)", false, 1, "N", cmd);
+                             "(scan-level parallelism; default 1)", false, 1, "N", cmd);
+    TCLAP::ValueArg<int> perScan("", "threads-per-scan", "threads working on one scan (the parameter threads: "
+                                 "cells and neighbour searches in parallel; overrides the config's; default: the "
+                                 "config's, else 1)", false, 0, "N", cmd);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     std::vector<std::string> scans = input.getValue();
     scans.insert(scans.end(), scanArgs.getValue().begin(), scanArgs.getValue().end());
@@ -226,8 +231,10 @@ int runBench(int argc, char** argv) {
     if (scans.empty()) return line.usageError("no scan to time: give -i SCAN (repeatable)");
     if (repeat < 1 || threads < 1 || threads > 256)
         return line.usageError("--repeat must be >= 1 and --threads between 1 and 256");
+    if (perScan.isSet() && (perScan.getValue() < 1 || perScan.getValue() > 256))
+        return line.usageError("--threads-per-scan must be between 1 and 256");
     try {
-        return run(scans, config, repeat, threads);
+        return run(scans, config, repeat, threads, perScan.getValue());
     } catch (const std::exception& e) {
         std::fprintf(stderr, "gseg bench: %s\n", ::gseg::mrpt::errorReason(e).c_str());
         return tools::kBadInput;

@@ -5,7 +5,14 @@
 
 namespace gseg {
 
+SlopeLimit::SlopeLimit(const Params& params)
+    : sin(std::sin(params.slopeThresholdDegrees * M_PI / 180.0)), cos(std::cos(params.slopeThresholdDegrees * M_PI / 180.0)) {}
+
 CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params) {
+    return classifyCell(pts, n, params, SlopeLimit(params));
+}
+
+CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope) {
     CellClassification out;
     if (n == 0) return out;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -36,8 +43,8 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     const double sum = l.sum();
     const double ratio = sum > 1e-12 ? l(2) / sum : 0.0;  // identical points: treated as clutter
 
-    const double sinSlope = std::sin(params.slopeThresholdDegrees * M_PI / 180.0);
-    const double cosSlope = std::cos(params.slopeThresholdDegrees * M_PI / 180.0);
+    const double sinSlope = slope.sin;
+    const double cosSlope = slope.cos;
     if (ratio > params.lineRatioThreshold) {
         out.cellClass = CellClass::Line;
         const double verticalComponent = std::abs(eig.eigenvectors().col(2).z());  // sin(line elevation)

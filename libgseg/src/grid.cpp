@@ -83,4 +83,180 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     }
 }
 
+namespace {
+constexpr std::int64_t kColumnBias = std::int64_t(1) << 31;
+std::uint64_t columnKey(std::int32_t ix, std::int32_t iy) {
+    return (std::uint64_t(std::int64_t(ix) + kColumnBias) << 32) | std::uint64_t(std::int64_t(iy) + kColumnBias);
+}
+}  // namespace
+
+void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
+                        std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool) {
+    const std::size_t n = indices.size();
+    columnOf.resize(n);
+    coords_.resize(2 * n);
+    // Runs body(begin, end) over [0, n), in chunks on the pool's threads where there is one.
+    constexpr std::size_t kChunk = 8192;
+    const auto forPoints = [&](auto&& body) {
+        if (pool && pool->threads() > 1)
+            pool->forRange(n, kChunk, [&](std::size_t b, std::size_t e, unsigned) { body(b, e); });
+        else
+            body(std::size_t(0), n);
+    };
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    bounds_.assign(4 * std::max<std::size_t>(chunks, 1), 0);
+    for (std::size_t c = 0; c < bounds_.size(); c += 4) {
+        bounds_[c] = bounds_[c + 1] = std::numeric_limits<std::int32_t>::max();
+        bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
+    }
+    forPoints([&](std::size_t b, std::size_t e) {
+        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
+        for (std::size_t k = b; k < e; ++k) {
+            const float* p = cloud.point(indices[k]);
+            const std::int32_t cx = cellCoord(p[0], sx), cy = cellCoord(p[1], sy);
+            coords_[2 * k] = cx, coords_[2 * k + 1] = cy;
+            box[0] = std::min(box[0], cx), box[2] = std::max(box[2], cx);
+            box[1] = std::min(box[1], cy), box[3] = std::max(box[3], cy);
+        }
+    });
+    std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
+    std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
+    for (std::size_t c = 0; c < bounds_.size(); c += 4) {
+        lo[0] = std::min(lo[0], bounds_[c]), lo[1] = std::min(lo[1], bounds_[c + 1]);
+        hi[0] = std::max(hi[0], bounds_[c + 2]), hi[1] = std::max(hi[1], bounds_[c + 3]);
+    }
+    keys_.clear();
+    if (n == 0) {
+        dense_ = true, lo_[0] = lo_[1] = 0, extY_ = 1, size_ = 0;
+        return;
+    }
+    const double area = (double(hi[0]) - lo[0] + 1) * (double(hi[1]) - lo[1] + 1);
+    dense_ = area <= 4.0 * double(n) + 65536.0;
+    if (dense_) {
+        lo_[0] = lo[0], lo_[1] = lo[1];
+        extY_ = std::int64_t(hi[1]) - lo[1] + 1;
+        size_ = std::uint32_t(area);
+        forPoints([&](std::size_t b, std::size_t e) {
+            for (std::size_t k = b; k < e; ++k)
+                columnOf[k] = std::uint32_t((std::int64_t(coords_[2 * k]) - lo[0]) * extY_ +
+                                            (std::int64_t(coords_[2 * k + 1]) - lo[1]));
+        });
+        return;
+    }
+    keys_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) keys_[k] = columnKey(coords_[2 * k], coords_[2 * k + 1]);
+    std::sort(keys_.begin(), keys_.end());
+    keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
+    size_ = std::uint32_t(keys_.size());
+    for (std::size_t k = 0; k < n; ++k)
+        columnOf[k] = std::uint32_t(
+            std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[2 * k], coords_[2 * k + 1])) - keys_.begin());
+}
+
+std::int64_t ColumnIndex::find(std::int32_t ix, std::int32_t iy) const {
+    if (dense_) {
+        const std::int64_t x = std::int64_t(ix) - lo_[0], y = std::int64_t(iy) - lo_[1];
+        if (x < 0 || y < 0 || y >= extY_ || x * extY_ + y >= std::int64_t(size_)) return -1;
+        return x * extY_ + y;
+    }
+    const std::uint64_t key = columnKey(ix, iy);
+    const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
+    return it != keys_.end() && *it == key ? std::int64_t(it - keys_.begin()) : -1;
+}
+
+std::int32_t ColumnIndex::ix(std::uint32_t id) const {
+    return dense_ ? std::int32_t(lo_[0] + std::int64_t(id) / extY_) : std::int32_t(std::int64_t(keys_[id] >> 32) - kColumnBias);
+}
+
+std::int32_t ColumnIndex::iy(std::uint32_t id) const {
+    return dense_ ? std::int32_t(lo_[1] + std::int64_t(id) % extY_)
+                  : std::int32_t(std::int64_t(keys_[id] & 0xffffffffull) - kColumnBias);
+}
+
+// Stable counting sort by column, then within each column a stable sort by z cell: the order of
+// build()'s stable sort by (ix, iy, iz).
+void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
+                 const std::uint32_t* columnOf, double sz, double originZ,
+                 const Eigen::Vector3f* pointsOfIndices) {
+    const std::size_t n = indices.size();
+    const std::uint32_t numColumns = columns.size();
+    cells_.clear();
+    cellColumns_.clear();
+    order_.resize(n);
+    points_.resize(n);
+    columnCells_.assign(std::size_t(numColumns) + 1, 0);
+    if (n == 0) return;
+    counts_.assign(std::size_t(numColumns) + 1, 0);
+    for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
+    for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
+    byColumn_.resize(n);
+    byColumnPoints_.resize(n);
+    iz_.resize(n);
+    sortedIz_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t i = indices[k];
+        const std::uint32_t at = counts_[columnOf[k]]++;
+        byColumn_[at] = i;
+        if (pointsOfIndices) {
+            byColumnPoints_[at] = pointsOfIndices[k];
+        } else {
+            const float* p = cloud.point(i);
+            byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+        }
+        iz_[at] = cellCoord(byColumnPoints_[at].z(), sz, originZ);
+    }
+    // counts_[c] is now the end of column c (and the start of column c + 1).
+    std::uint32_t start = 0;
+    for (std::uint32_t c = 0; c < numColumns; ++c) {
+        const std::uint32_t end = counts_[c];
+        columnCells_[c] = std::uint32_t(cells_.size());
+        if (start == end) continue;
+        const std::int32_t ix = columns.ix(c), iy = columns.iy(c);
+        std::int32_t lo = iz_[start], hi = iz_[start];
+        for (std::uint32_t k = start + 1; k < end; ++k) lo = std::min(lo, iz_[k]), hi = std::max(hi, iz_[k]);
+        if (lo == hi) {
+            std::copy(byColumn_.begin() + start, byColumn_.begin() + end, order_.begin() + start);
+            std::copy(byColumnPoints_.begin() + start, byColumnPoints_.begin() + end, points_.begin() + start);
+            cells_.push_back({ix, iy, lo, start, end});
+            cellColumns_.push_back(c);
+            start = end;
+            continue;
+        }
+        // Stable sort of the column's points by z cell: counting sort over a small range, else a
+        // stable comparison sort of (iz, position) keys.
+        const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
+        if (range <= 4 * std::uint64_t(end - start) + 64) {
+            keys_.assign(std::size_t(range) + 1, 0);
+            for (std::uint32_t k = start; k < end; ++k) ++keys_[std::size_t(iz_[k] - lo) + 1];
+            for (std::size_t b = 1; b <= range; ++b) keys_[b] += keys_[b - 1];
+            for (std::uint32_t k = start; k < end; ++k) {
+                const std::uint32_t at = start + keys_[std::size_t(iz_[k] - lo)]++;
+                order_[at] = byColumn_[k];
+                points_[at] = byColumnPoints_[k];
+                sortedIz_[at] = iz_[k];
+            }
+        } else {
+            sortKeys_.resize(end - start);
+            for (std::uint32_t k = start; k < end; ++k)
+                sortKeys_[k - start] = (std::uint64_t(std::int64_t(iz_[k]) + kColumnBias) << 32) | (k - start);
+            std::sort(sortKeys_.begin(), sortKeys_.begin() + (end - start));
+            for (std::uint32_t k = start; k < end; ++k) {
+                const std::uint32_t from = start + std::uint32_t(sortKeys_[k - start] & 0xffffffffull);
+                order_[k] = byColumn_[from];
+                points_[k] = byColumnPoints_[from];
+                sortedIz_[k] = iz_[from];
+            }
+        }
+        for (std::uint32_t s = start; s < end;) {
+            std::uint32_t e = s + 1;
+            while (e < end && sortedIz_[e] == sortedIz_[s]) ++e;
+            cells_.push_back({ix, iy, sortedIz_[s], s, e});
+            cellColumns_.push_back(c);
+            s = e;
+        }
+        start = end;
+    }
+    columnCells_[numColumns] = std::uint32_t(cells_.size());
+}
+
 }  // namespace gseg

@@ -1,4 +1,5 @@
 #include <gseg/below_ground.hpp>
+#include <gseg/fork_join_pool.hpp>
 #include <gseg/cell_classifier.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/ground_segmenter.hpp>
@@ -52,15 +53,10 @@ double volumePerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std:
     return m == 0 ? 0.0 : double(box.volume()) / double(m);
 }
 
-// A column's key that sorts like the signed pair (ix, iy), the grid's order: the sign bit flipped.
-std::uint64_t columnKey(const GridCell& g) {
-    return (std::uint64_t(std::uint32_t(g.ix) ^ 0x80000000u) << 32) | (std::uint32_t(g.iy) ^ 0x80000000u);
-}
-
 // The z range of the points of one Phase I cell that Phase I did not accept.
 struct RejectedSpan {
-    std::uint64_t key;  // columnKey of the cell
-    float low, high;    // [m]
+    std::uint32_t column;  // the cell's column id (ColumnIndex: shared by both phases, in (ix, iy) order)
+    float low, high;       // [m]
 };
 
 // Per-cell working state of one phase.
@@ -79,17 +75,35 @@ struct CellState {
 }  // namespace
 
 struct detail::Workspace {
-    Grid grid;
+    Grid grid;  // its points(): the points grouped by cell, aligned with grid.order()
+    ColumnIndex columns;                  // the columns (ix, iy) of the finite points, shared by both phases
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
-    std::vector<Eigen::Vector3f> pts;  // points grouped by cell, aligned with grid.order()
+    std::vector<std::uint32_t> inputColumns;          // the column id of each point of input, in its order
+    std::vector<Eigen::Vector3f> phase1GroundPoints;  // the points of phase1Ground (Phase II's input), in its order
+    std::vector<std::uint32_t> phase1GroundColumns;   // their column ids
     std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
-    std::vector<std::uint8_t> mask;    // plane-fit scratch
+    // Per thread (Params::threads; [0]: the calling thread): the plane fit's scratch.
+    struct ThreadScratch {
+        std::vector<std::uint8_t> mask;  // a cell's inlier mask
+        PlaneFitScratch planeFit;
+    };
+    std::vector<ThreadScratch> perThread;
+    std::unique_ptr<ForkJoinPool> pool;  // Params::threads > 1: the threads of one scan's cells (persistent)
+
+    // Runs body(begin, end, thread) over [0, n): in chunks on the pool's threads, or all at once.
+    template <class Body>
+    void forCells(std::size_t n, Body&& body) {
+        if (pool)
+            pool->forRange(n, 128, body);
+        else
+            body(std::size_t(0), n, 0u);
+    }
     std::vector<CellState> cells;
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
-    std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (KD-tree points)
-    // Per Phase I cell, in the grid's order: the z range of its points Phase I called non-ground
-    // (cells too small to classify excepted). Phase II sees only Phase I's ground, so this is how it
-    // knows what stands below its cells.
+    std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (the expansion's points)
+    // Per Phase I cell, in the grid's order (so by column id): the z range of its points Phase I
+    // called non-ground (cells too small to classify excepted). Phase II sees only Phase I's
+    // ground, so this is how it knows what stands below its cells.
     std::vector<RejectedSpan> rejected;
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
@@ -99,6 +113,8 @@ struct detail::Workspace {
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
     params_.validate();
+    ws_->perThread.resize(std::size_t(params_.threads));
+    if (params_.threads > 1) ws_->pool = std::make_unique<ForkJoinPool>(unsigned(params_.threads));
 }
 GroundSegmenter::~GroundSegmenter() = default;
 GroundSegmenter::GroundSegmenter(GroundSegmenter&&) noexcept = default;
@@ -154,7 +170,8 @@ struct PhaseSettings {
 ///   slope limit must hold more than minGroundInlierRatio of the cell.
 /// - Algorithm 1 sparsity buckets and the ambiguous-cell rule [paper; bucket limits: authors']. Ours: only
 ///   a population of at least minPointsPerCell outliers can make a cell ambiguous.
-/// - Step 4, region expansion over a KD-tree of centroids [paper]. Ours: the seed is the candidates
+/// - Step 4, region expansion over the centroids within a radius [paper: a KD-tree; ours: columns of
+///   centroids, the same neighbours, region_growing.cpp]. Ours: the seed is the candidates
 ///   near the robot at ground level (seedHeightTolerance) instead of synthetic points, with the
 ///   few-seeds disc (fewer than 4 seeds: also those just beyond the nearest candidate) and the
 ///   tolerance widening with the slope; the height gate measured along the fitted planes.
@@ -166,18 +183,22 @@ struct PhaseSettings {
 /// taking part, and reflections below the ground flagged (below_ground.hpp).
 class Phase {
 public:
-    Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings) {}
+    Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings), slope_(p) {}
 
-    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, std::vector<std::uint32_t>& ground,
+    /// `inputPoints` (optional): the points of `input` in its order; `groundPoints` (optional)
+    /// receives the points of `ground` likewise (Phase I hands them to Phase II).
+    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const std::uint32_t* inputColumns,
+             const Eigen::Vector3f* inputPoints, std::vector<std::uint32_t>& ground,
+             std::vector<std::uint32_t>* groundColumns, std::vector<Eigen::Vector3f>* groundPoints,
              detail::Workspace& ws, PhaseReport& report, bool keepCells) {
         report.inputPoints = input.size();
         auto t = Clock::now();
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, p_.cellSizeX, p_.cellSizeY, set_.cellSizeZ, originZ());
+        ws.grid.build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
         report.ms.grid = msSince(t);
-        classifyCells(cloud, ws);  // Step 2: local eigen classification
+        classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
         fitPlanes(ws);  // Step 3: surface gradient analysis
         report.ms.planeFit = msSince(t);
@@ -185,63 +206,69 @@ public:
         report.ms.refinement = msSince(t);
         expand(ws);  // Step 4: ground region expansion with per-cell checks
         report.ms.expansion = msSince(t);
-        collect(ws, ground, report, keepCells);
+        collect(ws, ground, groundColumns, groundPoints, report, keepCells);
         report.ms.refinement += msSince(t);
     }
 
 private:
-    void classifyCells(const PointCloudView& cloud, detail::Workspace& ws) const {
-        const auto& order = ws.grid.order();
-        ws.pts.resize(order.size());
-        for (std::size_t k = 0; k < order.size(); ++k) {
-            const float* q = cloud.point(order[k]);
-            ws.pts[k] = Eigen::Vector3f(q[0], q[1], q[2]);
-        }
-        ws.inlier.assign(order.size(), 0);
+    void classifyCells(detail::Workspace& ws) const {
+        const auto& pts = ws.grid.points();
+        ws.inlier.assign(pts.size(), 0);
         ws.cells.assign(ws.grid.cells().size(), CellState());
-        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
-            const GridCell& g = ws.grid.cells()[c];
-            const CellClassification cls = classifyCell(&ws.pts[g.begin], g.size(), p_);
-            CellState& s = ws.cells[c];
-            s.cellClass = cls.cellClass;
-            s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
-            s.steepNormal = cls.steepNormal;
-            if (cls.groundCandidate && cls.cellClass != CellClass::Plane) {
-                // Line and small cells have no plane: all their points are ground candidates.
-                std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 1);
-                s.inliers = g.size();
-                s.ground = cls.mean;
-                s.normal = cls.normal;
-            }
+        // Cells are independent: each writes its own state and its own points' flags.
+        ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
+            for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
+        });
+    }
+
+    void classifyOne(detail::Workspace& ws, std::size_t c) const {
+        const auto& pts = ws.grid.points();
+        const GridCell& g = ws.grid.cells()[c];
+        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_);
+        CellState& s = ws.cells[c];
+        s.cellClass = cls.cellClass;
+        s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
+        s.steepNormal = cls.steepNormal;
+        if (cls.groundCandidate && cls.cellClass != CellClass::Plane) {
+            // Line and small cells have no plane: all their points are ground candidates.
+            std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 1);
+            s.inliers = g.size();
+            s.ground = cls.mean;
+            s.normal = cls.normal;
         }
     }
 
     // Planar cells: the best plane within the slope limit must hold most of the cell's points;
     // otherwise the cell is dominated by something steeper (a wall, a car side) and is not ground.
+    // Each cell's RANSAC generator is seeded from the cell's index, so the fits are independent.
     void fitPlanes(detail::Workspace& ws) const {
-        for (std::size_t c = 0; c < ws.cells.size(); ++c) {
-            CellState& s = ws.cells[c];
-            if (s.cellClass != CellClass::Plane) continue;
-            const GridCell& g = ws.grid.cells()[c];
-            if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
-                s.outcome = CellOutcome::Steep;
-                continue;
-            }
-            const PlaneFitResult fit = fitPlane(&ws.pts[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
-                                                ws.mask, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
-            if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
-                s.outcome = CellOutcome::Steep;
-                continue;
-            }
-            Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-            for (std::uint32_t i = 0; i < g.size(); ++i) {
-                ws.inlier[g.begin + i] = ws.mask[i];
-                if (ws.mask[i]) sum += ws.pts[g.begin + i];
-            }
-            s.inliers = std::uint32_t(fit.numInliers);
-            s.ground = sum / float(fit.numInliers);
-            s.normal = fit.normal;
+        ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned thread) {
+            for (std::size_t c = begin; c < end; ++c) fitOne(ws, c, ws.perThread[thread]);
+        });
+    }
+
+    void fitOne(detail::Workspace& ws, std::size_t c, detail::Workspace::ThreadScratch& scratch) const {
+        CellState& s = ws.cells[c];
+        if (s.cellClass != CellClass::Plane) return;
+        const GridCell& g = ws.grid.cells()[c];
+        if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
+            s.outcome = CellOutcome::Steep;
+            return;
         }
+        const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
+                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
+        if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
+            s.outcome = CellOutcome::Steep;
+            return;
+        }
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        for (std::uint32_t i = 0; i < g.size(); ++i) {
+            ws.inlier[g.begin + i] = scratch.mask[i];
+            if (scratch.mask[i]) sum += ws.grid.points()[g.begin + i];
+        }
+        s.inliers = std::uint32_t(fit.numInliers);
+        s.ground = sum / float(fit.numInliers);
+        s.normal = fit.normal;
     }
 
     void markAmbiguous(detail::Workspace& ws) const {
@@ -255,8 +282,8 @@ private:
             // A handful of outliers has no meaningful bounding box: only a population of at least
             // minPointsPerCell outliers can compete with the inliers.
             if (g.size() - s.inliers >= std::uint32_t(p_.minPointsPerCell)) {
-                const Sparsity in = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
-                const Sparsity out = sparsityBucket(volumePerPoint(&ws.pts[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
+                const Sparsity in = sparsityBucket(volumePerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
+                const Sparsity out = sparsityBucket(volumePerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
                 s.ambiguous = in == out;
             }
             s.candidate = std::int32_t(ws.candidateCell.size());
@@ -279,12 +306,12 @@ private:
         if (!set_.belowRejected) return false;
         // Only points between floatingMinHeight and floatingMaxDepth below the cell's bottom count:
         // closer, a step of the ground; deeper, a reflection under it.
-        const std::uint64_t key = columnKey(g[c]);
+        const std::uint32_t column = ws.grid.cellColumns()[c];
         const double bottom = originZ() + double(g[c].iz) * set_.cellSizeZ;
         const double top = bottom - p_.floatingMinHeight, deep = bottom - p_.floatingMaxDepth;
-        for (auto it = std::lower_bound(ws.rejected.begin(), ws.rejected.end(), key,
-                                        [](const RejectedSpan& a, std::uint64_t k) { return a.key < k; });
-             it != ws.rejected.end() && it->key == key; ++it)
+        for (auto it = std::lower_bound(ws.rejected.begin(), ws.rejected.end(), column,
+                                        [](const RejectedSpan& a, std::uint32_t k) { return a.column < k; });
+             it != ws.rejected.end() && it->column == column; ++it)
             if (double(it->low) < top && double(it->high) >= deep) return true;
         return false;
     }
@@ -301,6 +328,9 @@ private:
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
         es.fewSeeds = 4;  // real scans give dozens (KITTI: 85-169); one or two may be a car's wheels
+        es.pool = ws.pool.get();
+        // Only the ambiguous-cell rule reads the neighbours (the lowest of them).
+        es.needsNeighbours = [&](std::uint32_t cand) { return ws.cells[ws.candidateCell[cand]].ambiguous; };
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
             const std::size_t c = ws.candidateCell[cand];
             CellState& s = ws.cells[c];
@@ -322,20 +352,25 @@ private:
         expandRegion(ws.centroids, es, accept, &ws.parents);
     }
 
-    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, PhaseReport& r,
-                 bool keepCells) const {
+    void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
+                 std::vector<Eigen::Vector3f>* groundPoints, PhaseReport& r, bool keepCells) const {
         const auto& order = ws.grid.order();
         const auto& grid = ws.grid.cells();
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
         if (set_.recordRejected) ws.rejected.clear();
+        // recover() reads only the ground cells, which it never changes: every cell on its own.
+        if (set_.recover)
+            ws.forCells(grid.size(), [&](std::size_t begin, std::size_t end, unsigned) {
+                for (std::size_t c = begin; c < end; ++c)
+                    if (ws.cells[c].outcome != CellOutcome::Ground &&
+                        (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
+                        recover(ws, c);
+            });
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
-            if (set_.recover && s.outcome != CellOutcome::Ground &&
-                (!set_.recoverSparseOnly || s.outcome == CellOutcome::TooFewPoints))
-                recover(ws, c);
             if (set_.recordRejected && s.outcome != CellOutcome::TooFewPoints) recordRejected(ws, c);
             if (s.outcome == CellOutcome::Ground || s.recovered) {
                 if (s.outcome == CellOutcome::Ground)
@@ -343,7 +378,11 @@ private:
                 else
                     r.recoveredPoints += s.inliers;
                 for (std::uint32_t k = g.begin; k < g.end; ++k)
-                    if (ws.inlier[k]) ground.push_back(order[k]);
+                    if (ws.inlier[k]) {
+                        ground.push_back(order[k]);
+                        if (groundPoints) groundPoints->push_back(ws.grid.points()[k]);
+                        if (groundColumns) groundColumns->push_back(ws.grid.cellColumns()[c]);
+                    }
             } else if (s.outcome == CellOutcome::TooFewPoints) {
                 r.unlabelledCellPoints += g.size();
             } else if (s.outcome == CellOutcome::NotReached) {
@@ -362,29 +401,29 @@ private:
     // sidewalk in a cell that a pedestrian made steep. Phase II judges them like any other point.
     void recover(detail::Workspace& ws, std::size_t c) const {
         const auto& cells = ws.grid.cells();
+        const auto& columnCells = ws.grid.columnCells();
         const GridCell& g = cells[c];
         std::uint32_t nb[17];
         int count = 0;
-        // The cells (ix + dx, iy - 1 .. iy + 1, iz - 1 .. iz) of each dx follow one another in the
-        // grid's order: one search per dx, then a walk (neighbours come in (dx, dy, dz) order).
-        for (int dx = -1; dx <= 1; ++dx) {
-            const GridCell key{g.ix + dx, g.iy - 1, g.iz - 1, 0, 0};
-            auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const GridCell& a, const GridCell& b) {
-                return std::tie(a.ix, a.iy, a.iz) < std::tie(b.ix, b.iy, b.iz);
-            });
-            for (; it != cells.end() && it->ix == key.ix && it->iy <= g.iy + 1; ++it) {
-                if (it->iz < g.iz - 1 || it->iz > g.iz || (!dx && it->iy == g.iy && it->iz == g.iz)) continue;
-                if (ws.cells[std::size_t(it - cells.begin())].outcome == CellOutcome::Ground)
-                    nb[count++] = std::uint32_t(it - cells.begin());
+        // The occupied cells (ix + dx, iy + dy, iz + dz), dz = -1 then 0 (not the cell itself), in
+        // (dx, dy, dz) order, found in their column's cells (sorted by iz).
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy) {
+                const std::int64_t column = ws.columns.find(g.ix + dx, g.iy + dy);
+                if (column < 0) continue;
+                for (std::uint32_t b = columnCells[std::size_t(column)], e = columnCells[std::size_t(column) + 1]; b < e; ++b) {
+                    if (cells[b].iz > g.iz) break;
+                    if (cells[b].iz < g.iz - 1 || b == c) continue;
+                    if (ws.cells[b].outcome == CellOutcome::Ground) nb[count++] = b;
+                }
             }
-        }
         CellState& s = ws.cells[c];
         std::fill(ws.inlier.begin() + g.begin, ws.inlier.begin() + g.end, 0);
         s.inliers = 0;
         if (count == 0) return;
         const float thr = float(set_.recoveryThreshold);
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = ws.pts[k];
+            const Eigen::Vector3f& q = ws.grid.points()[k];
             // The plane of the neighbour whose ground centroid is horizontally nearest.
             const CellState* best = nullptr;
             float bestD = std::numeric_limits<float>::infinity();
@@ -416,19 +455,22 @@ private:
         const GridCell& g = ws.grid.cells()[c];
         const CellState& s = ws.cells[c];
         const bool ground = s.outcome == CellOutcome::Ground;
-        RejectedSpan span{columnKey(g), std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+        RejectedSpan span{ws.grid.cellColumns()[c], std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity()};
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             if (ground && ws.inlier[k]) continue;
-            if (ground && p_.floatingIgnoresLowOutliers && s.normal.dot(ws.pts[k] - s.ground) < 0) continue;
-            if (s.recovered && s.normal.dot(ws.pts[k] - s.ground) < -p_.floatingMaxDepth) continue;
-            span.low = std::min(span.low, ws.pts[k].z());
-            span.high = std::max(span.high, ws.pts[k].z());
+            const Eigen::Vector3f& q = ws.grid.points()[k];
+            if (ground && p_.floatingIgnoresLowOutliers && s.normal.dot(q - s.ground) < 0) continue;
+            if (s.recovered && s.normal.dot(q - s.ground) < -p_.floatingMaxDepth) continue;
+            span.low = std::min(span.low, q.z());
+            span.high = std::max(span.high, q.z());
         }
         if (span.low <= span.high) ws.rejected.push_back(span);
     }
 
     const Params& p_;
     const PhaseSettings set_;
+    const SlopeLimit slope_;
 };
 
 }  // namespace
@@ -456,13 +498,20 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     for (std::uint32_t i = 0; i < cloud.size(); ++i)
         if (finitePoint(cloud.point(i))) ws.input.push_back(i);
     r.numNonFinite = cloud.size() - ws.input.size();
+    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
     ws.phase1Ground.clear();
     ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
-    Phase(params, PhaseSettings::first(params)).run(cloud, ws.input, ws.phase1Ground, ws, r.phase1, keepCellDiagnostics);
+    ws.phase1GroundPoints.clear();
+    ws.phase1GroundColumns.clear();
+    Phase(params, PhaseSettings::first(params))
+        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.phase1Ground, &ws.phase1GroundColumns,
+             &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
-    Phase(params, PhaseSettings::second(params)).run(cloud, ws.phase1Ground, ws.phase2Ground, ws, r.phase2, keepCellDiagnostics);
+    Phase(params, PhaseSettings::second(params))
+        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), ws.phase2Ground,
+             nullptr, nullptr, ws, r.phase2, keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
     for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
@@ -476,7 +525,7 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
         if (ws.cells[c].outcome != CellOutcome::Ground) continue;
         float lowest = std::numeric_limits<float>::infinity();
         for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) lowest = std::min(lowest, ws.pts[k].z());
+            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid.points()[k].z());
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);

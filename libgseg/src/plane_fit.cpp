@@ -7,14 +7,25 @@
 namespace gseg {
 namespace {
 
-std::size_t markInliers(const Eigen::Vector3f* pts, std::size_t n, const Eigen::Vector3f& normal, float d,
-                        float thr, std::vector<std::uint8_t>* mask) {
-    std::size_t count = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const bool in = std::abs(normal.dot(pts[i]) + d) <= thr;
-        count += in;
-        if (mask) (*mask)[i] = in;
+// The points within `thr` of the plane n . p + d = 0 (n . p as Eigen's dot: n0 p0 + (n1 p1 + n2 p2),
+// so that the same points count as with Eigen::Vector3f); writes 1/0 per point into `mask` if given.
+std::size_t markInliers(const PlaneFitScratch& s, std::size_t n, const Eigen::Vector3f& normal, float d, float thr,
+                        std::uint8_t* mask) {
+    const float nx = normal.x(), ny = normal.y(), nz = normal.z();
+    const float* x = s.x.data();
+    const float* y = s.y.data();
+    const float* z = s.z.data();
+    if (mask) {
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const bool in = std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + d) <= thr;
+            mask[i] = in;
+            count += in;
+        }
+        return count;
     }
+    std::uint32_t count = 0;
+    for (std::size_t i = 0; i < n; ++i) count += std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + d) <= thr ? 1u : 0u;
     return count;
 }
 
@@ -78,9 +89,18 @@ double planeSlopeDegrees(const Eigen::Vector3f& normal) {
 
 PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
                         std::vector<std::uint8_t>& inlier, double maxSlopeDegrees, double minInlierRatio) {
+    PlaneFitScratch scratch;
+    return fitPlane(pts, n, params, seed, inlier, scratch, maxSlopeDegrees, minInlierRatio);
+}
+
+PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
+                        std::vector<std::uint8_t>& inlier, PlaneFitScratch& scratch, double maxSlopeDegrees,
+                        double minInlierRatio) {
     PlaneFitResult res;
     inlier.assign(n, 0);
     if (n < 3) return res;
+    scratch.x.resize(n), scratch.y.resize(n), scratch.z.resize(n);
+    for (std::size_t i = 0; i < n; ++i) scratch.x[i] = pts[i].x(), scratch.y[i] = pts[i].y(), scratch.z[i] = pts[i].z();
     const float thr = float(params.groundInlierThreshold);
     const double logFail = std::log(1.0 - params.ransacConfidence);
     const float minNz = float(std::cos(std::min(90.0, maxSlopeDegrees) * M_PI / 180.0)) - 1e-6f;
@@ -113,7 +133,7 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
         Eigen::Vector3f nrm;
         float d;
         if (!hypothesis(pts[i], pts[j], pts[k], thr, nrm, d) || nrm.z() < minNz) continue;
-        const std::size_t count = markInliers(pts, n, nrm, d, thr, nullptr);
+        const std::size_t count = markInliers(scratch, n, nrm, d, thr, nullptr);
         if (count > best) {
             best = count;
             bestN = nrm;
@@ -127,12 +147,13 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
 
     // Least-squares refinement on the inliers; kept only if it is well defined (inliers not
     // collinear at the noise scale), within the slope limit, and does not lose inliers.
-    markInliers(pts, n, bestN, bestD, thr, &inlier);
+    markInliers(scratch, n, bestN, bestD, thr, inlier.data());
     Eigen::Vector3f refN;
     float refD;
     if (leastSquaresPlane(pts, n, inlier, thr, refN, refD) && refN.z() >= minNz) {
-        std::vector<std::uint8_t> refMask(n);
-        const std::size_t refCount = markInliers(pts, n, refN, refD, thr, &refMask);
+        std::vector<std::uint8_t>& refMask = scratch.mask;
+        refMask.resize(n);
+        const std::size_t refCount = markInliers(scratch, n, refN, refD, thr, refMask.data());
         if (refCount >= best) {
             bestN = refN, bestD = refD, best = refCount;
             inlier.swap(refMask);

@@ -1,38 +1,114 @@
 #include <gseg/region_growing.hpp>
 
-#include <nanoflann.hpp>
-
 #include <algorithm>
+#include <limits>
+#include <utility>
 #include <cmath>
 #include <deque>
 
 namespace gseg {
 namespace {
 
-struct CentroidSet {
-    const std::vector<Eigen::Vector3f>& pts;
-    std::size_t kdtree_get_point_count() const { return pts.size(); }
-    float kdtree_get_pt(std::size_t i, std::size_t dim) const { return pts[i][int(dim)]; }
-    template <class Box>
-    bool kdtree_get_bbox(Box&) const { return false; }
-};
-
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CentroidSet>, CentroidSet,
-                                                 3, std::uint32_t>;
-
-// Collects indices only (nanoflann takes the *squared* radius), works with nanoflann 1.4 and 1.5.
-struct IndexCollector {
-    float radiusSq;
-    std::vector<std::uint32_t>& out;
-    void init() { out.clear(); }
-    void clear() { out.clear(); }
-    std::size_t size() const { return out.size(); }
-    bool full() const { return true; }
-    bool addPoint(float dist, std::uint32_t index) {
-        if (dist < radiusSq) out.push_back(index);
-        return true;
+// nanoflann's L2_Simple_Adaptor metric (what the KD-tree search before #21 compared with the
+// squared radius): ((0 + d0^2) + d1^2) + d2^2 in float, d = query - point.
+inline float squaredDistance(const Eigen::Vector3f& q, const Eigen::Vector3f& p) {
+    float r = 0.f;
+    for (int i = 0; i < 3; ++i) {
+        const float d = q[i] - p[i];
+        r += d * d;
     }
-    float worstDist() const { return radiusSq; }
+    return r;
+}
+
+// The centroids binned in square columns of half the search radius (a little more) in x, y: every
+// neighbour of a centroid lies in the 5 x 5 columns around its own. Their coordinates are kept
+// column by column in separate x, y, z arrays (a column's distance tests read contiguous memory).
+// Columns are found in a dense table over the centroids' bounding box or, where that box is
+// absurdly large for their number, by bisection in the sorted column keys.
+class CentroidColumns {
+public:
+    CentroidColumns(const std::vector<Eigen::Vector3f>& pts, double radius) : size_(radius * 0.5 * 1.001) {
+        const std::size_t n = pts.size();
+        std::int64_t lo[2] = {std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max()};
+        std::int64_t hi[2] = {std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::min()};
+        keys_.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::int64_t cx = coord(pts[i].x()), cy = coord(pts[i].y());
+            lo[0] = std::min(lo[0], cx), hi[0] = std::max(hi[0], cx);
+            lo[1] = std::min(lo[1], cy), hi[1] = std::max(hi[1], cy);
+            keys_[i] = {cx, cy};
+        }
+        lo_[0] = lo[0], lo_[1] = lo[1];
+        w_ = hi[0] - lo[0] + 1, h_ = hi[1] - lo[1] + 1;
+        dense_ = double(w_) * double(h_) <= 4.0 * double(n) + 4096.0;
+        items_.resize(n);
+        if (dense_) {
+            start_.assign(std::size_t(w_ * h_) + 1, 0);
+            for (const auto& k : keys_) ++start_[std::size_t(index(k.first, k.second)) + 1];
+            for (std::size_t b = 1; b < start_.size(); ++b) start_[b] += start_[b - 1];
+            std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+            for (std::uint32_t i = 0; i < n; ++i) items_[fill[std::size_t(index(keys_[i].first, keys_[i].second))]++] = i;
+        } else {
+            for (std::uint32_t i = 0; i < n; ++i) items_[i] = i;
+            std::stable_sort(items_.begin(), items_.end(), [&](std::uint32_t a, std::uint32_t b) { return keys_[a] < keys_[b]; });
+            sortedKeys_.resize(n);
+            for (std::size_t t = 0; t < n; ++t) sortedKeys_[t] = keys_[items_[t]];
+        }
+        x_.resize(n), y_.resize(n), z_.resize(n);
+        for (std::size_t t = 0; t < n; ++t) {
+            const Eigen::Vector3f& p = pts[items_[t]];
+            x_[t] = p.x(), y_[t] = p.y(), z_[t] = p.z();
+        }
+    }
+
+    /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
+    /// centroid `from` (radiusSq at most the square of the radius given at construction).
+    template <class F>
+    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
+        near(q, from, radiusSq, [](std::uint32_t) { return false; }, f);
+    }
+
+    /// The same, leaving out the centroids j with skip(j) true before their distance is computed.
+    template <class Skip, class F>
+    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, Skip&& skip, F&& f) const {
+        const auto& k = keys_[from];
+        for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
+            for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
+                std::size_t b = 0, e = 0;
+                if (dense_) {
+                    if (cx < lo_[0] || cy < lo_[1] || cx >= lo_[0] + w_ || cy >= lo_[1] + h_) continue;
+                    const std::size_t c = std::size_t(index(cx, cy));
+                    b = start_[c], e = start_[c + 1];
+                } else {
+                    const auto range = std::equal_range(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy));
+                    b = std::size_t(range.first - sortedKeys_.begin()), e = std::size_t(range.second - sortedKeys_.begin());
+                }
+                for (std::size_t t = b; t < e; ++t) {
+                    if (skip(items_[t])) continue;
+                    // squaredDistance(q, p), term by term in the same order
+                    const float dx = q.x() - x_[t], dy = q.y() - y_[t], dz = q.z() - z_[t];
+                    float r = 0.f;
+                    r += dx * dx;
+                    r += dy * dy;
+                    r += dz * dz;
+                    if (r < radiusSq) f(items_[t]);
+                }
+            }
+    }
+
+private:
+    std::int64_t coord(float v) const {
+        const double c = std::floor(double(v) / size_);
+        return std::int64_t(std::max(-1e15, std::min(1e15, c)));
+    }
+    std::int64_t index(std::int64_t cx, std::int64_t cy) const { return (cx - lo_[0]) * h_ + (cy - lo_[1]); }
+
+    double size_;
+    bool dense_ = true;
+    std::int64_t lo_[2] = {0, 0}, w_ = 0, h_ = 0;
+    std::vector<std::pair<std::int64_t, std::int64_t>> keys_, sortedKeys_;
+    std::vector<std::uint32_t> start_, items_;
+    std::vector<float> x_, y_, z_;
 };
 
 }  // namespace
@@ -43,20 +119,22 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     std::vector<std::uint8_t> state(centroids.size(), 0);
     if (parents) parents->assign(centroids.size(), -2);
     if (centroids.empty()) return state;
-    const CentroidSet set{centroids};
-    const Tree tree(3, set, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    const CentroidColumns columns(centroids, s.radius);
+    const float radiusSq = float(s.radius * s.radius);
 
     std::vector<std::uint32_t> found, neighbours;
-    auto search = [&](const Eigen::Vector3f& q, double radius, std::vector<std::uint32_t>& out) {
+    // The seed discs: every candidate within `radius` of the seed, in index order.
+    auto searchSeed = [&](double radius, std::vector<std::uint32_t>& out) {
         out.clear();
-        IndexCollector collector{float(radius * radius), out};
-        // The tree is built deterministically from the centroids, so the order of the results is
-        // deterministic too: no sort needed.
-        tree.radiusSearchCustomCallback(q.data(), collector);
+        const float r2 = float(radius * radius);
+        for (std::uint32_t j = 0; j < centroids.size(); ++j)
+            if (squaredDistance(s.seed, centroids[j]) < r2) out.push_back(j);
     };
     // The step between two centroids, measured along the ground-plane normal of each (or along z):
     // a neighbour is taken only if the step lies in both planes within the gate.
+    const bool noGate = std::isinf(s.heightGate) && s.heightGate > 0;
     auto gated = [&](std::uint32_t from, std::uint32_t j) {
+        if (noGate) return true;
         const Eigen::Vector3f d = centroids[j] - centroids[from];
         const float step = s.normals ? std::max(std::abs((*s.normals)[from].dot(d)), std::abs((*s.normals)[j].dot(d)))
                                      : std::abs(d.z());
@@ -73,15 +151,14 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     // distance at the slope limit, again first in the near disc.
     std::vector<double> discs = {s.seedRadius};  // radii around the seed, searched in this order
     if (s.fewSeeds > 0) {
-        std::uint32_t nearest = 0;
-        float distanceSq = 0;
-        if (tree.knnSearch(s.seed.data(), 1, &nearest, &distanceSq) == 1 && distanceSq > 0)
-            discs.push_back(std::sqrt(double(distanceSq)) + s.seedRadius);
+        float distanceSq = std::numeric_limits<float>::infinity();  // to the nearest candidate
+        for (const Eigen::Vector3f& c : centroids) distanceSq = std::min(distanceSq, squaredDistance(s.seed, c));
+        if (distanceSq > 0) discs.push_back(std::sqrt(double(distanceSq)) + s.seedRadius);
     }
     std::deque<std::uint32_t> queue;
     for (const double slope : {0.0, s.seedSlope}) {
         for (std::size_t d = 0; d < discs.size() && (d == 0 || queue.size() < s.fewSeeds); ++d) {
-            search(s.seed, discs[d], found);
+            searchSeed(discs[d], found);
             for (std::uint32_t j : found) {
                 const float horizontal = (centroids[j] - s.seed).head<2>().norm();
                 if (state[j] == 0 && std::abs(centroids[j].z() - s.seed.z()) <= s.seedGate + slope * horizontal) {
@@ -94,21 +171,74 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         if (!queue.empty()) break;
     }
 
+    // Each candidate's neighbours (the search's order, itself excluded, within the gate): searched
+    // when the walk reaches it, or all before the walk on several threads (independent searches).
+    // The order of a candidate's neighbours (by column, then index) decides only the order of the
+    // walk (and so Result's reachedFrom), never which candidates are accepted: accept() depends on
+    // the candidate and the set of its neighbours alone, and every candidate connected to the seed
+    // through accepted ones is reached in any order.
+    const auto neighboursOf = [&](std::uint32_t c, std::vector<std::uint32_t>& out) {
+        out.clear();
+        columns.near(centroids[c], c, radiusSq, [&](std::uint32_t j) {
+            if (j != c && gated(c, j)) out.push_back(j);
+        });
+    };
+    std::vector<std::uint32_t> listStart, lists;  // CSR of the precomputed neighbours
+    if (s.pool && s.pool->threads() > 1) {
+        constexpr std::size_t chunk = 64;
+        const std::size_t n = centroids.size(), parts = (n + chunk - 1) / chunk;
+        std::vector<std::vector<std::uint32_t>> partLists(parts), partCounts(parts);
+        std::vector<std::vector<std::uint32_t>> out(s.pool->threads());
+        s.pool->forRange(n, chunk, [&](std::size_t b, std::size_t e, unsigned t) {
+            auto& list = partLists[b / chunk];
+            auto& counts = partCounts[b / chunk];
+            for (std::size_t c = b; c < e; ++c) {
+                if (s.needsNeighbours && !s.needsNeighbours(std::uint32_t(c)))
+                    out[t].clear();  // searched during the walk, if ever
+                else
+                    neighboursOf(std::uint32_t(c), out[t]);
+                list.insert(list.end(), out[t].begin(), out[t].end());
+                counts.push_back(std::uint32_t(out[t].size()));
+            }
+        });
+        listStart.reserve(n + 1);
+        listStart.push_back(0);
+        for (std::size_t p = 0; p < parts; ++p) {
+            lists.insert(lists.end(), partLists[p].begin(), partLists[p].end());
+            for (std::uint32_t k : partCounts[p]) listStart.push_back(listStart.back() + k);
+        }
+    }
+
+    const auto reach = [&](std::uint32_t c, std::uint32_t j) {
+        state[j] = 1;
+        queue.push_back(j);
+        if (parents) (*parents)[j] = std::int32_t(c);
+    };
     while (!queue.empty()) {
         const std::uint32_t c = queue.front();
         queue.pop_front();
-        search(centroids[c], s.radius, found);
-        neighbours.clear();
-        for (std::uint32_t j : found)
-            if (j != c && gated(c, j)) neighbours.push_back(j);
+        if (!s.needsNeighbours || s.needsNeighbours(c)) {
+            if (!listStart.empty())
+                neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
+            else
+                neighboursOf(c, neighbours);
+        } else {
+            // accept() does not look at this candidate's neighbours: decide first, then visit only
+            // the neighbours not reached yet (the same ones, in the same order, as from the list).
+            neighbours.clear();
+            if (!accept(c, neighbours)) continue;
+            state[c] = 2;
+            columns.near(
+                centroids[c], c, radiusSq, [&](std::uint32_t j) { return state[j] != 0; },
+                [&](std::uint32_t j) {
+                    if (j != c && gated(c, j)) reach(c, j);
+                });
+            continue;
+        }
         if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
         state[c] = 2;
         for (std::uint32_t j : neighbours)
-            if (state[j] == 0) {
-                state[j] = 1;
-                queue.push_back(j);
-                if (parents) (*parents)[j] = std::int32_t(c);
-            }
+            if (state[j] == 0) reach(c, j);
     }
     return state;
 }

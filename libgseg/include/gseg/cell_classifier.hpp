@@ -25,6 +25,16 @@ struct CellClassification {
 /// computed here). Planar cells come back as candidates: the plane fit decides their slope.
 CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params);
 
+/// sin and cos of Params::slopeThresholdDegrees (computed once, not per cell).
+struct SlopeLimit {
+    double sin = 0, cos = 1;
+    SlopeLimit() = default;
+    explicit SlopeLimit(const Params& params);
+};
+
+/// The same with the slope limit's sine and cosine given (the segmenter computes them once per scan).
+CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope);
+
 /// Bounding-box sparsity of Algorithm 1: box volume / point count, in m^3 per point.
 enum class Sparsity : std::uint8_t { Low, Medium, High };
 

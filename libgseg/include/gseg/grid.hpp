@@ -2,8 +2,10 @@
 /// \file grid.hpp
 /// Binning of points into axis-aligned cells, indexed with floor (never truncation).
 
+#include <gseg/fork_join_pool.hpp>
 #include <gseg/point_cloud.hpp>
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -12,10 +14,15 @@ namespace gseg {
 
 /// Integer index of a cell along one axis: floor((v - origin) / size), clamped to +-2^30 so that absurdly
 /// far points land in a far cell of their own instead of overflowing.
+/// (The floor is taken by truncation and a correction, which x86-64 without SSE4.1 does without a
+/// call to floor(): the same value for every finite input.)
 inline std::int32_t cellCoord(float v, double size, double origin = 0.0) {
-    const double c = std::floor((static_cast<double>(v) - origin) / size);
+    const double q = (static_cast<double>(v) - origin) / size;
     constexpr double lim = 1073741824.0;  // 2^30
-    return static_cast<std::int32_t>(c < -lim ? -lim : (c > lim ? lim : c));
+    if (!(q > -lim)) return -1073741824;  // floor(q) <= -2^30, and NaN
+    if (!(q < lim)) return 1073741824;    // floor(q) >= 2^30
+    const std::int64_t t = static_cast<std::int64_t>(q);  // towards zero
+    return static_cast<std::int32_t>(static_cast<double>(t) > q ? t - 1 : t);
 }
 
 /// One occupied cell: its index and the range [begin, end) of its points in Grid::order().
@@ -23,6 +30,37 @@ struct GridCell {
     std::int32_t ix = 0, iy = 0, iz = 0;
     std::uint32_t begin = 0, end = 0;
     std::uint32_t size() const { return end - begin; }
+};
+
+/// The columns (ix, iy) of cells sx * sy of a scan's points, numbered once per scan so that both
+/// phases of the segmenter bin into them without recomputing a column per point. Column ids
+/// follow (ix, iy) order. Where the points' columns fit a box of a few times their number (every
+/// real scan), the ids are the box's dense index (empty columns have ids too); otherwise (points
+/// spread absurdly far) they are the ranks of the occupied columns. Reuses its memory.
+class ColumnIndex {
+public:
+    /// Numbers the columns of the points `indices` of `cloud`; `columnOf[k]` receives the column
+    /// id of point indices[k] (resized to indices.size()).
+    /// `pool` (optional): the per-point work in parallel (the same ids).
+    void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
+               std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool = nullptr);
+
+    /// Number of column ids (ids are 0 .. size() - 1).
+    std::uint32_t size() const { return size_; }
+    /// Id of column (ix, iy), or -1 where it holds no point (dense ids: outside the box).
+    std::int64_t find(std::int32_t ix, std::int32_t iy) const;
+    /// Column index along x and y of the column `id`.
+    std::int32_t ix(std::uint32_t id) const;
+    std::int32_t iy(std::uint32_t id) const;
+
+private:
+    bool dense_ = true;
+    std::int32_t lo_[2] = {0, 0};
+    std::int64_t extY_ = 1;
+    std::uint32_t size_ = 0;
+    std::vector<std::uint64_t> keys_;    // sparse ids: sorted keys of the occupied columns
+    std::vector<std::int32_t> coords_;   // ix, iy per input position (scratch)
+    std::vector<std::int32_t> bounds_;   // per chunk of points: their columns' bounding box (scratch)
 };
 
 /// A 3-D grid of occupied cells, rebuilt per scan. Cells come sorted by (ix, iy, iz), so the cells
@@ -34,7 +72,24 @@ public:
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx,
                double sy, double sz, double originZ = 0.0);
 
+    /// The same cells as build() (same order, same order() within each cell), from the points'
+    /// columns numbered by `columns` (`columnOf[k]`: the column id of indices[k]) and sx, sy the
+    /// columns' sizes: points are binned per column and only their z cell is computed here. Also
+    /// fills points(), columnCells() and cellColumns().
+    /// `pointsOfIndices`, if given, holds the points of `indices` in their order (a copy the caller
+    /// has at hand, read sequentially instead of the cloud).
+    void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
+               const std::uint32_t* columnOf, double sz, double originZ = 0.0,
+               const Eigen::Vector3f* pointsOfIndices = nullptr);
+
     const std::vector<GridCell>& cells() const { return cells_; }
+    /// [m] The points (x, y, z) aligned with order() (filled by the ColumnIndex form of build()).
+    const std::vector<Eigen::Vector3f>& points() const { return points_; }
+    /// The cells of column id c are cells()[columnCells()[c] .. columnCells()[c + 1]) (filled by
+    /// the ColumnIndex form of build(); size ColumnIndex::size() + 1).
+    const std::vector<std::uint32_t>& columnCells() const { return columnCells_; }
+    /// The column id of each cell (filled by the ColumnIndex form of build()).
+    const std::vector<std::uint32_t>& cellColumns() const { return cellColumns_; }
     /// Point indices (into the cloud) grouped by cell: cell c owns order()[c.begin .. c.end).
     const std::vector<std::uint32_t>& order() const { return order_; }
 
@@ -44,6 +99,9 @@ private:
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
     std::vector<std::uint32_t> keys_, counts_;
     std::vector<std::uint64_t> sortKeys_;
+    std::vector<Eigen::Vector3f> points_, byColumnPoints_;
+    std::vector<std::uint32_t> columnCells_, cellColumns_, byColumn_;
+    std::vector<std::int32_t> iz_, sortedIz_;
 };
 
 }  // namespace gseg

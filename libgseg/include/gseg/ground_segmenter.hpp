@@ -35,7 +35,7 @@ struct StepTimes {
     double grid = 0;            ///< binning points into cells
     double classification = 0;  ///< covariance + eigen classification
     double planeFit = 0;        ///< RANSAC plane fit of planar cells
-    double expansion = 0;       ///< KD-tree build + breadth-first region expansion with its checks
+    double expansion = 0;       ///< neighbour search between candidate centroids + breadth-first region expansion with its checks
     double refinement = 0;      ///< sparsity buckets and final per-point labels
     double total() const { return grid + classification + planeFit + expansion + refinement; }
 };
@@ -45,7 +45,7 @@ struct PhaseReport {
     std::size_t inputPoints = 0;     ///< points the phase looked at
     std::size_t groundPoints = 0;    ///< points the phase called ground
     std::size_t occupiedCells = 0;   ///< cells with at least one point
-    std::size_t candidateCells = 0;  ///< tentative ground cells (KD-tree size)
+    std::size_t candidateCells = 0;  ///< tentative ground cells (the expansion's centroids)
     std::size_t groundCells = 0;     ///< cells accepted as ground
     std::size_t unlabelledCellPoints = 0;  ///< points in cells with too few points (labelled non-ground)
     std::size_t unreachedCellPoints = 0;   ///< points in candidate cells the expansion never reached (non-ground)

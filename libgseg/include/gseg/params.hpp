@@ -42,7 +42,7 @@ struct Params {
 
     // --- ground region expansion ------------------------------------------------------------------
     double seedHeightTolerance = 0.3;   ///< [m] expansion starts from the candidates within robotRadius + centroidSearchRadius whose ground lies within this of -distToGround (both phases; if fewer than 4 do, also those within robotRadius + centroidSearchRadius beyond the nearest candidate: a sensor whose blind zone hides the ground near the robot; if none does, the tolerance widens at slopeThresholdDegrees with the distance: the robot stands on a slope)
-    double centroidSearchRadius = 5.0;  ///< [m] radius of the KD-tree search between ground-candidate centroids
+    double centroidSearchRadius = 5.0;  ///< [m] radius of the neighbour search between ground-candidate centroids (the paper's KD-tree search)
     double heightGate = 0.1;            ///< [m] Phase II (tau): a neighbour is taken only if the step between the two ground centroids, measured along both cells' fitted ground planes (height for line and small cells), is at most this
     bool recoverNearGround = true;      ///< Phase I: points of non-ground cells that lie on the ground plane of a ground cell beside them (or one level below) go on to Phase II
     double recoveryThreshold = 0.1;     ///< [m] point-to-plane distance of such a recovered point
@@ -56,6 +56,9 @@ struct Params {
     double floatingMaxDepth = 0.5;           ///< [m] ... and at most this below it; deeper points are reflections under the ground (a rejected cell recovered onto a neighbour's plane does not count its points more than this below that plane either)
     bool floatingIgnoresLowOutliers = true;  ///< ... not counting the outliers of a Phase I ground cell that lie below its plane (lower ground beside it); false: every outlier counts
     double belowGroundMargin = 0.5;          ///< [m] non-ground points this far below the local ground are flagged as reflections (Result::belowGround; 0: never)
+
+    // --- execution --------------------------------------------------------------------------------
+    int threads = 1;  ///< [threads] threads working on one scan (intra-scan: cells, plane fits and the expansion's neighbour searches in parallel; 1..256); the labels are the same for any count. Not the tools' --threads, which segment several scans at once
 
     /// Throws std::invalid_argument naming the first invalid key and its value.
     void validate() const;

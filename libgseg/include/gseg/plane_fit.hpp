@@ -34,6 +34,18 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
                         std::uint64_t seed, std::vector<std::uint8_t>& inlier, double maxSlopeDegrees = 90.0,
                         double minInlierRatio = 0.0);
 
+/// Scratch memory of fitPlane(), reused between calls (one per thread): the points as separate
+/// x, y, z arrays (the inlier count over them vectorises) and a second inlier mask.
+struct PlaneFitScratch {
+    std::vector<float> x, y, z;
+    std::vector<std::uint8_t> mask;
+};
+
+/// The same, allocating nothing once `scratch` (and `inlier`) have grown to the largest cell.
+PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
+                        std::vector<std::uint8_t>& inlier, PlaneFitScratch& scratch, double maxSlopeDegrees = 90.0,
+                        double minInlierRatio = 0.0);
+
 /// Angle [deg] between a unit normal and the z axis (0 = horizontal plane).
 double planeSlopeDegrees(const Eigen::Vector3f& normal);
 
