@@ -109,15 +109,26 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         bounds_[c] = bounds_[c + 1] = std::numeric_limits<std::int32_t>::max();
         bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
     }
+    xy_.resize(2 * n);
     forPoints([&](std::size_t b, std::size_t e) {
-        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
+        // The coordinates gathered first, then the cells and the box in loops that vectorise.
+        float* const xs = xy_.data();
+        float* const ys = xy_.data() + n;
         for (std::size_t k = b; k < e; ++k) {
             const float* p = cloud.point(indices[k]);
-            const std::int32_t cx = cellCoord(p[0], sx), cy = cellCoord(p[1], sy);
-            coords_[2 * k] = cx, coords_[2 * k + 1] = cy;
-            box[0] = std::min(box[0], cx), box[2] = std::max(box[2], cx);
-            box[1] = std::min(box[1], cy), box[3] = std::max(box[3], cy);
+            xs[k] = p[0], ys[k] = p[1];
         }
+        std::int32_t* const cxs = coords_.data();
+        std::int32_t* const cys = coords_.data() + n;
+        for (std::size_t k = b; k < e; ++k) cxs[k] = cellCoord(xs[k], sx);
+        for (std::size_t k = b; k < e; ++k) cys[k] = cellCoord(ys[k], sy);
+        std::int32_t lx = std::numeric_limits<std::int32_t>::max(), ly = lx;
+        std::int32_t hx = std::numeric_limits<std::int32_t>::min(), hy = hx;
+        for (std::size_t k = b; k < e; ++k) lx = std::min(lx, cxs[k]), hx = std::max(hx, cxs[k]);
+        for (std::size_t k = b; k < e; ++k) ly = std::min(ly, cys[k]), hy = std::max(hy, cys[k]);
+        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
+        box[0] = std::min(box[0], lx), box[2] = std::max(box[2], hx);
+        box[1] = std::min(box[1], ly), box[3] = std::max(box[3], hy);
     });
     std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
     std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
@@ -137,20 +148,23 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         extY_ = std::int64_t(hi[1]) - lo[1] + 1;
         size_ = std::uint32_t(area);
         forPoints([&](std::size_t b, std::size_t e) {
+            const std::int32_t* const cxs = coords_.data();
+            const std::int32_t* const cys = coords_.data() + n;
+            // Dense ids fit 32 bits (the box holds at most 4 n + 65536 columns).
+            const std::uint32_t ey = std::uint32_t(extY_), lx = std::uint32_t(lo[0]), ly = std::uint32_t(lo[1]);
             for (std::size_t k = b; k < e; ++k)
-                columnOf[k] = std::uint32_t((std::int64_t(coords_[2 * k]) - lo[0]) * extY_ +
-                                            (std::int64_t(coords_[2 * k + 1]) - lo[1]));
+                columnOf[k] = (std::uint32_t(cxs[k]) - lx) * ey + (std::uint32_t(cys[k]) - ly);
         });
         return;
     }
     keys_.resize(n);
-    for (std::size_t k = 0; k < n; ++k) keys_[k] = columnKey(coords_[2 * k], coords_[2 * k + 1]);
+    for (std::size_t k = 0; k < n; ++k) keys_[k] = columnKey(coords_[k], coords_[n + k]);
     std::sort(keys_.begin(), keys_.end());
     keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
     size_ = std::uint32_t(keys_.size());
     for (std::size_t k = 0; k < n; ++k)
         columnOf[k] = std::uint32_t(
-            std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[2 * k], coords_[2 * k + 1])) - keys_.begin());
+            std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[k], coords_[n + k])) - keys_.begin());
 }
 
 std::int64_t ColumnIndex::find(std::int32_t ix, std::int32_t iy) const {
@@ -189,21 +203,44 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     counts_.assign(std::size_t(numColumns) + 1, 0);
     for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
     for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
-    byColumn_.resize(n);
-    byColumnPoints_.resize(n);
+    // Input already grouped by column in ascending order (Phase II: Phase I hands its ground over
+    // cell by cell)? Then the stable counting sort by column keeps it as it is.
+    bool sorted = true;
+    for (std::size_t k = 1; k < n && sorted; ++k) sorted = columnOf[k] >= columnOf[k - 1];
+    const std::uint32_t* byColumn = indices.data();  // the points' indices, grouped by column
+    const Eigen::Vector3f* byColumnPoints = pointsOfIndices;  // and their coordinates
     iz_.resize(n);
     sortedIz_.resize(n);
-    for (std::size_t k = 0; k < n; ++k) {
-        const std::uint32_t i = indices[k];
-        const std::uint32_t at = counts_[columnOf[k]]++;
-        byColumn_[at] = i;
-        if (pointsOfIndices) {
-            byColumnPoints_[at] = pointsOfIndices[k];
-        } else {
-            const float* p = cloud.point(i);
-            byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+    if (sorted) {
+        for (std::uint32_t c = 0; c < numColumns; ++c) counts_[c] = counts_[c + 1];
+        if (!byColumnPoints) {
+            byColumnPoints_.resize(n);
+            for (std::size_t k = 0; k < n; ++k) {
+                const float* p = cloud.point(indices[k]);
+                byColumnPoints_[k] = Eigen::Vector3f(p[0], p[1], p[2]);
+            }
+            byColumnPoints = byColumnPoints_.data();
         }
-        iz_[at] = cellCoord(byColumnPoints_[at].z(), sz, originZ);
+        // The z cells, in loops that vectorise.
+        zs_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) zs_[k] = byColumnPoints[k].z();
+        for (std::size_t k = 0; k < n; ++k) iz_[k] = cellCoord(zs_[k], sz, originZ);
+    } else {
+        byColumn_.resize(n);
+        byColumnPoints_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint32_t at = counts_[columnOf[k]]++;
+            byColumn_[at] = indices[k];
+            if (pointsOfIndices) {
+                byColumnPoints_[at] = pointsOfIndices[k];
+            } else {
+                const float* p = cloud.point(indices[k]);
+                byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+            }
+            iz_[at] = cellCoord(byColumnPoints_[at].z(), sz, originZ);
+        }
+        byColumn = byColumn_.data();
+        byColumnPoints = byColumnPoints_.data();
     }
     // counts_[c] is now the end of column c (and the start of column c + 1).
     std::uint32_t start = 0;
@@ -215,8 +252,8 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         std::int32_t lo = iz_[start], hi = iz_[start];
         for (std::uint32_t k = start + 1; k < end; ++k) lo = std::min(lo, iz_[k]), hi = std::max(hi, iz_[k]);
         if (lo == hi) {
-            std::copy(byColumn_.begin() + start, byColumn_.begin() + end, order_.begin() + start);
-            std::copy(byColumnPoints_.begin() + start, byColumnPoints_.begin() + end, points_.begin() + start);
+            std::copy(byColumn + start, byColumn + end, order_.begin() + start);
+            std::copy(byColumnPoints + start, byColumnPoints + end, points_.begin() + start);
             cells_.push_back({ix, iy, lo, start, end});
             cellColumns_.push_back(c);
             start = end;
@@ -231,8 +268,8 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             for (std::size_t b = 1; b <= range; ++b) keys_[b] += keys_[b - 1];
             for (std::uint32_t k = start; k < end; ++k) {
                 const std::uint32_t at = start + keys_[std::size_t(iz_[k] - lo)]++;
-                order_[at] = byColumn_[k];
-                points_[at] = byColumnPoints_[k];
+                order_[at] = byColumn[k];
+                points_[at] = byColumnPoints[k];
                 sortedIz_[at] = iz_[k];
             }
         } else {
@@ -242,8 +279,8 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             std::sort(sortKeys_.begin(), sortKeys_.begin() + (end - start));
             for (std::uint32_t k = start; k < end; ++k) {
                 const std::uint32_t from = start + std::uint32_t(sortKeys_[k - start] & 0xffffffffull);
-                order_[k] = byColumn_[from];
-                points_[k] = byColumnPoints_[from];
+                order_[k] = byColumn[from];
+                points_[k] = byColumnPoints[from];
                 sortedIz_[k] = iz_[from];
             }
         }
