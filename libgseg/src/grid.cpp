@@ -200,19 +200,25 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     points_.resize(n);
     columnCells_.assign(std::size_t(numColumns) + 1, 0);
     if (n == 0) return;
-    counts_.assign(std::size_t(numColumns) + 1, 0);
-    for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
-    for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
     // Input already grouped by column in ascending order (Phase II: Phase I hands its ground over
     // cell by cell)? Then the stable counting sort by column keeps it as it is.
     bool sorted = true;
     for (std::size_t k = 1; k < n && sorted; ++k) sorted = columnOf[k] >= columnOf[k - 1];
+    counts_.assign(std::size_t(numColumns) + 1, 0);
+    if (!sorted) {
+        for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
+        for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
+    }
     const std::uint32_t* byColumn = indices.data();  // the points' indices, grouped by column
     const Eigen::Vector3f* byColumnPoints = pointsOfIndices;  // and their coordinates
     iz_.resize(n);
     sortedIz_.resize(n);
     if (sorted) {
-        for (std::uint32_t c = 0; c < numColumns; ++c) counts_[c] = counts_[c + 1];
+        // The end of each column: where the next column's points begin (no count per point).
+        std::uint32_t c = 0;
+        for (std::uint32_t k = 0; k < std::uint32_t(n); ++k)
+            while (c < columnOf[k]) counts_[c++] = k;
+        while (c < numColumns) counts_[c++] = std::uint32_t(n);
         if (!byColumnPoints) {
             byColumnPoints_.resize(n);
             for (std::size_t k = 0; k < n; ++k) {
@@ -244,11 +250,18 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     }
     // counts_[c] is now the end of column c (and the start of column c + 1).
     std::uint32_t start = 0;
+    // Dense ids: column c is (ix, iy) = (lo x + c / extY, lo y + c % extY), stepped along here
+    // instead of divided per column.
+    const bool dense = columns.denseIds();
+    const std::int64_t extY = dense ? columns.extentY() : 1;
+    std::int64_t stepX = 0, stepY = 0;  // c / extY, c % extY
     for (std::uint32_t c = 0; c < numColumns; ++c) {
+        if (c > 0 && ++stepY == extY) stepY = 0, ++stepX;
         const std::uint32_t end = counts_[c];
         columnCells_[c] = std::uint32_t(cells_.size());
         if (start == end) continue;
-        const std::int32_t ix = columns.ix(c), iy = columns.iy(c);
+        const std::int32_t ix = dense ? std::int32_t(columns.loX() + stepX) : columns.ix(c);
+        const std::int32_t iy = dense ? std::int32_t(columns.loY() + stepY) : columns.iy(c);
         std::int32_t lo = iz_[start], hi = iz_[start];
         for (std::uint32_t k = start + 1; k < end; ++k) lo = std::min(lo, iz_[k]), hi = std::max(hi, iz_[k]);
         if (lo == hi) {

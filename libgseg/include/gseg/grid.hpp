@@ -54,6 +54,11 @@ public:
     /// Column index along x and y of the column `id`.
     std::int32_t ix(std::uint32_t id) const;
     std::int32_t iy(std::uint32_t id) const;
+    /// Whether the ids are the dense index of a box: id = (ix - loX()) * extentY() + (iy - loY()).
+    bool denseIds() const { return dense_; }
+    std::int64_t loX() const { return lo_[0]; }
+    std::int64_t loY() const { return lo_[1]; }
+    std::int64_t extentY() const { return extY_; }
 
 private:
     bool dense_ = true;
