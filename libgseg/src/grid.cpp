@@ -4,6 +4,19 @@
 #include <limits>
 
 namespace gseg {
+namespace detail {
+
+// cellCoord of n values into out. On x86-64 with GCC also compiled for AVX2 (chosen when the CPU
+// has it, at load time): four quotients at once instead of two, the same values (the same IEEE
+// division and comparisons; AVX2 brings no fused multiply-add).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out) {
+    for (std::size_t k = 0; k < n; ++k) out[k] = cellCoord(v[k], size, origin);
+}
+
+}  // namespace detail
 
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx,
                  double sy, double sz, double originZ) {
@@ -120,8 +133,8 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         }
         std::int32_t* const cxs = coords_.data();
         std::int32_t* const cys = coords_.data() + n;
-        for (std::size_t k = b; k < e; ++k) cxs[k] = cellCoord(xs[k], sx);
-        for (std::size_t k = b; k < e; ++k) cys[k] = cellCoord(ys[k], sy);
+        detail::cellCoords(xs + b, e - b, sx, 0.0, cxs + b);
+        detail::cellCoords(ys + b, e - b, sy, 0.0, cys + b);
         std::int32_t lx = std::numeric_limits<std::int32_t>::max(), ly = lx;
         std::int32_t hx = std::numeric_limits<std::int32_t>::min(), hy = hx;
         for (std::size_t k = b; k < e; ++k) lx = std::min(lx, cxs[k]), hx = std::max(hx, cxs[k]);
@@ -230,7 +243,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         // The z cells, in loops that vectorise.
         zs_.resize(n);
         for (std::size_t k = 0; k < n; ++k) zs_[k] = byColumnPoints[k].z();
-        for (std::size_t k = 0; k < n; ++k) iz_[k] = cellCoord(zs_[k], sz, originZ);
+        detail::cellCoords(zs_.data(), n, sz, originZ, iz_.data());
     } else {
         byColumn_.resize(n);
         byColumnPoints_.resize(n);
