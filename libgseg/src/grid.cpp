@@ -1,18 +1,36 @@
 #include <gseg/grid.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace gseg {
 namespace detail {
 
-// cellCoord of n values into out. On x86-64 with GCC also compiled for AVX2 (chosen when the CPU
-// has it, at load time): four quotients at once instead of two, the same values (the same IEEE
-// division and comparisons; AVX2 brings no fused multiply-add).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-__attribute__((target_clones("avx2", "default")))
+// cellCoord of n values into out: a loop that vectorises (two quotients at a time on x86-64's
+// baseline); on x86-64 CPUs with AVX2 (checked once) four at a time, with AVX's floor
+// instruction: the same values (the same IEEE division and clamps, an exact floor; no fused
+// multiply-add).
+#if defined(__GNUC__) && defined(__x86_64__)
+namespace {
+__attribute__((target("avx2"))) void cellCoordsAvx2(const float* v, std::size_t n, double size, double origin,
+                                                    std::int32_t* out) {
+    constexpr double lim = 1073741824.0;  // as cellCoord
+    for (std::size_t k = 0; k < n; ++k) {
+        double q = (static_cast<double>(v[k]) - origin) / size;
+        q = q > -lim ? q : -lim;
+        q = q < lim ? q : lim;
+        out[k] = static_cast<std::int32_t>(std::floor(q));
+    }
+}
+const bool kAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2") != 0);
+}  // namespace
 #endif
+
 void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (kAvx2) return cellCoordsAvx2(v, n, size, origin, out);
+#endif
     for (std::size_t k = 0; k < n; ++k) out[k] = cellCoord(v[k], size, origin);
 }
 
@@ -247,6 +265,11 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     } else {
         byColumn_.resize(n);
         byColumnPoints_.resize(n);
+        // The z cells in the input's order first (vectorised), then carried along.
+        zs_.resize(n);
+        izIn_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+        detail::cellCoords(zs_.data(), n, sz, originZ, izIn_.data());
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint32_t at = counts_[columnOf[k]]++;
             byColumn_[at] = indices[k];
@@ -256,7 +279,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
                 const float* p = cloud.point(indices[k]);
                 byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
             }
-            iz_[at] = cellCoord(byColumnPoints_[at].z(), sz, originZ);
+            iz_[at] = izIn_[k];
         }
         byColumn = byColumn_.data();
         byColumnPoints = byColumnPoints_.data();

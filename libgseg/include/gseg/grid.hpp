@@ -109,7 +109,7 @@ private:
     std::vector<std::uint64_t> sortKeys_;
     std::vector<Eigen::Vector3f> points_, byColumnPoints_;
     std::vector<std::uint32_t> columnCells_, cellColumns_, byColumn_;
-    std::vector<std::int32_t> iz_, sortedIz_;
+    std::vector<std::int32_t> iz_, sortedIz_, izIn_;
     std::vector<float> zs_;
 };
 
