@@ -157,6 +157,29 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         }
         EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
 
+        // Few (column, z cell) keys (Phase I's tall cells; no tall column): the single counting
+        // sort by both, the same cells and order.
+        std::vector<std::uint32_t> low, lowColumns;
+        for (std::size_t k = 0; k < idx.size(); ++k)
+            if (std::abs(cloud.z(idx[k])) < 5.f) low.push_back(idx[k]), lowColumns.push_back(columnOf[k]);
+        gseg::Grid plainLow, byKeyLow;
+        plainLow.build(cloud, low, 1.5, 1.0, 1.5, -2.5);
+        byKeyLow.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5);
+        ASSERT_EQ(plainLow.cells().size(), byKeyLow.cells().size()) << far;
+        EXPECT_EQ(plainLow.order(), byKeyLow.order()) << far;
+        for (std::size_t c = 0; c < plainLow.cells().size(); ++c) {
+            const auto &a = plainLow.cells()[c], &b = byKeyLow.cells()[c];
+            ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
+            EXPECT_EQ(columns.find(a.ix, a.iy), std::int64_t(byKeyLow.cellColumns()[c]));
+            const std::int64_t col = columns.find(a.ix, a.iy);
+            EXPECT_GE(c, byKeyLow.columnCells()[std::size_t(col)]);
+            EXPECT_LT(c, byKeyLow.columnCells()[std::size_t(col) + 1]);
+        }
+        for (std::size_t k = 0; k < low.size(); ++k) {
+            const float* p = cloud.point(byKeyLow.order()[k]);
+            EXPECT_EQ(byKeyLow.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
+        }
+
         // Input already grouped by column (Phase II's: Phase I's cells in order) takes the path
         // without the scatter by column: the same cells and order as the plain form on that input,
         // with the points handed over or read from the cloud, and z cells of another height.

@@ -218,6 +218,66 @@ std::int32_t ColumnIndex::iy(std::uint32_t id) const {
                   : std::int32_t(std::int64_t(keys_[id] & 0xffffffffull) - kColumnBias);
 }
 
+// One stable counting sort by the key (column, z cell) where the columns times the z cells of the
+// points are few (Phase I's tall cells over a scan: about 10^5 keys): each point is moved once,
+// straight to its place, and the cells are read off the keys in order. Returns false (nothing
+// done) where there would be too many keys.
+bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                             const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
+                             const Eigen::Vector3f* pointsOfIndices) {
+    const std::size_t n = indices.size();
+    const std::uint32_t numColumns = columns.size();
+    zs_.resize(n);
+    izIn_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+    detail::cellCoords(zs_.data(), n, sz, originZ, izIn_.data());
+    std::int32_t lo = izIn_[0], hi = izIn_[0];
+    for (std::size_t k = 1; k < n; ++k) lo = std::min(lo, izIn_[k]), hi = std::max(hi, izIn_[k]);
+    const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
+    const std::uint64_t numKeys = range * numColumns;
+    if (numKeys > 4 * std::uint64_t(n) + 65536 || numKeys >= (std::uint64_t(1) << 32)) return false;
+    const std::uint32_t r = std::uint32_t(range);
+    keys_.resize(n);
+    counts_.assign(std::size_t(numKeys) + 1, 0);
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t key = columnOf[k] * r + std::uint32_t(izIn_[k] - lo);
+        keys_[k] = key;
+        ++counts_[key + 1];
+    }
+    for (std::size_t b = 1; b <= numKeys; ++b) counts_[b] += counts_[b - 1];
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t at = counts_[keys_[k]]++;
+        order_[at] = indices[k];
+        if (pointsOfIndices) {
+            points_[at] = pointsOfIndices[k];
+        } else {
+            const float* p = cloud.point(indices[k]);
+            points_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+        }
+    }
+    // counts_[key] is now the end of the key's points (and the start of the next key's).
+    const bool dense = columns.denseIds();
+    const std::int64_t extY = dense ? columns.extentY() : 1;
+    std::int64_t stepX = 0, stepY = 0;  // c / extY, c % extY (dense ids)
+    std::uint32_t start = 0;
+    for (std::uint32_t c = 0; c < numColumns; ++c) {
+        if (c > 0 && ++stepY == extY) stepY = 0, ++stepX;
+        columnCells_[c] = std::uint32_t(cells_.size());
+        if (counts_[std::size_t(c) * r + r - 1] == start) continue;  // no point in the column
+        const std::int32_t ix = dense ? std::int32_t(columns.loX() + stepX) : columns.ix(c);
+        const std::int32_t iy = dense ? std::int32_t(columns.loY() + stepY) : columns.iy(c);
+        for (std::uint32_t z = 0; z < r; ++z) {
+            const std::uint32_t end = counts_[std::size_t(c) * r + z];
+            if (end == start) continue;
+            cells_.push_back({ix, iy, std::int32_t(std::int64_t(lo) + z), start, end});
+            cellColumns_.push_back(c);
+            start = end;
+        }
+    }
+    columnCells_[numColumns] = std::uint32_t(cells_.size());
+    return true;
+}
+
 // Stable counting sort by column, then within each column a stable sort by z cell: the order of
 // build()'s stable sort by (ix, iy, iz).
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
@@ -235,6 +295,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     // cell by cell)? Then the stable counting sort by column keeps it as it is.
     bool sorted = true;
     for (std::size_t k = 1; k < n && sorted; ++k) sorted = columnOf[k] >= columnOf[k - 1];
+    if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices)) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
     if (!sorted) {
         for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];

@@ -102,6 +102,12 @@ public:
     const std::vector<std::uint32_t>& order() const { return order_; }
 
 private:
+    // The ColumnIndex form's single counting sort by (column, z cell) where the keys are few;
+    // false: not done.
+    bool buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                           const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
+                           const Eigen::Vector3f* pointsOfIndices);
+
     std::vector<GridCell> cells_;
     std::vector<std::uint32_t> order_;
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
