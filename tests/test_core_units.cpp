@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <random>
@@ -31,6 +32,42 @@ TEST(CellCoord, FloorNotTruncationTable) {
     for (const Row& r : rows) EXPECT_EQ(gseg::cellCoord(r.v, r.size), r.expected) << r.v << " / " << r.size;
     EXPECT_EQ(gseg::cellCoord(-1.8f, 0.2, -1.9), 0);  // origin shifts the borders
     EXPECT_EQ(gseg::cellCoord(-1.95f, 0.2, -1.9), -1);
+}
+
+// cellCoord is branch-free so that grid.cpp's loops vectorise (#21): the floor of the quotient,
+// clamped, for values near cell borders, of every magnitude, negative, NaN and infinite; and the
+// vectorised loops of ColumnIndex::build give each point the column of cellCoord.
+TEST(CellCoord, BranchFreeFormIsTheClampedFloorAndColumnIndexAgrees) {
+    const auto reference = [](float v, double size, double origin) {
+        const double q = (double(v) - origin) / size;
+        if (std::isnan(q) || q <= -1073741824.0) return -(1 << 30);
+        if (q >= 1073741824.0) return 1 << 30;
+        return int(std::floor(q));
+    };
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<float> xyz;
+    for (int i = 0; i < 30000; ++i) {
+        const float scale = std::pow(10.f, float(i % 12) - 3.f);
+        const float border = std::round(u(rng) * 100.f) * 1.5f;  // on and next to cell borders
+        const float v = i % 3 == 0 ? std::nextafter(border, u(rng) > 0 ? 1e30f : -1e30f) : u(rng) * scale;
+        for (const double size : {1.5, 1.0, 0.2})
+            for (const double origin : {0.0, -1.9})
+                ASSERT_EQ(gseg::cellCoord(v, size, origin), reference(v, size, origin)) << v << " " << size << " " << origin;
+        xyz.insert(xyz.end(), {v, -v * 0.7f, 0.f});
+    }
+    for (const float v : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity(), 3e38f, -3e38f})
+        EXPECT_EQ(gseg::cellCoord(v, 0.2), reference(v, 0.2, 0.0)) << v;
+    const gseg::PointCloudView cloud(xyz.data(), xyz.size() / 3);
+    std::vector<std::uint32_t> idx(cloud.size()), columnOf;
+    for (std::uint32_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    gseg::ColumnIndex columns;
+    columns.build(cloud, idx, 1.5, 1.0, columnOf);
+    for (std::uint32_t i = 0; i < idx.size(); ++i) {
+        ASSERT_EQ(columns.ix(columnOf[i]), gseg::cellCoord(cloud.x(i), 1.5)) << cloud.x(i);
+        ASSERT_EQ(columns.iy(columnOf[i]), gseg::cellCoord(cloud.y(i), 1.0)) << cloud.y(i);
+    }
 }
 
 TEST(Grid, GroupsPointsByCellSortedByColumnThenHeight) {
@@ -119,6 +156,57 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
             EXPECT_EQ(byColumn.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
         }
         EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
+
+        // Few (column, z cell) keys (Phase I's tall cells; no tall column): the single counting
+        // sort by both, the same cells and order.
+        std::vector<std::uint32_t> low, lowColumns;
+        for (std::size_t k = 0; k < idx.size(); ++k)
+            if (std::abs(cloud.z(idx[k])) < 5.f) low.push_back(idx[k]), lowColumns.push_back(columnOf[k]);
+        gseg::Grid plainLow, byKeyLow;
+        plainLow.build(cloud, low, 1.5, 1.0, 1.5, -2.5);
+        byKeyLow.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5);
+        ASSERT_EQ(plainLow.cells().size(), byKeyLow.cells().size()) << far;
+        EXPECT_EQ(plainLow.order(), byKeyLow.order()) << far;
+        for (std::size_t c = 0; c < plainLow.cells().size(); ++c) {
+            const auto &a = plainLow.cells()[c], &b = byKeyLow.cells()[c];
+            ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
+            EXPECT_EQ(columns.find(a.ix, a.iy), std::int64_t(byKeyLow.cellColumns()[c]));
+            const std::int64_t col = columns.find(a.ix, a.iy);
+            EXPECT_GE(c, byKeyLow.columnCells()[std::size_t(col)]);
+            EXPECT_LT(c, byKeyLow.columnCells()[std::size_t(col) + 1]);
+        }
+        for (std::size_t k = 0; k < low.size(); ++k) {
+            const float* p = cloud.point(byKeyLow.order()[k]);
+            EXPECT_EQ(byKeyLow.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
+        }
+
+        // Input already grouped by column (Phase II's: Phase I's cells in order) takes the path
+        // without the scatter by column: the same cells and order as the plain form on that input,
+        // with the points handed over or read from the cloud, and z cells of another height.
+        const std::vector<std::uint32_t> grouped = byColumn.order();
+        std::vector<std::uint32_t> groupedColumns(grouped.size());
+        for (std::size_t c = 0; c < byColumn.cells().size(); ++c)
+            for (std::uint32_t k = byColumn.cells()[c].begin; k < byColumn.cells()[c].end; ++k)
+                groupedColumns[k] = byColumn.cellColumns()[c];
+        gseg::Grid plainGrouped, fromCloud, fromPoints;
+        plainGrouped.build(cloud, grouped, 1.5, 1.0, 0.05, -0.7);
+        fromCloud.build(cloud, grouped, columns, groupedColumns.data(), 0.05, -0.7);
+        fromPoints.build(cloud, grouped, columns, groupedColumns.data(), 0.05, -0.7, byColumn.points().data());
+        ASSERT_GT(plainGrouped.cells().size(), byColumn.cells().size()) << far;  // the thin cells reorder points
+        EXPECT_NE(plainGrouped.order(), grouped) << far;
+        for (const gseg::Grid* g : {&fromCloud, &fromPoints}) {
+            ASSERT_EQ(plainGrouped.cells().size(), g->cells().size()) << far;
+            EXPECT_EQ(plainGrouped.order(), g->order()) << far;
+            for (std::size_t c = 0; c < g->cells().size(); ++c) {
+                const auto &a = plainGrouped.cells()[c], &b = g->cells()[c];
+                ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
+                EXPECT_EQ(columns.find(a.ix, a.iy), std::int64_t(g->cellColumns()[c]));
+            }
+            for (std::size_t k = 0; k < grouped.size(); ++k) {
+                const float* p = cloud.point(g->order()[k]);
+                EXPECT_EQ(g->points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
+            }
+        }
     }
 }
 

@@ -1,9 +1,40 @@
 #include <gseg/grid.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace gseg {
+namespace detail {
+
+// cellCoord of n values into out: a loop that vectorises (two quotients at a time on x86-64's
+// baseline); on x86-64 CPUs with AVX2 (checked once) four at a time, with AVX's floor
+// instruction: the same values (the same IEEE division and clamps, an exact floor; no fused
+// multiply-add).
+#if defined(__GNUC__) && defined(__x86_64__)
+namespace {
+__attribute__((target("avx2"))) void cellCoordsAvx2(const float* v, std::size_t n, double size, double origin,
+                                                    std::int32_t* out) {
+    constexpr double lim = 1073741824.0;  // as cellCoord
+    for (std::size_t k = 0; k < n; ++k) {
+        double q = (static_cast<double>(v[k]) - origin) / size;
+        q = q > -lim ? q : -lim;
+        q = q < lim ? q : lim;
+        out[k] = static_cast<std::int32_t>(std::floor(q));
+    }
+}
+const bool kAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2") != 0);
+}  // namespace
+#endif
+
+void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (kAvx2) return cellCoordsAvx2(v, n, size, origin, out);
+#endif
+    for (std::size_t k = 0; k < n; ++k) out[k] = cellCoord(v[k], size, origin);
+}
+
+}  // namespace detail
 
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx,
                  double sy, double sz, double originZ) {
@@ -109,15 +140,26 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         bounds_[c] = bounds_[c + 1] = std::numeric_limits<std::int32_t>::max();
         bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
     }
+    xy_.resize(2 * n);
     forPoints([&](std::size_t b, std::size_t e) {
-        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
+        // The coordinates gathered first, then the cells and the box in loops that vectorise.
+        float* const xs = xy_.data();
+        float* const ys = xy_.data() + n;
         for (std::size_t k = b; k < e; ++k) {
             const float* p = cloud.point(indices[k]);
-            const std::int32_t cx = cellCoord(p[0], sx), cy = cellCoord(p[1], sy);
-            coords_[2 * k] = cx, coords_[2 * k + 1] = cy;
-            box[0] = std::min(box[0], cx), box[2] = std::max(box[2], cx);
-            box[1] = std::min(box[1], cy), box[3] = std::max(box[3], cy);
+            xs[k] = p[0], ys[k] = p[1];
         }
+        std::int32_t* const cxs = coords_.data();
+        std::int32_t* const cys = coords_.data() + n;
+        detail::cellCoords(xs + b, e - b, sx, 0.0, cxs + b);
+        detail::cellCoords(ys + b, e - b, sy, 0.0, cys + b);
+        std::int32_t lx = std::numeric_limits<std::int32_t>::max(), ly = lx;
+        std::int32_t hx = std::numeric_limits<std::int32_t>::min(), hy = hx;
+        for (std::size_t k = b; k < e; ++k) lx = std::min(lx, cxs[k]), hx = std::max(hx, cxs[k]);
+        for (std::size_t k = b; k < e; ++k) ly = std::min(ly, cys[k]), hy = std::max(hy, cys[k]);
+        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
+        box[0] = std::min(box[0], lx), box[2] = std::max(box[2], hx);
+        box[1] = std::min(box[1], ly), box[3] = std::max(box[3], hy);
     });
     std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
     std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
@@ -137,20 +179,23 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         extY_ = std::int64_t(hi[1]) - lo[1] + 1;
         size_ = std::uint32_t(area);
         forPoints([&](std::size_t b, std::size_t e) {
+            const std::int32_t* const cxs = coords_.data();
+            const std::int32_t* const cys = coords_.data() + n;
+            // Dense ids fit 32 bits (the box holds at most 4 n + 65536 columns).
+            const std::uint32_t ey = std::uint32_t(extY_), lx = std::uint32_t(lo[0]), ly = std::uint32_t(lo[1]);
             for (std::size_t k = b; k < e; ++k)
-                columnOf[k] = std::uint32_t((std::int64_t(coords_[2 * k]) - lo[0]) * extY_ +
-                                            (std::int64_t(coords_[2 * k + 1]) - lo[1]));
+                columnOf[k] = (std::uint32_t(cxs[k]) - lx) * ey + (std::uint32_t(cys[k]) - ly);
         });
         return;
     }
     keys_.resize(n);
-    for (std::size_t k = 0; k < n; ++k) keys_[k] = columnKey(coords_[2 * k], coords_[2 * k + 1]);
+    for (std::size_t k = 0; k < n; ++k) keys_[k] = columnKey(coords_[k], coords_[n + k]);
     std::sort(keys_.begin(), keys_.end());
     keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
     size_ = std::uint32_t(keys_.size());
     for (std::size_t k = 0; k < n; ++k)
         columnOf[k] = std::uint32_t(
-            std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[2 * k], coords_[2 * k + 1])) - keys_.begin());
+            std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[k], coords_[n + k])) - keys_.begin());
 }
 
 std::int64_t ColumnIndex::find(std::int32_t ix, std::int32_t iy) const {
@@ -173,6 +218,66 @@ std::int32_t ColumnIndex::iy(std::uint32_t id) const {
                   : std::int32_t(std::int64_t(keys_[id] & 0xffffffffull) - kColumnBias);
 }
 
+// One stable counting sort by the key (column, z cell) where the columns times the z cells of the
+// points are few (Phase I's tall cells over a scan: about 10^5 keys): each point is moved once,
+// straight to its place, and the cells are read off the keys in order. Returns false (nothing
+// done) where there would be too many keys.
+bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                             const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
+                             const Eigen::Vector3f* pointsOfIndices) {
+    const std::size_t n = indices.size();
+    const std::uint32_t numColumns = columns.size();
+    zs_.resize(n);
+    izIn_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+    detail::cellCoords(zs_.data(), n, sz, originZ, izIn_.data());
+    std::int32_t lo = izIn_[0], hi = izIn_[0];
+    for (std::size_t k = 1; k < n; ++k) lo = std::min(lo, izIn_[k]), hi = std::max(hi, izIn_[k]);
+    const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
+    const std::uint64_t numKeys = range * numColumns;
+    if (numKeys > 4 * std::uint64_t(n) + 65536 || numKeys >= (std::uint64_t(1) << 32)) return false;
+    const std::uint32_t r = std::uint32_t(range);
+    keys_.resize(n);
+    counts_.assign(std::size_t(numKeys) + 1, 0);
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t key = columnOf[k] * r + std::uint32_t(izIn_[k] - lo);
+        keys_[k] = key;
+        ++counts_[key + 1];
+    }
+    for (std::size_t b = 1; b <= numKeys; ++b) counts_[b] += counts_[b - 1];
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t at = counts_[keys_[k]]++;
+        order_[at] = indices[k];
+        if (pointsOfIndices) {
+            points_[at] = pointsOfIndices[k];
+        } else {
+            const float* p = cloud.point(indices[k]);
+            points_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+        }
+    }
+    // counts_[key] is now the end of the key's points (and the start of the next key's).
+    const bool dense = columns.denseIds();
+    const std::int64_t extY = dense ? columns.extentY() : 1;
+    std::int64_t stepX = 0, stepY = 0;  // c / extY, c % extY (dense ids)
+    std::uint32_t start = 0;
+    for (std::uint32_t c = 0; c < numColumns; ++c) {
+        if (c > 0 && ++stepY == extY) stepY = 0, ++stepX;
+        columnCells_[c] = std::uint32_t(cells_.size());
+        if (counts_[std::size_t(c) * r + r - 1] == start) continue;  // no point in the column
+        const std::int32_t ix = dense ? std::int32_t(columns.loX() + stepX) : columns.ix(c);
+        const std::int32_t iy = dense ? std::int32_t(columns.loY() + stepY) : columns.iy(c);
+        for (std::uint32_t z = 0; z < r; ++z) {
+            const std::uint32_t end = counts_[std::size_t(c) * r + z];
+            if (end == start) continue;
+            cells_.push_back({ix, iy, std::int32_t(std::int64_t(lo) + z), start, end});
+            cellColumns_.push_back(c);
+            start = end;
+        }
+    }
+    columnCells_[numColumns] = std::uint32_t(cells_.size());
+    return true;
+}
+
 // Stable counting sort by column, then within each column a stable sort by z cell: the order of
 // build()'s stable sort by (ix, iy, iz).
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
@@ -186,37 +291,79 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     points_.resize(n);
     columnCells_.assign(std::size_t(numColumns) + 1, 0);
     if (n == 0) return;
+    // Input already grouped by column in ascending order (Phase II: Phase I hands its ground over
+    // cell by cell)? Then the stable counting sort by column keeps it as it is.
+    bool sorted = true;
+    for (std::size_t k = 1; k < n && sorted; ++k) sorted = columnOf[k] >= columnOf[k - 1];
+    if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices)) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
-    for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
-    for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
-    byColumn_.resize(n);
-    byColumnPoints_.resize(n);
+    if (!sorted) {
+        for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
+        for (std::size_t c = 1; c <= numColumns; ++c) counts_[c] += counts_[c - 1];
+    }
+    const std::uint32_t* byColumn = indices.data();  // the points' indices, grouped by column
+    const Eigen::Vector3f* byColumnPoints = pointsOfIndices;  // and their coordinates
     iz_.resize(n);
     sortedIz_.resize(n);
-    for (std::size_t k = 0; k < n; ++k) {
-        const std::uint32_t i = indices[k];
-        const std::uint32_t at = counts_[columnOf[k]]++;
-        byColumn_[at] = i;
-        if (pointsOfIndices) {
-            byColumnPoints_[at] = pointsOfIndices[k];
-        } else {
-            const float* p = cloud.point(i);
-            byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+    if (sorted) {
+        // The end of each column: where the next column's points begin (no count per point).
+        std::uint32_t c = 0;
+        for (std::uint32_t k = 0; k < std::uint32_t(n); ++k)
+            while (c < columnOf[k]) counts_[c++] = k;
+        while (c < numColumns) counts_[c++] = std::uint32_t(n);
+        if (!byColumnPoints) {
+            byColumnPoints_.resize(n);
+            for (std::size_t k = 0; k < n; ++k) {
+                const float* p = cloud.point(indices[k]);
+                byColumnPoints_[k] = Eigen::Vector3f(p[0], p[1], p[2]);
+            }
+            byColumnPoints = byColumnPoints_.data();
         }
-        iz_[at] = cellCoord(byColumnPoints_[at].z(), sz, originZ);
+        // The z cells, in loops that vectorise.
+        zs_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) zs_[k] = byColumnPoints[k].z();
+        detail::cellCoords(zs_.data(), n, sz, originZ, iz_.data());
+    } else {
+        byColumn_.resize(n);
+        byColumnPoints_.resize(n);
+        // The z cells in the input's order first (vectorised), then carried along.
+        zs_.resize(n);
+        izIn_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+        detail::cellCoords(zs_.data(), n, sz, originZ, izIn_.data());
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint32_t at = counts_[columnOf[k]]++;
+            byColumn_[at] = indices[k];
+            if (pointsOfIndices) {
+                byColumnPoints_[at] = pointsOfIndices[k];
+            } else {
+                const float* p = cloud.point(indices[k]);
+                byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
+            }
+            iz_[at] = izIn_[k];
+        }
+        byColumn = byColumn_.data();
+        byColumnPoints = byColumnPoints_.data();
     }
     // counts_[c] is now the end of column c (and the start of column c + 1).
     std::uint32_t start = 0;
+    // Dense ids: column c is (ix, iy) = (lo x + c / extY, lo y + c % extY), stepped along here
+    // instead of divided per column.
+    const bool dense = columns.denseIds();
+    const std::int64_t extY = dense ? columns.extentY() : 1;
+    std::int64_t stepX = 0, stepY = 0;  // c / extY, c % extY
     for (std::uint32_t c = 0; c < numColumns; ++c) {
+        if (c > 0 && ++stepY == extY) stepY = 0, ++stepX;
         const std::uint32_t end = counts_[c];
         columnCells_[c] = std::uint32_t(cells_.size());
         if (start == end) continue;
-        const std::int32_t ix = columns.ix(c), iy = columns.iy(c);
+        const std::int32_t ix = dense ? std::int32_t(columns.loX() + stepX) : columns.ix(c);
+        const std::int32_t iy = dense ? std::int32_t(columns.loY() + stepY) : columns.iy(c);
         std::int32_t lo = iz_[start], hi = iz_[start];
         for (std::uint32_t k = start + 1; k < end; ++k) lo = std::min(lo, iz_[k]), hi = std::max(hi, iz_[k]);
         if (lo == hi) {
-            std::copy(byColumn_.begin() + start, byColumn_.begin() + end, order_.begin() + start);
-            std::copy(byColumnPoints_.begin() + start, byColumnPoints_.begin() + end, points_.begin() + start);
+            std::copy(byColumn + start, byColumn + end, order_.begin() + start);
+            std::copy(byColumnPoints + start, byColumnPoints + end, points_.begin() + start);
             cells_.push_back({ix, iy, lo, start, end});
             cellColumns_.push_back(c);
             start = end;
@@ -231,8 +378,8 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             for (std::size_t b = 1; b <= range; ++b) keys_[b] += keys_[b - 1];
             for (std::uint32_t k = start; k < end; ++k) {
                 const std::uint32_t at = start + keys_[std::size_t(iz_[k] - lo)]++;
-                order_[at] = byColumn_[k];
-                points_[at] = byColumnPoints_[k];
+                order_[at] = byColumn[k];
+                points_[at] = byColumnPoints[k];
                 sortedIz_[at] = iz_[k];
             }
         } else {
@@ -242,8 +389,8 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             std::sort(sortKeys_.begin(), sortKeys_.begin() + (end - start));
             for (std::uint32_t k = start; k < end; ++k) {
                 const std::uint32_t from = start + std::uint32_t(sortKeys_[k - start] & 0xffffffffull);
-                order_[k] = byColumn_[from];
-                points_[k] = byColumnPoints_[from];
+                order_[k] = byColumn[from];
+                points_[k] = byColumnPoints[from];
                 sortedIz_[k] = iz_[from];
             }
         }

@@ -13,6 +13,7 @@
 #include <limits>
 #include <sstream>
 #include <tuple>
+#include <utility>
 #include <stdexcept>
 
 namespace gseg {
@@ -44,13 +45,17 @@ std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
     return splitmix64(s);
 }
 
-// Bounding-box volume per point of the masked (want = 1) or unmasked (want = 0) points.
-double volumePerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std::size_t n, std::uint8_t want) {
-    Eigen::AlignedBox3f box;
-    std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i)
-        if (mask[i] == want) box.extend(pts[i]), ++m;
-    return m == 0 ? 0.0 : double(box.volume()) / double(m);
+// Bounding-box volume per point [m^3] of the masked points (mask 1: first) and of the unmasked
+// ones (mask 0: second), in one pass.
+std::pair<double, double> volumesPerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std::size_t n) {
+    Eigen::AlignedBox3f box[2];
+    std::size_t m[2] = {0, 0};
+    for (std::size_t i = 0; i < n; ++i) {
+        const int in = mask[i] == 1 ? 1 : (mask[i] == 0 ? 0 : -1);
+        if (in >= 0) box[in].extend(pts[i]), ++m[in];
+    }
+    const auto perPoint = [&](int k) { return m[k] == 0 ? 0.0 : double(box[k].volume()) / double(m[k]); };
+    return {perPoint(1), perPoint(0)};
 }
 
 // The z range of the points of one Phase I cell that Phase I did not accept.
@@ -282,8 +287,9 @@ private:
             // A handful of outliers has no meaningful bounding box: only a population of at least
             // minPointsPerCell outliers can compete with the inliers.
             if (g.size() - s.inliers >= std::uint32_t(p_.minPointsPerCell)) {
-                const Sparsity in = sparsityBucket(volumePerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size(), 1), p_);
-                const Sparsity out = sparsityBucket(volumePerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size(), 0), p_);
+                const auto volumes = volumesPerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size());
+                const Sparsity in = sparsityBucket(volumes.first, p_);
+                const Sparsity out = sparsityBucket(volumes.second, p_);
                 s.ambiguous = in == out;
             }
             s.candidate = std::int32_t(ws.candidateCell.size());
@@ -494,9 +500,15 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     Result r;
 
     // Points with a NaN or infinite coordinate (no return) take no part; they are non-ground.
-    ws.input.clear();
-    for (std::uint32_t i = 0; i < cloud.size(); ++i)
-        if (finitePoint(cloud.point(i))) ws.input.push_back(i);
+    // (Written unconditionally, kept where finite: no branch per point.)
+    ws.input.resize(cloud.size());
+    std::uint32_t* const input = ws.input.data();
+    std::size_t numFinite = 0;
+    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+        input[numFinite] = i;
+        numFinite += finitePoint(cloud.point(i)) ? 1 : 0;
+    }
+    ws.input.resize(numFinite);
     r.numNonFinite = cloud.size() - ws.input.size();
     ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
     ws.phase1Ground.clear();

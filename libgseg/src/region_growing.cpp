@@ -55,10 +55,44 @@ public:
             for (std::size_t t = 0; t < n; ++t) sortedKeys_[t] = keys_[items_[t]];
         }
         x_.resize(n), y_.resize(n), z_.resize(n);
+        slotOf_.resize(n);
         for (std::size_t t = 0; t < n; ++t) {
             const Eigen::Vector3f& p = pts[items_[t]];
             x_[t] = p.x(), y_[t] = p.y(), z_[t] = p.z();
+            slotOf_[items_[t]] = std::uint32_t(t);
         }
+        reached_.assign(n, 0);
+    }
+
+    /// Marks centroid i reached: nearUnreached() leaves it out from now on.
+    void markReached(std::uint32_t i) { reached_[slotOf_[i]] = 1; }
+
+    /// near() leaving out the centroids marked reached (read in the columns' order, not through
+    /// the centroid's index: the same centroids as near() with skip(j) = "j was marked").
+    template <class F>
+    void nearUnreached(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
+        const auto& k = keys_[from];
+        const std::uint8_t* const reached = reached_.data();
+        const std::uint32_t* const items = items_.data();
+        const float* const xs = x_.data();
+        const float* const ys = y_.data();
+        const float* const zs = z_.data();
+        const float qx = q.x(), qy = q.y(), qz = q.z();
+        for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
+            for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
+                std::size_t b = 0, e = 0;
+                if (!columnRange(cx, cy, b, e)) continue;
+                for (std::size_t t = b; t < e; ++t) {
+                    if (reached[t]) continue;
+                    // squaredDistance(q, p), term by term in the same order
+                    const float dx = qx - xs[t], dy = qy - ys[t], dz = qz - zs[t];
+                    float r = 0.f;
+                    r += dx * dx;
+                    r += dy * dy;
+                    r += dz * dz;
+                    if (r < radiusSq) f(items[t]);
+                }
+            }
     }
 
     /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
@@ -75,14 +109,7 @@ public:
         for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
             for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
                 std::size_t b = 0, e = 0;
-                if (dense_) {
-                    if (cx < lo_[0] || cy < lo_[1] || cx >= lo_[0] + w_ || cy >= lo_[1] + h_) continue;
-                    const std::size_t c = std::size_t(index(cx, cy));
-                    b = start_[c], e = start_[c + 1];
-                } else {
-                    const auto range = std::equal_range(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy));
-                    b = std::size_t(range.first - sortedKeys_.begin()), e = std::size_t(range.second - sortedKeys_.begin());
-                }
+                if (!columnRange(cx, cy, b, e)) continue;
                 for (std::size_t t = b; t < e; ++t) {
                     if (skip(items_[t])) continue;
                     // squaredDistance(q, p), term by term in the same order
@@ -97,6 +124,18 @@ public:
     }
 
 private:
+    // The slots [b, e) of column (cx, cy); false where it lies outside the dense table.
+    bool columnRange(std::int64_t cx, std::int64_t cy, std::size_t& b, std::size_t& e) const {
+        if (dense_) {
+            if (cx < lo_[0] || cy < lo_[1] || cx >= lo_[0] + w_ || cy >= lo_[1] + h_) return false;
+            const std::size_t c = std::size_t(index(cx, cy));
+            b = start_[c], e = start_[c + 1];
+        } else {
+            const auto range = std::equal_range(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy));
+            b = std::size_t(range.first - sortedKeys_.begin()), e = std::size_t(range.second - sortedKeys_.begin());
+        }
+        return true;
+    }
     std::int64_t coord(float v) const {
         const double c = std::floor(double(v) / size_);
         return std::int64_t(std::max(-1e15, std::min(1e15, c)));
@@ -108,6 +147,8 @@ private:
     std::int64_t lo_[2] = {0, 0}, w_ = 0, h_ = 0;
     std::vector<std::pair<std::int64_t, std::int64_t>> keys_, sortedKeys_;
     std::vector<std::uint32_t> start_, items_;
+    std::vector<std::uint32_t> slotOf_;  // per centroid: its slot in items_ (and x_, y_, z_)
+    std::vector<std::uint8_t> reached_;  // per slot: marked reached (markReached)
     std::vector<float> x_, y_, z_;
 };
 
@@ -119,7 +160,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
     std::vector<std::uint8_t> state(centroids.size(), 0);
     if (parents) parents->assign(centroids.size(), -2);
     if (centroids.empty()) return state;
-    const CentroidColumns columns(centroids, s.radius);
+    CentroidColumns columns(centroids, s.radius);
     const float radiusSq = float(s.radius * s.radius);
 
     std::vector<std::uint32_t> found, neighbours;
@@ -163,6 +204,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
                 const float horizontal = (centroids[j] - s.seed).head<2>().norm();
                 if (state[j] == 0 && std::abs(centroids[j].z() - s.seed.z()) <= s.seedGate + slope * horizontal) {
                     state[j] = 1;
+                    columns.markReached(j);
                     queue.push_back(j);
                     if (parents) (*parents)[j] = -1;
                 }
@@ -211,6 +253,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
 
     const auto reach = [&](std::uint32_t c, std::uint32_t j) {
         state[j] = 1;
+        columns.markReached(j);
         queue.push_back(j);
         if (parents) (*parents)[j] = std::int32_t(c);
     };
@@ -228,11 +271,10 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
             neighbours.clear();
             if (!accept(c, neighbours)) continue;
             state[c] = 2;
-            columns.near(
-                centroids[c], c, radiusSq, [&](std::uint32_t j) { return state[j] != 0; },
-                [&](std::uint32_t j) {
-                    if (j != c && gated(c, j)) reach(c, j);
-                });
+            // The centroids marked reached are those with state != 0.
+            columns.nearUnreached(centroids[c], c, radiusSq, [&](std::uint32_t j) {
+                if (j != c && gated(c, j)) reach(c, j);
+            });
             continue;
         }
         if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate

@@ -13,16 +13,18 @@
 namespace gseg {
 
 /// Integer index of a cell along one axis: floor((v - origin) / size), clamped to +-2^30 so that absurdly
-/// far points land in a far cell of their own instead of overflowing.
-/// (The floor is taken by truncation and a correction, which x86-64 without SSE4.1 does without a
-/// call to floor(): the same value for every finite input.)
+/// far points land in a far cell of their own instead of overflowing (NaN: -2^30).
+/// (Branch-free, so that loops over many points vectorise, as grid.cpp's do (compiled with
+/// -fno-trapping-math, which changes no value): the quotient is clamped first, then truncated
+/// towards zero and corrected down where that rounded up, all in double; x86-64 does this without
+/// a call to floor(); the same value for every input.)
 inline std::int32_t cellCoord(float v, double size, double origin = 0.0) {
-    const double q = (static_cast<double>(v) - origin) / size;
+    double q = (static_cast<double>(v) - origin) / size;
     constexpr double lim = 1073741824.0;  // 2^30
-    if (!(q > -lim)) return -1073741824;  // floor(q) <= -2^30, and NaN
-    if (!(q < lim)) return 1073741824;    // floor(q) >= 2^30
-    const std::int64_t t = static_cast<std::int64_t>(q);  // towards zero
-    return static_cast<std::int32_t>(static_cast<double>(t) > q ? t - 1 : t);
+    q = q > -lim ? q : -lim;              // floor(q) <= -2^30, and NaN
+    q = q < lim ? q : lim;                // floor(q) >= 2^30
+    const double t = static_cast<double>(static_cast<std::int32_t>(q));  // towards zero; |q| <= 2^30 fits
+    return static_cast<std::int32_t>(t > q ? t - 1.0 : t);
 }
 
 /// One occupied cell: its index and the range [begin, end) of its points in Grid::order().
@@ -52,6 +54,11 @@ public:
     /// Column index along x and y of the column `id`.
     std::int32_t ix(std::uint32_t id) const;
     std::int32_t iy(std::uint32_t id) const;
+    /// Whether the ids are the dense index of a box: id = (ix - loX()) * extentY() + (iy - loY()).
+    bool denseIds() const { return dense_; }
+    std::int64_t loX() const { return lo_[0]; }
+    std::int64_t loY() const { return lo_[1]; }
+    std::int64_t extentY() const { return extY_; }
 
 private:
     bool dense_ = true;
@@ -59,7 +66,8 @@ private:
     std::int64_t extY_ = 1;
     std::uint32_t size_ = 0;
     std::vector<std::uint64_t> keys_;    // sparse ids: sorted keys of the occupied columns
-    std::vector<std::int32_t> coords_;   // ix, iy per input position (scratch)
+    std::vector<std::int32_t> coords_;   // ix of every input position, then iy of every one (scratch)
+    std::vector<float> xy_;              // [m] x of every input position, then y of every one (scratch)
     std::vector<std::int32_t> bounds_;   // per chunk of points: their columns' bounding box (scratch)
 };
 
@@ -94,6 +102,12 @@ public:
     const std::vector<std::uint32_t>& order() const { return order_; }
 
 private:
+    // The ColumnIndex form's single counting sort by (column, z cell) where the keys are few;
+    // false: not done.
+    bool buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                           const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
+                           const Eigen::Vector3f* pointsOfIndices);
+
     std::vector<GridCell> cells_;
     std::vector<std::uint32_t> order_;
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
@@ -101,7 +115,8 @@ private:
     std::vector<std::uint64_t> sortKeys_;
     std::vector<Eigen::Vector3f> points_, byColumnPoints_;
     std::vector<std::uint32_t> columnCells_, cellColumns_, byColumn_;
-    std::vector<std::int32_t> iz_, sortedIz_;
+    std::vector<std::int32_t> iz_, sortedIz_, izIn_;
+    std::vector<float> zs_;
 };
 
 }  // namespace gseg
