@@ -119,7 +119,45 @@ constexpr std::int64_t kColumnBias = std::int64_t(1) << 31;
 std::uint64_t columnKey(std::int32_t ix, std::int32_t iy) {
     return (std::uint64_t(std::int64_t(ix) + kColumnBias) << 32) | std::uint64_t(std::int64_t(iy) + kColumnBias);
 }
+
+// Point k of `indices`: from pointsOfIndices where the caller has them at hand, else the cloud.
+Eigen::Vector3f pointOf(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                        const Eigen::Vector3f* pointsOfIndices, std::size_t k) {
+    if (pointsOfIndices) return pointsOfIndices[k];
+    const float* p = cloud.point(indices[k]);
+    return Eigen::Vector3f(p[0], p[1], p[2]);
+}
+
+// (ix, iy) of the column ids 0, 1, 2, ... visited in turn: dense ids are stepped along
+// (c / extY, c % extY without a division per column), sparse ids looked up.
+class ColumnWalk {
+public:
+    explicit ColumnWalk(const ColumnIndex& columns)
+        : columns_(columns), dense_(columns.denseIds()), extY_(dense_ ? columns.extentY() : 1) {}
+    /// Moves to column c (called for c = 0, 1, 2, ... in order).
+    void step(std::uint32_t c) {
+        if (c > 0 && ++y_ == extY_) y_ = 0, ++x_;
+    }
+    std::int32_t ix(std::uint32_t c) const { return dense_ ? std::int32_t(columns_.loX() + x_) : columns_.ix(c); }
+    std::int32_t iy(std::uint32_t c) const { return dense_ ? std::int32_t(columns_.loY() + y_) : columns_.iy(c); }
+
+private:
+    const ColumnIndex& columns_;
+    bool dense_;
+    std::int64_t extY_;
+    std::int64_t x_ = 0, y_ = 0;
+};
 }  // namespace
+
+// The z cells of the points `indices` in their order, computed in loops that vectorise.
+void Grid::zCells(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                  const Eigen::Vector3f* pointsOfIndices, double sz, double originZ, std::vector<std::int32_t>& out) {
+    const std::size_t n = indices.size();
+    zs_.resize(n);
+    out.resize(n);
+    for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+    detail::cellCoords(zs_.data(), n, sz, originZ, out.data());
+}
 
 void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
                         std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool) {
@@ -227,10 +265,7 @@ bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std:
                              const Eigen::Vector3f* pointsOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
-    zs_.resize(n);
-    izIn_.resize(n);
-    for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
-    detail::cellCoords(zs_.data(), n, sz, originZ, izIn_.data());
+    zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
     std::int32_t lo = izIn_[0], hi = izIn_[0];
     for (std::size_t k = 1; k < n; ++k) lo = std::min(lo, izIn_[k]), hi = std::max(hi, izIn_[k]);
     const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
@@ -248,24 +283,16 @@ bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std:
     for (std::size_t k = 0; k < n; ++k) {
         const std::uint32_t at = counts_[keys_[k]]++;
         order_[at] = indices[k];
-        if (pointsOfIndices) {
-            points_[at] = pointsOfIndices[k];
-        } else {
-            const float* p = cloud.point(indices[k]);
-            points_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
-        }
+        points_[at] = pointOf(cloud, indices, pointsOfIndices, k);
     }
     // counts_[key] is now the end of the key's points (and the start of the next key's).
-    const bool dense = columns.denseIds();
-    const std::int64_t extY = dense ? columns.extentY() : 1;
-    std::int64_t stepX = 0, stepY = 0;  // c / extY, c % extY (dense ids)
+    ColumnWalk walk(columns);
     std::uint32_t start = 0;
     for (std::uint32_t c = 0; c < numColumns; ++c) {
-        if (c > 0 && ++stepY == extY) stepY = 0, ++stepX;
+        walk.step(c);
         columnCells_[c] = std::uint32_t(cells_.size());
         if (counts_[std::size_t(c) * r + r - 1] == start) continue;  // no point in the column
-        const std::int32_t ix = dense ? std::int32_t(columns.loX() + stepX) : columns.ix(c);
-        const std::int32_t iy = dense ? std::int32_t(columns.loY() + stepY) : columns.iy(c);
+        const std::int32_t ix = walk.ix(c), iy = walk.iy(c);
         for (std::uint32_t z = 0; z < r; ++z) {
             const std::uint32_t end = counts_[std::size_t(c) * r + z];
             if (end == start) continue;
@@ -313,33 +340,19 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         while (c < numColumns) counts_[c++] = std::uint32_t(n);
         if (!byColumnPoints) {
             byColumnPoints_.resize(n);
-            for (std::size_t k = 0; k < n; ++k) {
-                const float* p = cloud.point(indices[k]);
-                byColumnPoints_[k] = Eigen::Vector3f(p[0], p[1], p[2]);
-            }
+            for (std::size_t k = 0; k < n; ++k) byColumnPoints_[k] = pointOf(cloud, indices, nullptr, k);
             byColumnPoints = byColumnPoints_.data();
         }
-        // The z cells, in loops that vectorise.
-        zs_.resize(n);
-        for (std::size_t k = 0; k < n; ++k) zs_[k] = byColumnPoints[k].z();
-        detail::cellCoords(zs_.data(), n, sz, originZ, iz_.data());
+        zCells(cloud, indices, byColumnPoints, sz, originZ, iz_);
     } else {
         byColumn_.resize(n);
         byColumnPoints_.resize(n);
         // The z cells in the input's order first (vectorised), then carried along.
-        zs_.resize(n);
-        izIn_.resize(n);
-        for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
-        detail::cellCoords(zs_.data(), n, sz, originZ, izIn_.data());
+        zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint32_t at = counts_[columnOf[k]]++;
             byColumn_[at] = indices[k];
-            if (pointsOfIndices) {
-                byColumnPoints_[at] = pointsOfIndices[k];
-            } else {
-                const float* p = cloud.point(indices[k]);
-                byColumnPoints_[at] = Eigen::Vector3f(p[0], p[1], p[2]);
-            }
+            byColumnPoints_[at] = pointOf(cloud, indices, pointsOfIndices, k);
             iz_[at] = izIn_[k];
         }
         byColumn = byColumn_.data();
@@ -347,18 +360,13 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     }
     // counts_[c] is now the end of column c (and the start of column c + 1).
     std::uint32_t start = 0;
-    // Dense ids: column c is (ix, iy) = (lo x + c / extY, lo y + c % extY), stepped along here
-    // instead of divided per column.
-    const bool dense = columns.denseIds();
-    const std::int64_t extY = dense ? columns.extentY() : 1;
-    std::int64_t stepX = 0, stepY = 0;  // c / extY, c % extY
+    ColumnWalk walk(columns);
     for (std::uint32_t c = 0; c < numColumns; ++c) {
-        if (c > 0 && ++stepY == extY) stepY = 0, ++stepX;
+        walk.step(c);
         const std::uint32_t end = counts_[c];
         columnCells_[c] = std::uint32_t(cells_.size());
         if (start == end) continue;
-        const std::int32_t ix = dense ? std::int32_t(columns.loX() + stepX) : columns.ix(c);
-        const std::int32_t iy = dense ? std::int32_t(columns.loY() + stepY) : columns.iy(c);
+        const std::int32_t ix = walk.ix(c), iy = walk.iy(c);
         std::int32_t lo = iz_[start], hi = iz_[start];
         for (std::uint32_t k = start + 1; k < end; ++k) lo = std::min(lo, iz_[k]), hi = std::max(hi, iz_[k]);
         if (lo == hi) {

@@ -67,10 +67,22 @@ public:
     /// Marks centroid i reached: nearUnreached() leaves it out from now on.
     void markReached(std::uint32_t i) { reached_[slotOf_[i]] = 1; }
 
-    /// near() leaving out the centroids marked reached (read in the columns' order, not through
-    /// the centroid's index: the same centroids as near() with skip(j) = "j was marked").
+    /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
+    /// centroid `from` (radiusSq at most the square of the radius given at construction), in the
+    /// columns' order.
+    template <class F>
+    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
+        search<false>(q, from, radiusSq, f);
+    }
+    /// near() leaving out the centroids marked reached (markReached).
     template <class F>
     void nearUnreached(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
+        search<true>(q, from, radiusSq, f);
+    }
+
+private:
+    template <bool kSkipReached, class F>
+    void search(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F& f) const {
         const auto& k = keys_[from];
         const std::uint8_t* const reached = reached_.data();
         const std::uint32_t* const items = items_.data();
@@ -83,7 +95,7 @@ public:
                 std::size_t b = 0, e = 0;
                 if (!columnRange(cx, cy, b, e)) continue;
                 for (std::size_t t = b; t < e; ++t) {
-                    if (reached[t]) continue;
+                    if (kSkipReached && reached[t]) continue;
                     // squaredDistance(q, p), term by term in the same order
                     const float dx = qx - xs[t], dy = qy - ys[t], dz = qz - zs[t];
                     float r = 0.f;
@@ -95,35 +107,6 @@ public:
             }
     }
 
-    /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
-    /// centroid `from` (radiusSq at most the square of the radius given at construction).
-    template <class F>
-    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
-        near(q, from, radiusSq, [](std::uint32_t) { return false; }, f);
-    }
-
-    /// The same, leaving out the centroids j with skip(j) true before their distance is computed.
-    template <class Skip, class F>
-    void near(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, Skip&& skip, F&& f) const {
-        const auto& k = keys_[from];
-        for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
-            for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
-                std::size_t b = 0, e = 0;
-                if (!columnRange(cx, cy, b, e)) continue;
-                for (std::size_t t = b; t < e; ++t) {
-                    if (skip(items_[t])) continue;
-                    // squaredDistance(q, p), term by term in the same order
-                    const float dx = q.x() - x_[t], dy = q.y() - y_[t], dz = q.z() - z_[t];
-                    float r = 0.f;
-                    r += dx * dx;
-                    r += dy * dy;
-                    r += dz * dz;
-                    if (r < radiusSq) f(items_[t]);
-                }
-            }
-    }
-
-private:
     // The slots [b, e) of column (cx, cy); false where it lies outside the dense table.
     bool columnRange(std::int64_t cx, std::int64_t cy, std::size_t& b, std::size_t& e) const {
         if (dense_) {

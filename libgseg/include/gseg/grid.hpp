@@ -104,6 +104,8 @@ public:
 private:
     // The ColumnIndex form's single counting sort by (column, z cell) where the keys are few;
     // false: not done.
+    void zCells(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
+                const Eigen::Vector3f* pointsOfIndices, double sz, double originZ, std::vector<std::int32_t>& out);
     bool buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
                            const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
                            const Eigen::Vector3f* pointsOfIndices);
