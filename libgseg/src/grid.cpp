@@ -236,12 +236,7 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
             std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[k], coords_[n + k])) - keys_.begin());
 }
 
-std::int64_t ColumnIndex::find(std::int32_t ix, std::int32_t iy) const {
-    if (dense_) {
-        const std::int64_t x = std::int64_t(ix) - lo_[0], y = std::int64_t(iy) - lo_[1];
-        if (x < 0 || y < 0 || y >= extY_ || x * extY_ + y >= std::int64_t(size_)) return -1;
-        return x * extY_ + y;
-    }
+std::int64_t ColumnIndex::findSparse(std::int32_t ix, std::int32_t iy) const {
     const std::uint64_t key = columnKey(ix, iy);
     const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
     return it != keys_.end() && *it == key ? std::int64_t(it - keys_.begin()) : -1;

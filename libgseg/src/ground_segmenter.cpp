@@ -360,7 +360,6 @@ private:
 
     void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
                  std::vector<Eigen::Vector3f>* groundPoints, PhaseReport& r, bool keepCells) const {
-        const auto& order = ws.grid.order();
         const auto& grid = ws.grid.cells();
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
@@ -374,6 +373,17 @@ private:
                         (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
                         recover(ws, c);
             });
+        // The accepted points are written in place, without a check per point: room for every
+        // point of the ground and recovered cells (and one more: the branch-free compaction writes
+        // one past its last point), cut to what was written at the end.
+        std::size_t room = 1;
+        for (std::size_t c = 0; c < grid.size(); ++c)
+            if (ws.cells[c].outcome == CellOutcome::Ground || ws.cells[c].recovered) room += grid[c].size();
+        const std::size_t first = ground.size();
+        ground.resize(first + room);
+        if (groundPoints) groundPoints->resize(first + room);
+        if (groundColumns) groundColumns->resize(first + room);
+        std::size_t written = first;
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
@@ -383,12 +393,8 @@ private:
                     ++r.groundCells;
                 else
                     r.recoveredPoints += s.inliers;
-                for (std::uint32_t k = g.begin; k < g.end; ++k)
-                    if (ws.inlier[k]) {
-                        ground.push_back(order[k]);
-                        if (groundPoints) groundPoints->push_back(ws.grid.points()[k]);
-                        if (groundColumns) groundColumns->push_back(ws.grid.cellColumns()[c]);
-                    }
+                written = groundPoints ? appendInliers<true>(ws, c, written, ground, groundColumns, groundPoints)
+                                       : appendInliers<false>(ws, c, written, ground, groundColumns, groundPoints);
             } else if (s.outcome == CellOutcome::TooFewPoints) {
                 r.unlabelledCellPoints += g.size();
             } else if (s.outcome == CellOutcome::NotReached) {
@@ -398,7 +404,37 @@ private:
                 r.cells.push_back({g.ix, g.iy, g.iz, g.size(), s.inliers, s.cellClass, s.outcome, s.ground.z(),
                                    s.candidate < 0 ? -2 : reachedFromCell(ws, std::size_t(s.candidate))});
         }
+        ground.resize(written);
+        if (groundPoints) groundPoints->resize(written);
+        if (groundColumns) groundColumns->resize(written);
         r.groundPoints = ground.size();
+    }
+
+    // Writes the inliers of cell c (their indices, and with kPoints their points and column ids
+    // too) from position `at` of the outputs, which have room for all the cell's points and one
+    // more; returns the position after the last one written. (Every point is written, and the
+    // position advances past the inliers only: no branch per point.)
+    template <bool kPoints>
+    static std::size_t appendInliers(const detail::Workspace& ws, std::size_t c, std::size_t at,
+                                     std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
+                                     std::vector<Eigen::Vector3f>* groundPoints) {
+        const GridCell& g = ws.grid.cells()[c];
+        const std::uint32_t* const order = ws.grid.order().data();
+        const Eigen::Vector3f* const pts = ws.grid.points().data();
+        const std::uint8_t* const inlier = ws.inlier.data();
+        std::uint32_t* const outIdx = ground.data();
+        Eigen::Vector3f* const outPts = kPoints ? groundPoints->data() : nullptr;
+        std::uint32_t* const outCol = kPoints && groundColumns ? groundColumns->data() : nullptr;
+        const std::uint32_t column = ws.grid.cellColumns()[c];
+        for (std::uint32_t k = g.begin; k < g.end; ++k) {
+            outIdx[at] = order[k];
+            if (kPoints) {
+                outPts[at] = pts[k];
+                if (outCol) outCol[at] = column;
+            }
+            at += inlier[k];
+        }
+        return at;
     }
 
     // Phase I, a cell that is not ground: its points that lie on the ground plane of a ground cell
@@ -461,8 +497,16 @@ private:
         const GridCell& g = ws.grid.cells()[c];
         const CellState& s = ws.cells[c];
         const bool ground = s.outcome == CellOutcome::Ground;
+        if (ground && s.inliers == g.size()) return;  // every point accepted (s.inliers: the cell's inlier flags)
         RejectedSpan span{ws.grid.cellColumns()[c], std::numeric_limits<float>::infinity(),
                           -std::numeric_limits<float>::infinity()};
+        if (!ground && !s.recovered) {  // every point counts: the z range of the cell
+            const Eigen::Vector3f* const pts = ws.grid.points().data();
+            for (std::uint32_t k = g.begin; k < g.end; ++k)
+                span.low = std::min(span.low, pts[k].z()), span.high = std::max(span.high, pts[k].z());
+            ws.rejected.push_back(span);  // a cell holds at least one point
+            return;
+        }
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             if (ground && ws.inlier[k]) continue;
             const Eigen::Vector3f& q = ws.grid.points()[k];

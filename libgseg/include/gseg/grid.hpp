@@ -50,7 +50,13 @@ public:
     /// Number of column ids (ids are 0 .. size() - 1).
     std::uint32_t size() const { return size_; }
     /// Id of column (ix, iy), or -1 where it holds no point (dense ids: outside the box).
-    std::int64_t find(std::int32_t ix, std::int32_t iy) const;
+    /// (Dense ids inline: the recovery asks for nine columns per cell.)
+    std::int64_t find(std::int32_t ix, std::int32_t iy) const {
+        if (!dense_) return findSparse(ix, iy);
+        const std::int64_t x = std::int64_t(ix) - lo_[0], y = std::int64_t(iy) - lo_[1];
+        if (x < 0 || y < 0 || y >= extY_ || x * extY_ + y >= std::int64_t(size_)) return -1;
+        return x * extY_ + y;
+    }
     /// Column index along x and y of the column `id`.
     std::int32_t ix(std::uint32_t id) const;
     std::int32_t iy(std::uint32_t id) const;
@@ -61,6 +67,8 @@ public:
     std::int64_t extentY() const { return extY_; }
 
 private:
+    std::int64_t findSparse(std::int32_t ix, std::int32_t iy) const;
+
     bool dense_ = true;
     std::int32_t lo_[2] = {0, 0};
     std::int64_t extY_ = 1;
