@@ -2,8 +2,45 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace gseg {
+
+Eigen::Matrix3d detail::scatterMatrix(const Eigen::Vector3f* pts, std::size_t n, const Eigen::Vector3d& mean,
+                                      const std::uint8_t* mask) {
+    // Element (r, c) sums d_r d_c in the points' order, as Eigen's outer product does; (c, r) is
+    // the same product (multiplication commutes exactly), so only the lower triangle is summed.
+#if defined(__SSE2__)
+    const __m128d mxy = _mm_set_pd(mean.y(), mean.x());  // lanes (x, y)
+    const __m128d mz = _mm_set_sd(mean.z());
+    __m128d xxyx = _mm_setzero_pd(), yyzy = _mm_setzero_pd(), xzzz = _mm_setzero_pd();
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        const float* p = pts[i].data();
+        const __m128d dxy = _mm_sub_pd(_mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)))), mxy);
+        const __m128d dz = _mm_sub_sd(_mm_cvtss_sd(_mm_setzero_pd(), _mm_load_ss(p + 2)), mz);
+        xxyx = _mm_add_pd(xxyx, _mm_mul_pd(dxy, _mm_unpacklo_pd(dxy, dxy)));                 // (dx dx, dy dx)
+        yyzy = _mm_add_pd(yyzy, _mm_mul_pd(_mm_shuffle_pd(dxy, dz, 1), _mm_unpackhi_pd(dxy, dxy)));  // (dy dy, dz dy)
+        xzzz = _mm_add_pd(xzzz, _mm_mul_pd(_mm_unpacklo_pd(dxy, dz), _mm_unpacklo_pd(dz, dz)));   // (dx dz, dz dz)
+    }
+    double a[2], b[2], c[2];
+    _mm_storeu_pd(a, xxyx), _mm_storeu_pd(b, yyzy), _mm_storeu_pd(c, xzzz);
+    const double xx = a[0], yx = a[1], yy = b[0], zy = b[1], zx = c[0], zz = c[1];
+#else
+    double xx = 0, yx = 0, zx = 0, yy = 0, zy = 0, zz = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        const Eigen::Vector3d d = pts[i].cast<double>() - mean;
+        xx += d.x() * d.x(), yx += d.y() * d.x(), zx += d.z() * d.x();
+        yy += d.y() * d.y(), zy += d.z() * d.y(), zz += d.z() * d.z();
+    }
+#endif
+    Eigen::Matrix3d m;
+    m << xx, yx, zx, yx, yy, zy, zx, zy, zz;
+    return m;
+}
 
 SlopeLimit::SlopeLimit(const Params& params)
     : sin(std::sin(params.slopeThresholdDegrees * M_PI / 180.0)), cos(std::cos(params.slopeThresholdDegrees * M_PI / 180.0)) {}
@@ -21,11 +58,7 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     out.mean = mean.cast<float>();
     if (n < std::size_t(params.minPointsPerCell)) return out;  // TooFewPoints
 
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3d d = pts[i].cast<double>() - mean;
-        cov.noalias() += d * d.transpose();
-    }
+    Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean);
     cov /= double(n);
 
     if (n < std::size_t(params.minPointsForPca)) {

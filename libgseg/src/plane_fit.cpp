@@ -1,3 +1,4 @@
+#include <gseg/cell_classifier.hpp>
 #include <gseg/plane_fit.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -38,12 +39,7 @@ bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vec
         if (mask[i]) mean += pts[i].cast<double>(), ++m;
     if (m < 3) return false;
     mean /= double(m);
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < n; ++i)
-        if (mask[i]) {
-            const Eigen::Vector3d q = pts[i].cast<double>() - mean;
-            cov.noalias() += q * q.transpose();
-        }
+    const Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean, mask.data());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     // Inliers spread less than the inlier distance across their main axis: a line, no plane.
