@@ -8,6 +8,34 @@
 
 namespace gseg {
 
+Eigen::Vector3d detail::pointSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask, std::size_t* count) {
+    std::size_t m = 0;
+#if defined(__SSE2__)
+    __m128d xy = _mm_setzero_pd();
+    double z = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        const float* p = pts[i].data();
+        xy = _mm_add_pd(xy, _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)))));
+        z += double(p[2]);
+        ++m;
+    }
+    double a[2];
+    _mm_storeu_pd(a, xy);
+    const Eigen::Vector3d sum(a[0], a[1], z);
+#else
+    double x = 0, y = 0, z = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        x += double(pts[i].x()), y += double(pts[i].y()), z += double(pts[i].z());
+        ++m;
+    }
+    const Eigen::Vector3d sum(x, y, z);
+#endif
+    if (count) *count = m;
+    return sum;
+}
+
 Eigen::Matrix3d detail::scatterMatrix(const Eigen::Vector3f* pts, std::size_t n, const Eigen::Vector3d& mean,
                                       const std::uint8_t* mask) {
     // Element (r, c) sums d_r d_c in the points' order, as Eigen's outer product does; (c, r) is
@@ -52,8 +80,7 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
 CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope) {
     CellClassification out;
     if (n == 0) return out;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) mean += pts[i].cast<double>();
+    Eigen::Vector3d mean = detail::pointSum(pts, n);
     mean /= double(n);
     out.mean = mean.cast<float>();
     if (n < std::size_t(params.minPointsPerCell)) return out;  // TooFewPoints

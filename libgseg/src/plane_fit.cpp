@@ -33,10 +33,8 @@ std::size_t markInliers(const PlaneFitScratch& s, std::size_t n, const Eigen::Ve
 // Least-squares plane through the masked points: normal = smallest principal axis.
 bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vector<std::uint8_t>& mask,
                        float thr, Eigen::Vector3f& normal, float& d) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i)
-        if (mask[i]) mean += pts[i].cast<double>(), ++m;
+    Eigen::Vector3d mean = detail::pointSum(pts, n, mask.data(), &m);
     if (m < 3) return false;
     mean /= double(m);
     const Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean, mask.data());

@@ -36,6 +36,11 @@ struct SlopeLimit {
 CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope);
 
 namespace detail {
+/// The sum of the points `pts[0..n)` whose `mask` is non-zero (mask null: every point), in double,
+/// in the points' order (bit for bit Eigen's `sum += p.cast<double>()`, kept in registers);
+/// `count` (optional) receives how many were summed.
+Eigen::Vector3d pointSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask = nullptr,
+                         std::size_t* count = nullptr);
 /// The scatter matrix sum over the points i of (p_i - mean)(p_i - mean)^T [m^2], the differences
 /// and sums in double, of the points `pts[0..n)` whose `mask` is non-zero (mask null: every
 /// point): the same value, bit for bit, as Eigen's `cov.noalias() += d * d.transpose()` summed in
