@@ -400,11 +400,11 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         // stable comparison sort of (iz, position) keys.
         const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
         if (range <= 4 * std::uint64_t(end - start) + 64) {
-            keys_.assign(std::size_t(range) + 1, 0);
-            for (std::uint32_t k = start; k < end; ++k) ++keys_[std::size_t(iz_[k] - lo) + 1];
-            for (std::size_t b = 1; b <= range; ++b) keys_[b] += keys_[b - 1];
+            zCounts_.assign(std::size_t(range) + 1, 0);
+            for (std::uint32_t k = start; k < end; ++k) ++zCounts_[std::size_t(iz_[k] - lo) + 1];
+            for (std::size_t b = 1; b <= range; ++b) zCounts_[b] += zCounts_[b - 1];
             for (std::uint32_t k = start; k < end; ++k) {
-                const std::uint32_t at = start + keys_[std::size_t(iz_[k] - lo)]++;
+                const std::uint32_t at = start + zCounts_[std::size_t(iz_[k] - lo)]++;
                 order_[at] = byColumn[k];
                 points_[at] = byColumnPoints[k];
                 sortedIz_[at] = iz_[k];

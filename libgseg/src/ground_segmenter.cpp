@@ -80,7 +80,11 @@ struct CellState {
 }  // namespace
 
 struct detail::Workspace {
-    Grid grid;  // its points(): the points grouped by cell, aligned with grid.order()
+    // One grid per phase (its points(): the points grouped by cell, aligned with order()), so that
+    // neither shrinks the other's buffers (a vector grown again is filled again); `grid`: the
+    // current phase's (after run(): Phase II's).
+    Grid phaseGrids[2];
+    Grid* grid = &phaseGrids[0];
     ColumnIndex columns;                  // the columns (ix, iy) of the finite points, shared by both phases
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
     std::vector<std::uint32_t> inputColumns;          // the column id of each point of input, in its order
@@ -163,7 +167,7 @@ struct PhaseSettings {
     }
 };
 
-/// One phase of GSeg3D over the points `input`; appends the indices it calls ground to `ground`.
+/// One phase of GSeg3D over the points `input`; replaces the contents of `ground` with the indices it calls ground.
 ///
 /// Which steps are the paper's (Lodhi and Hertzberg, ICRCV 2025), which the authors' public
 /// implementation's (dfki-ric/ground_segmentation, where the paper is vague) and which our own:
@@ -201,7 +205,8 @@ public:
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
+        ws.grid = &ws.phaseGrids[set_.number - 1];
+        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -217,9 +222,9 @@ public:
 
 private:
     void classifyCells(detail::Workspace& ws) const {
-        const auto& pts = ws.grid.points();
+        const auto& pts = ws.grid->points();
         ws.inlier.assign(pts.size(), 0);
-        ws.cells.assign(ws.grid.cells().size(), CellState());
+        ws.cells.assign(ws.grid->cells().size(), CellState());
         // Cells are independent: each writes its own state and its own points' flags.
         ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
             for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
@@ -227,8 +232,8 @@ private:
     }
 
     void classifyOne(detail::Workspace& ws, std::size_t c) const {
-        const auto& pts = ws.grid.points();
-        const GridCell& g = ws.grid.cells()[c];
+        const auto& pts = ws.grid->points();
+        const GridCell& g = ws.grid->cells()[c];
         const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_);
         CellState& s = ws.cells[c];
         s.cellClass = cls.cellClass;
@@ -255,12 +260,12 @@ private:
     void fitOne(detail::Workspace& ws, std::size_t c, detail::Workspace::ThreadScratch& scratch) const {
         CellState& s = ws.cells[c];
         if (s.cellClass != CellClass::Plane) return;
-        const GridCell& g = ws.grid.cells()[c];
+        const GridCell& g = ws.grid->cells()[c];
         if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
             s.outcome = CellOutcome::Steep;
             return;
         }
-        const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
+        const PlaneFitResult fit = fitPlane(&ws.grid->points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
                                             scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
         if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
             s.outcome = CellOutcome::Steep;
@@ -269,7 +274,7 @@ private:
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
         for (std::uint32_t i = 0; i < g.size(); ++i) {
             ws.inlier[g.begin + i] = scratch.mask[i];
-            if (scratch.mask[i]) sum += ws.grid.points()[g.begin + i];
+            if (scratch.mask[i]) sum += ws.grid->points()[g.begin + i];
         }
         s.inliers = std::uint32_t(fit.numInliers);
         s.ground = sum / float(fit.numInliers);
@@ -283,11 +288,11 @@ private:
         for (std::size_t c = 0; c < ws.cells.size(); ++c) {
             CellState& s = ws.cells[c];
             if (s.outcome != CellOutcome::NotReached) continue;
-            const GridCell& g = ws.grid.cells()[c];
+            const GridCell& g = ws.grid->cells()[c];
             // A handful of outliers has no meaningful bounding box: only a population of at least
             // minPointsPerCell outliers can compete with the inliers.
             if (g.size() - s.inliers >= std::uint32_t(p_.minPointsPerCell)) {
-                const auto volumes = volumesPerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size());
+                const auto volumes = volumesPerPoint(&ws.grid->points()[g.begin], &ws.inlier[g.begin], g.size());
                 const Sparsity in = sparsityBucket(volumes.first, p_);
                 const Sparsity out = sparsityBucket(volumes.second, p_);
                 s.ambiguous = in == out;
@@ -304,7 +309,7 @@ private:
     // An occupied cell classified non-ground lies directly below cell c (same column, lower z); in
     // Phase II also any point Phase I called non-ground below the cell's bottom.
     bool floating(const detail::Workspace& ws, std::size_t c) const {
-        const auto& g = ws.grid.cells();
+        const auto& g = ws.grid->cells();
         for (std::size_t b = c; b-- > 0 && g[b].ix == g[c].ix && g[b].iy == g[c].iy;) {
             const CellOutcome o = ws.cells[b].outcome;
             if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
@@ -312,7 +317,7 @@ private:
         if (!set_.belowRejected) return false;
         // Only points between floatingMinHeight and floatingMaxDepth below the cell's bottom count:
         // closer, a step of the ground; deeper, a reflection under it.
-        const std::uint32_t column = ws.grid.cellColumns()[c];
+        const std::uint32_t column = ws.grid->cellColumns()[c];
         const double bottom = originZ() + double(g[c].iz) * set_.cellSizeZ;
         const double top = bottom - p_.floatingMinHeight, deep = bottom - p_.floatingMaxDepth;
         for (auto it = std::lower_bound(ws.rejected.begin(), ws.rejected.end(), column,
@@ -360,7 +365,7 @@ private:
 
     void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
                  std::vector<Eigen::Vector3f>* groundPoints, PhaseReport& r, bool keepCells) const {
-        const auto& grid = ws.grid.cells();
+        const auto& grid = ws.grid->cells();
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
@@ -373,17 +378,18 @@ private:
                         (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
                         recover(ws, c);
             });
-        // The accepted points are written in place, without a check per point: room for every
-        // point of the ground and recovered cells (and one more: the branch-free compaction writes
-        // one past its last point), cut to what was written at the end.
+        // The accepted points replace the outputs' contents, written in place without a check per
+        // point: room for every point of the ground and recovered cells (and one more: the
+        // branch-free compaction writes one past its last point), cut to what was written at the
+        // end. (The outputs keep their size from the previous scan until then: resizing within it
+        // fills nothing.)
         std::size_t room = 1;
         for (std::size_t c = 0; c < grid.size(); ++c)
             if (ws.cells[c].outcome == CellOutcome::Ground || ws.cells[c].recovered) room += grid[c].size();
-        const std::size_t first = ground.size();
-        ground.resize(first + room);
-        if (groundPoints) groundPoints->resize(first + room);
-        if (groundColumns) groundColumns->resize(first + room);
-        std::size_t written = first;
+        ground.resize(room);
+        if (groundPoints) groundPoints->resize(room);
+        if (groundColumns) groundColumns->resize(room);
+        std::size_t written = 0;
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
@@ -418,14 +424,14 @@ private:
     static std::size_t appendInliers(const detail::Workspace& ws, std::size_t c, std::size_t at,
                                      std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
                                      std::vector<Eigen::Vector3f>* groundPoints) {
-        const GridCell& g = ws.grid.cells()[c];
-        const std::uint32_t* const order = ws.grid.order().data();
-        const Eigen::Vector3f* const pts = ws.grid.points().data();
+        const GridCell& g = ws.grid->cells()[c];
+        const std::uint32_t* const order = ws.grid->order().data();
+        const Eigen::Vector3f* const pts = ws.grid->points().data();
         const std::uint8_t* const inlier = ws.inlier.data();
         std::uint32_t* const outIdx = ground.data();
         Eigen::Vector3f* const outPts = kPoints ? groundPoints->data() : nullptr;
         std::uint32_t* const outCol = kPoints && groundColumns ? groundColumns->data() : nullptr;
-        const std::uint32_t column = ws.grid.cellColumns()[c];
+        const std::uint32_t column = ws.grid->cellColumns()[c];
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             outIdx[at] = order[k];
             if (kPoints) {
@@ -442,8 +448,8 @@ private:
     // the authors' implementation: the road at the foot of a wall, the grass between bushes, the
     // sidewalk in a cell that a pedestrian made steep. Phase II judges them like any other point.
     void recover(detail::Workspace& ws, std::size_t c) const {
-        const auto& cells = ws.grid.cells();
-        const auto& columnCells = ws.grid.columnCells();
+        const auto& cells = ws.grid->cells();
+        const auto& columnCells = ws.grid->columnCells();
         const GridCell& g = cells[c];
         std::uint32_t nb[17];
         int count = 0;
@@ -465,7 +471,7 @@ private:
         if (count == 0) return;
         const float thr = float(set_.recoveryThreshold);
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = ws.grid.points()[k];
+            const Eigen::Vector3f& q = ws.grid->points()[k];
             // The plane of the neighbour whose ground centroid is horizontally nearest.
             const CellState* best = nullptr;
             float bestD = std::numeric_limits<float>::infinity();
@@ -494,14 +500,14 @@ private:
     // something standing below the cells above; and in a recovered cell, points more than
     // floatingMaxDepth below the plane it was recovered onto (reflections under the road).
     void recordRejected(detail::Workspace& ws, std::size_t c) const {
-        const GridCell& g = ws.grid.cells()[c];
+        const GridCell& g = ws.grid->cells()[c];
         const CellState& s = ws.cells[c];
         const bool ground = s.outcome == CellOutcome::Ground;
         if (ground && s.inliers == g.size()) return;  // every point accepted (s.inliers: the cell's inlier flags)
-        RejectedSpan span{ws.grid.cellColumns()[c], std::numeric_limits<float>::infinity(),
+        RejectedSpan span{ws.grid->cellColumns()[c], std::numeric_limits<float>::infinity(),
                           -std::numeric_limits<float>::infinity()};
         if (!ground && !s.recovered) {  // every point counts: the z range of the cell
-            const Eigen::Vector3f* const pts = ws.grid.points().data();
+            const Eigen::Vector3f* const pts = ws.grid->points().data();
             for (std::uint32_t k = g.begin; k < g.end; ++k)
                 span.low = std::min(span.low, pts[k].z()), span.high = std::max(span.high, pts[k].z());
             ws.rejected.push_back(span);  // a cell holds at least one point
@@ -509,7 +515,7 @@ private:
         }
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             if (ground && ws.inlier[k]) continue;
-            const Eigen::Vector3f& q = ws.grid.points()[k];
+            const Eigen::Vector3f& q = ws.grid->points()[k];
             if (ground && p_.floatingIgnoresLowOutliers && s.normal.dot(q - s.ground) < 0) continue;
             if (s.recovered && s.normal.dot(q - s.ground) < -p_.floatingMaxDepth) continue;
             span.low = std::min(span.low, q.z());
@@ -555,12 +561,8 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     ws.input.resize(numFinite);
     r.numNonFinite = cloud.size() - ws.input.size();
     ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
-    ws.phase1Ground.clear();
-    ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
-    ws.phase1GroundPoints.clear();
-    ws.phase1GroundColumns.clear();
     Phase(params, PhaseSettings::first(params))
         .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.phase1Ground, &ws.phase1GroundColumns,
              &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
@@ -576,12 +578,12 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     // Ours, not the paper's: reflections far below the ground (below_ground.hpp), the ground's
     // columns taken from Phase II's grid, still in the workspace (a ground cell holds its inliers).
     ws.groundColumns.clear();
-    const auto& cells = ws.grid.cells();
+    const auto& cells = ws.grid->cells();
     for (std::size_t c = 0; c < cells.size(); ++c) {
         if (ws.cells[c].outcome != CellOutcome::Ground) continue;
         float lowest = std::numeric_limits<float>::infinity();
         for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid.points()[k].z());
+            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid->points()[k].z());
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);

@@ -128,6 +128,7 @@ private:
     std::vector<std::uint32_t> order_;
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
     std::vector<std::uint32_t> keys_, counts_;
+    std::vector<std::uint32_t> zCounts_;  // one column's counting sort by z cell (small: keys_ keeps its size)
     std::vector<std::uint64_t> sortKeys_;
     std::vector<Eigen::Vector3f> points_, byColumnPoints_;
     std::vector<std::uint32_t> columnCells_, cellColumns_, byColumn_;
