@@ -117,6 +117,7 @@ struct detail::Workspace {
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
     BelowGroundScratch belowGround;
+    std::vector<std::uint8_t> groundInColumn;  // per column id: it holds a ground cell (Phase I's recovery)
     std::vector<GroundColumn> groundColumns;  // flagBelowGround: the lowest ground of each Phase II ground cell
 };
 
@@ -371,13 +372,18 @@ private:
         if (keepCells) r.cells.reserve(grid.size());
         if (set_.recordRejected) ws.rejected.clear();
         // recover() reads only the ground cells, which it never changes: every cell on its own.
-        if (set_.recover)
+        if (set_.recover) {
+            // The columns holding a ground cell (recover() looks into no other).
+            ws.groundInColumn.assign(ws.columns.size(), 0);
+            for (std::size_t c = 0; c < grid.size(); ++c)
+                if (ws.cells[c].outcome == CellOutcome::Ground) ws.groundInColumn[ws.grid->cellColumns()[c]] = 1;
             ws.forCells(grid.size(), [&](std::size_t begin, std::size_t end, unsigned) {
                 for (std::size_t c = begin; c < end; ++c)
                     if (ws.cells[c].outcome != CellOutcome::Ground &&
                         (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
                         recover(ws, c);
             });
+        }
         // The accepted points replace the outputs' contents, written in place without a check per
         // point: room for every point of the ground and recovered cells (and one more: the
         // branch-free compaction writes one past its last point), cut to what was written at the
@@ -458,7 +464,7 @@ private:
         for (int dx = -1; dx <= 1; ++dx)
             for (int dy = -1; dy <= 1; ++dy) {
                 const std::int64_t column = ws.columns.find(g.ix + dx, g.iy + dy);
-                if (column < 0) continue;
+                if (column < 0 || !ws.groundInColumn[std::size_t(column)]) continue;
                 for (std::uint32_t b = columnCells[std::size_t(column)], e = columnCells[std::size_t(column) + 1]; b < e; ++b) {
                     if (cells[b].iz > g.iz) break;
                     if (cells[b].iz < g.iz - 1 || b == c) continue;
@@ -470,19 +476,30 @@ private:
         s.inliers = 0;
         if (count == 0) return;
         const float thr = float(set_.recoveryThreshold);
+        // The neighbours' ground centroids (x, y) at hand.
+        const CellState* nbs[17];
+        float gx[17], gy[17];
+        for (int j = 0; j < count; ++j) {
+            nbs[j] = &ws.cells[nb[j]];
+            gx[j] = nbs[j]->ground.x(), gy[j] = nbs[j]->ground.y();
+        }
+        const Eigen::Vector3f* const pts = ws.grid->points().data();
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = ws.grid->points()[k];
-            // The plane of the neighbour whose ground centroid is horizontally nearest.
-            const CellState* best = nullptr;
+            const Eigen::Vector3f& q = pts[k];
+            // The plane of the neighbour whose ground centroid is horizontally nearest (the first
+            // of equals): (ground - q).head<2>().squaredNorm(), without a branch.
+            int best = 0;
             float bestD = std::numeric_limits<float>::infinity();
             for (int j = 0; j < count; ++j) {
-                const CellState& n = ws.cells[nb[j]];
-                const float d = (n.ground - q).head<2>().squaredNorm();
-                if (d < bestD) bestD = d, best = &n;
+                const float dx = gx[j] - q.x(), dy = gy[j] - q.y();
+                const float d = dx * dx + dy * dy;
+                best = d < bestD ? j : best;
+                bestD = d < bestD ? d : bestD;
             }
-            if (std::abs(best->normal.dot(q - best->ground)) <= thr) {
+            const CellState& n = *nbs[best];
+            if (std::abs(n.normal.dot(q - n.ground)) <= thr) {
                 ws.inlier[k] = 1, ++s.inliers;
-                s.normal = best->normal, s.ground = q;
+                s.normal = n.normal, s.ground = q;
             }
         }
         s.recovered = s.inliers > 0;
