@@ -47,15 +47,28 @@ std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
 
 // Bounding-box volume per point [m^3] of the masked points (mask 1: first) and of the unmasked
 // ones (mask 0: second), in one pass.
+// (The boxes' corners in registers, each updated or kept without a branch: AlignedBox::extend's
+// min and max, the same values.)
 std::pair<double, double> volumesPerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std::size_t n) {
-    Eigen::AlignedBox3f box[2];
-    std::size_t m[2] = {0, 0};
+    constexpr float hi = std::numeric_limits<float>::max(), lo = std::numeric_limits<float>::lowest();  // an empty box
+    float inMin[3] = {hi, hi, hi}, inMax[3] = {lo, lo, lo}, outMin[3] = {hi, hi, hi}, outMax[3] = {lo, lo, lo};
+    std::size_t mIn = 0, mOut = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        const int in = mask[i] == 1 ? 1 : (mask[i] == 0 ? 0 : -1);
-        if (in >= 0) box[in].extend(pts[i]), ++m[in];
+        const bool in = mask[i] == 1, out = mask[i] == 0;
+        for (int a = 0; a < 3; ++a) {
+            const float v = pts[i][a];
+            inMin[a] = in ? std::min(inMin[a], v) : inMin[a];
+            inMax[a] = in ? std::max(inMax[a], v) : inMax[a];
+            outMin[a] = out ? std::min(outMin[a], v) : outMin[a];
+            outMax[a] = out ? std::max(outMax[a], v) : outMax[a];
+        }
+        mIn += in, mOut += out;
     }
-    const auto perPoint = [&](int k) { return m[k] == 0 ? 0.0 : double(box[k].volume()) / double(m[k]); };
-    return {perPoint(1), perPoint(0)};
+    const auto perPoint = [](const float* mn, const float* mx, std::size_t m) {
+        const Eigen::AlignedBox3f box(Eigen::Vector3f(mn[0], mn[1], mn[2]), Eigen::Vector3f(mx[0], mx[1], mx[2]));
+        return m == 0 ? 0.0 : double(box.volume()) / double(m);
+    };
+    return {perPoint(inMin, inMax, mIn), perPoint(outMin, outMax, mOut)};
 }
 
 // The z range of the points of one Phase I cell that Phase I did not accept.
@@ -272,11 +285,13 @@ private:
             s.outcome = CellOutcome::Steep;
             return;
         }
+        // (Pointers at hand: a byte store may alias anything, and would have them reloaded per point.)
+        const std::uint8_t* const mask = scratch.mask.data();
+        const Eigen::Vector3f* const pts = ws.grid->points().data() + g.begin;
+        std::copy(mask, mask + g.size(), ws.inlier.begin() + g.begin);
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        for (std::uint32_t i = 0; i < g.size(); ++i) {
-            ws.inlier[g.begin + i] = scratch.mask[i];
-            if (scratch.mask[i]) sum += ws.grid->points()[g.begin + i];
-        }
+        for (std::uint32_t i = 0; i < g.size(); ++i)
+            if (mask[i]) sum += pts[i];
         s.inliers = std::uint32_t(fit.numInliers);
         s.ground = sum / float(fit.numInliers);
         s.normal = fit.normal;
