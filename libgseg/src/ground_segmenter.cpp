@@ -127,6 +127,7 @@ struct detail::Workspace {
     // called non-ground (cells too small to classify excepted). Phase II sees only Phase I's
     // ground, so this is how it knows what stands below its cells.
     std::vector<RejectedSpan> rejected;
+    std::vector<std::uint32_t> rejectedStart;  // per column id c: the spans of c are rejected[rejectedStart[c] .. rejectedStart[c + 1])
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
     BelowGroundScratch belowGround;
@@ -336,10 +337,8 @@ private:
         const std::uint32_t column = ws.grid->cellColumns()[c];
         const double bottom = originZ() + double(g[c].iz) * set_.cellSizeZ;
         const double top = bottom - p_.floatingMinHeight, deep = bottom - p_.floatingMaxDepth;
-        for (auto it = std::lower_bound(ws.rejected.begin(), ws.rejected.end(), column,
-                                        [](const RejectedSpan& a, std::uint32_t k) { return a.column < k; });
-             it != ws.rejected.end() && it->column == column; ++it)
-            if (double(it->low) < top && double(it->high) >= deep) return true;
+        for (std::uint32_t k = ws.rejectedStart[column], e = ws.rejectedStart[column + 1]; k < e; ++k)
+            if (double(ws.rejected[k].low) < top && double(ws.rejected[k].high) >= deep) return true;
         return false;
     }
 
@@ -435,6 +434,12 @@ private:
         if (groundPoints) groundPoints->resize(written);
         if (groundColumns) groundColumns->resize(written);
         r.groundPoints = ground.size();
+        if (set_.recordRejected) {
+            // Where each column's spans begin (they come by column id): no search per cell later.
+            ws.rejectedStart.assign(std::size_t(ws.columns.size()) + 1, 0);
+            for (const RejectedSpan& span : ws.rejected) ++ws.rejectedStart[span.column + 1];
+            for (std::size_t k = 1; k < ws.rejectedStart.size(); ++k) ws.rejectedStart[k] += ws.rejectedStart[k - 1];
+        }
     }
 
     // Writes the inliers of cell c (their indices, and with kPoints their points and column ids
