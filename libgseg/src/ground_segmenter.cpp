@@ -504,6 +504,11 @@ private:
             gx[j] = nbs[j]->ground.x(), gy[j] = nbs[j]->ground.y();
         }
         const Eigen::Vector3f* const pts = ws.grid->points().data();
+        std::uint8_t* const inlier = ws.inlier.data();
+        // Without a branch per point; the cell's state written once at the end: its count, and the
+        // plane and the point of the last point recovered.
+        std::uint32_t inliers = 0, last = 0;
+        int lastBest = 0;
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             const Eigen::Vector3f& q = pts[k];
             // The plane of the neighbour whose ground centroid is horizontally nearest (the first
@@ -517,12 +522,15 @@ private:
                 bestD = d < bestD ? d : bestD;
             }
             const CellState& n = *nbs[best];
-            if (std::abs(n.normal.dot(q - n.ground)) <= thr) {
-                ws.inlier[k] = 1, ++s.inliers;
-                s.normal = n.normal, s.ground = q;
-            }
+            const bool on = std::abs(n.normal.dot(q - n.ground)) <= thr;
+            inlier[k] = on;
+            inliers += on;
+            last = on ? k : last;
+            lastBest = on ? best : lastBest;
         }
-        s.recovered = s.inliers > 0;
+        s.inliers = inliers;
+        if (inliers > 0) s.normal = nbs[lastBest]->normal, s.ground = pts[last];
+        s.recovered = inliers > 0;
     }
 
     std::int32_t reachedFromCell(const detail::Workspace& ws, std::size_t candidate) const {
