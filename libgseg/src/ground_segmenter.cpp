@@ -458,6 +458,14 @@ private:
         Eigen::Vector3f* const outPts = kPoints ? groundPoints->data() : nullptr;
         std::uint32_t* const outCol = kPoints && groundColumns ? groundColumns->data() : nullptr;
         const std::uint32_t column = ws.grid->cellColumns()[c];
+        if (ws.cells[c].inliers == g.size()) {  // every point (s.inliers: the cell's inlier flags)
+            std::copy(order + g.begin, order + g.end, outIdx + at);
+            if (kPoints) {
+                std::copy(pts + g.begin, pts + g.end, outPts + at);
+                if (outCol) std::fill(outCol + at, outCol + at + g.size(), column);
+            }
+            return at + g.size();
+        }
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             outIdx[at] = order[k];
             if (kPoints) {

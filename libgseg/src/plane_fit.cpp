@@ -93,7 +93,8 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
     PlaneFitResult res;
     inlier.assign(n, 0);
     if (n < 3) return res;
-    scratch.x.resize(n), scratch.y.resize(n), scratch.z.resize(n);
+    // Grown, never shrunk (a vector grown again fills its new part): the first n are this cell's.
+    if (scratch.x.size() < n) scratch.x.resize(n), scratch.y.resize(n), scratch.z.resize(n);
     for (std::size_t i = 0; i < n; ++i) scratch.x[i] = pts[i].x(), scratch.y[i] = pts[i].y(), scratch.z[i] = pts[i].z();
     const float thr = float(params.groundInlierThreshold);
     const double logFail = std::log(1.0 - params.ransacConfidence);
