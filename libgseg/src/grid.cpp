@@ -339,8 +339,14 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     if (n == 0) return;
     // Input already grouped by column in ascending order (Phase II: Phase I hands its ground over
     // cell by cell)? Then the stable counting sort by column keeps it as it is.
+    // (In blocks whose test vectorises, stopping after the first block out of order.)
     bool sorted = true;
-    for (std::size_t k = 1; k < n && sorted; ++k) sorted = columnOf[k] >= columnOf[k - 1];
+    for (std::size_t b = 1; b < n && sorted; b += 1024) {
+        const std::size_t e = std::min(n, b + 1024);
+        unsigned down = 0;
+        for (std::size_t k = b; k < e; ++k) down |= columnOf[k] < columnOf[k - 1] ? 1u : 0u;
+        sorted = down == 0;
+    }
     if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices)) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
     if (!sorted) {
@@ -353,9 +359,14 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     sortedIz_.resize(n);
     if (sorted) {
         // The end of each column: where the next column's points begin (no count per point).
+        // (Only where the column changes, found by a test that vectorises.)
         std::uint32_t c = 0;
-        for (std::uint32_t k = 0; k < std::uint32_t(n); ++k)
-            while (c < columnOf[k]) counts_[c++] = k;
+        for (std::uint32_t b = 0; b < std::uint32_t(n); b += 64) {
+            const std::uint32_t e = std::min(std::uint32_t(n), b + 64);
+            if (columnOf[e - 1] == c) continue;  // sorted: the whole block lies in column c
+            for (std::uint32_t k = b; k < e; ++k)
+                while (c < columnOf[k]) counts_[c++] = k;
+        }
         while (c < numColumns) counts_[c++] = std::uint32_t(n);
         if (!byColumnPoints) {
             byColumnPoints_.resize(n);
