@@ -70,6 +70,32 @@ TEST(CellCoord, BranchFreeFormIsTheClampedFloorAndColumnIndexAgrees) {
     }
 }
 
+// detail::cellCoords (the vectorised form; on AVX2 a product with the reciprocal of the size,
+// the division only near a border) gives cellCoord's value for every input: on the borders of
+// every size and origin the segmenter uses and the floats next to them, far values, NaN and
+// infinities.
+TEST(CellCoord, VectorisedFormEqualsCellCoordOnAndNextToBorders) {
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> cell(-700, 700);
+    for (const double size : {1.5, 1.0, 0.2, 0.1, 0.3})
+        for (const double origin : {0.0, -1.9, -1.723 - 0.8 * 1.5, -1.723 - 0.8 * 0.2}) {
+            std::vector<float> v;
+            for (int i = 0; i < 4000; ++i) {
+                const float border = float(origin + double(cell(rng)) * size);
+                v.insert(v.end(), {border, std::nextafter(border, 1e30f), std::nextafter(border, -1e30f),
+                                   std::nextafter(std::nextafter(border, 1e30f), 1e30f)});
+            }
+            v.insert(v.end(), {0.f, -0.f, 1e12f, -1e12f, 3e38f, -3e38f, std::numeric_limits<float>::quiet_NaN(),
+                               std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), 1e-30f});
+            for (std::size_t n : {v.size(), v.size() - 3}) {  // with and without a remainder of the groups of four
+                std::vector<std::int32_t> out(n, 12345);
+                gseg::detail::cellCoords(v.data(), n, size, origin, out.data());
+                for (std::size_t k = 0; k < n; ++k)
+                    ASSERT_EQ(out[k], gseg::cellCoord(v[k], size, origin)) << v[k] << " " << size << " " << origin;
+            }
+        }
+}
+
 TEST(Grid, GroupsPointsByCellSortedByColumnThenHeight) {
     const std::vector<float> xyz = {0.1f, 0.1f, 0.1f,  -0.1f, 0.1f, 0.1f,  0.2f, 0.3f, 0.15f,
                                     0.1f, 0.1f, -0.1f, -0.1f, -0.1f, -0.1f};

@@ -2,8 +2,73 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace gseg {
+
+Eigen::Vector3d detail::pointSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask, std::size_t* count) {
+    std::size_t m = 0;
+#if defined(__SSE2__)
+    __m128d xy = _mm_setzero_pd();
+    double z = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        const float* p = pts[i].data();
+        xy = _mm_add_pd(xy, _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)))));
+        z += double(p[2]);
+        ++m;
+    }
+    double a[2];
+    _mm_storeu_pd(a, xy);
+    const Eigen::Vector3d sum(a[0], a[1], z);
+#else
+    double x = 0, y = 0, z = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        x += double(pts[i].x()), y += double(pts[i].y()), z += double(pts[i].z());
+        ++m;
+    }
+    const Eigen::Vector3d sum(x, y, z);
+#endif
+    if (count) *count = m;
+    return sum;
+}
+
+Eigen::Matrix3d detail::scatterMatrix(const Eigen::Vector3f* pts, std::size_t n, const Eigen::Vector3d& mean,
+                                      const std::uint8_t* mask) {
+    // Element (r, c) sums d_r d_c in the points' order, as Eigen's outer product does; (c, r) is
+    // the same product (multiplication commutes exactly), so only the lower triangle is summed.
+#if defined(__SSE2__)
+    const __m128d mxy = _mm_set_pd(mean.y(), mean.x());  // lanes (x, y)
+    const __m128d mz = _mm_set_sd(mean.z());
+    __m128d xxyx = _mm_setzero_pd(), yyzy = _mm_setzero_pd(), xzzz = _mm_setzero_pd();
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        const float* p = pts[i].data();
+        const __m128d dxy = _mm_sub_pd(_mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)))), mxy);
+        const __m128d dz = _mm_sub_sd(_mm_cvtss_sd(_mm_setzero_pd(), _mm_load_ss(p + 2)), mz);
+        xxyx = _mm_add_pd(xxyx, _mm_mul_pd(dxy, _mm_unpacklo_pd(dxy, dxy)));                 // (dx dx, dy dx)
+        yyzy = _mm_add_pd(yyzy, _mm_mul_pd(_mm_shuffle_pd(dxy, dz, 1), _mm_unpackhi_pd(dxy, dxy)));  // (dy dy, dz dy)
+        xzzz = _mm_add_pd(xzzz, _mm_mul_pd(_mm_unpacklo_pd(dxy, dz), _mm_unpacklo_pd(dz, dz)));   // (dx dz, dz dz)
+    }
+    double a[2], b[2], c[2];
+    _mm_storeu_pd(a, xxyx), _mm_storeu_pd(b, yyzy), _mm_storeu_pd(c, xzzz);
+    const double xx = a[0], yx = a[1], yy = b[0], zy = b[1], zx = c[0], zz = c[1];
+#else
+    double xx = 0, yx = 0, zx = 0, yy = 0, zy = 0, zz = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mask && !mask[i]) continue;
+        const Eigen::Vector3d d = pts[i].cast<double>() - mean;
+        xx += d.x() * d.x(), yx += d.y() * d.x(), zx += d.z() * d.x();
+        yy += d.y() * d.y(), zy += d.z() * d.y(), zz += d.z() * d.z();
+    }
+#endif
+    Eigen::Matrix3d m;
+    m << xx, yx, zx, yx, yy, zy, zx, zy, zz;
+    return m;
+}
 
 SlopeLimit::SlopeLimit(const Params& params)
     : sin(std::sin(params.slopeThresholdDegrees * M_PI / 180.0)), cos(std::cos(params.slopeThresholdDegrees * M_PI / 180.0)) {}
@@ -15,17 +80,12 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
 CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope) {
     CellClassification out;
     if (n == 0) return out;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) mean += pts[i].cast<double>();
+    Eigen::Vector3d mean = detail::pointSum(pts, n);
     mean /= double(n);
     out.mean = mean.cast<float>();
     if (n < std::size_t(params.minPointsPerCell)) return out;  // TooFewPoints
 
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3d d = pts[i].cast<double>() - mean;
-        cov.noalias() += d * d.transpose();
-    }
+    Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean);
     cov /= double(n);
 
     if (n < std::size_t(params.minPointsForPca)) {

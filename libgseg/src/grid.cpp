@@ -3,25 +3,49 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace gseg {
 namespace detail {
 
 // cellCoord of n values into out: a loop that vectorises (two quotients at a time on x86-64's
 // baseline); on x86-64 CPUs with AVX2 (checked once) four at a time, with AVX's floor
-// instruction: the same values (the same IEEE division and clamps, an exact floor; no fused
-// multiply-add).
+// instruction: the same values (no fused multiply-add). There the quotient is first taken as a
+// product with the reciprocal of the size (q'), which differs from the division's quotient q by at
+// most 3 units of 2^-53 |q'|: where q' lies farther than 2^-40 (1 + |q'|) from every integer and
+// |q'| < 2^29 (no clamp), floor(q) = floor(q'); the few other values take the division.
 #if defined(__GNUC__) && defined(__x86_64__)
 namespace {
 __attribute__((target("avx2"))) void cellCoordsAvx2(const float* v, std::size_t n, double size, double origin,
                                                     std::int32_t* out) {
     constexpr double lim = 1073741824.0;  // as cellCoord
-    for (std::size_t k = 0; k < n; ++k) {
+    const auto divided = [&](std::size_t k) {
         double q = (static_cast<double>(v[k]) - origin) / size;
         q = q > -lim ? q : -lim;
         q = q < lim ? q : lim;
         out[k] = static_cast<std::int32_t>(std::floor(q));
+    };
+    const __m256d inv = _mm256_set1_pd(1.0 / size), org = _mm256_set1_pd(origin);
+    const __m256d one = _mm256_set1_pd(1.0), tol = _mm256_set1_pd(0x1p-40), safe = _mm256_set1_pd(0x1p29);
+    const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+    std::size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        const __m256d q = _mm256_mul_pd(_mm256_sub_pd(_mm256_cvtps_pd(_mm_loadu_ps(v + k)), org), inv);
+        const __m256d f = _mm256_floor_pd(q);
+        const __m256d a = _mm256_and_pd(q, absMask);
+        const __m256d margin = _mm256_mul_pd(tol, _mm256_add_pd(one, a));
+        const __m256d frac = _mm256_sub_pd(q, f);  // exact, in [0, 1)
+        const __m256d ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(frac, margin, _CMP_GT_OQ),
+                                                       _mm256_cmp_pd(_mm256_sub_pd(one, frac), margin, _CMP_GT_OQ)),
+                                         _mm256_cmp_pd(a, safe, _CMP_LT_OQ));  // false for NaN
+        if (_mm256_movemask_pd(ok) == 0xf)
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(out + k), _mm256_cvttpd_epi32(f));
+        else
+            for (std::size_t j = k; j < k + 4; ++j) divided(j);
     }
+    for (; k < n; ++k) divided(k);
 }
 const bool kAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2") != 0);
 }  // namespace
@@ -236,12 +260,7 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
             std::lower_bound(keys_.begin(), keys_.end(), columnKey(coords_[k], coords_[n + k])) - keys_.begin());
 }
 
-std::int64_t ColumnIndex::find(std::int32_t ix, std::int32_t iy) const {
-    if (dense_) {
-        const std::int64_t x = std::int64_t(ix) - lo_[0], y = std::int64_t(iy) - lo_[1];
-        if (x < 0 || y < 0 || y >= extY_ || x * extY_ + y >= std::int64_t(size_)) return -1;
-        return x * extY_ + y;
-    }
+std::int64_t ColumnIndex::findSparse(std::int32_t ix, std::int32_t iy) const {
     const std::uint64_t key = columnKey(ix, iy);
     const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
     return it != keys_.end() && *it == key ? std::int64_t(it - keys_.begin()) : -1;
@@ -320,8 +339,14 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     if (n == 0) return;
     // Input already grouped by column in ascending order (Phase II: Phase I hands its ground over
     // cell by cell)? Then the stable counting sort by column keeps it as it is.
+    // (In blocks whose test vectorises, stopping after the first block out of order.)
     bool sorted = true;
-    for (std::size_t k = 1; k < n && sorted; ++k) sorted = columnOf[k] >= columnOf[k - 1];
+    for (std::size_t b = 1; b < n && sorted; b += 1024) {
+        const std::size_t e = std::min(n, b + 1024);
+        unsigned down = 0;
+        for (std::size_t k = b; k < e; ++k) down |= columnOf[k] < columnOf[k - 1] ? 1u : 0u;
+        sorted = down == 0;
+    }
     if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices)) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
     if (!sorted) {
@@ -334,9 +359,14 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
     sortedIz_.resize(n);
     if (sorted) {
         // The end of each column: where the next column's points begin (no count per point).
+        // (Only where the column changes, found by a test that vectorises.)
         std::uint32_t c = 0;
-        for (std::uint32_t k = 0; k < std::uint32_t(n); ++k)
-            while (c < columnOf[k]) counts_[c++] = k;
+        for (std::uint32_t b = 0; b < std::uint32_t(n); b += 64) {
+            const std::uint32_t e = std::min(std::uint32_t(n), b + 64);
+            if (columnOf[e - 1] == c) continue;  // sorted: the whole block lies in column c
+            for (std::uint32_t k = b; k < e; ++k)
+                while (c < columnOf[k]) counts_[c++] = k;
+        }
         while (c < numColumns) counts_[c++] = std::uint32_t(n);
         if (!byColumnPoints) {
             byColumnPoints_.resize(n);
@@ -381,11 +411,11 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         // stable comparison sort of (iz, position) keys.
         const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
         if (range <= 4 * std::uint64_t(end - start) + 64) {
-            keys_.assign(std::size_t(range) + 1, 0);
-            for (std::uint32_t k = start; k < end; ++k) ++keys_[std::size_t(iz_[k] - lo) + 1];
-            for (std::size_t b = 1; b <= range; ++b) keys_[b] += keys_[b - 1];
+            zCounts_.assign(std::size_t(range) + 1, 0);
+            for (std::uint32_t k = start; k < end; ++k) ++zCounts_[std::size_t(iz_[k] - lo) + 1];
+            for (std::size_t b = 1; b <= range; ++b) zCounts_[b] += zCounts_[b - 1];
             for (std::uint32_t k = start; k < end; ++k) {
-                const std::uint32_t at = start + keys_[std::size_t(iz_[k] - lo)]++;
+                const std::uint32_t at = start + zCounts_[std::size_t(iz_[k] - lo)]++;
                 order_[at] = byColumn[k];
                 points_[at] = byColumnPoints[k];
                 sortedIz_[at] = iz_[k];

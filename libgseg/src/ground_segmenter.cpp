@@ -47,15 +47,28 @@ std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
 
 // Bounding-box volume per point [m^3] of the masked points (mask 1: first) and of the unmasked
 // ones (mask 0: second), in one pass.
+// (The boxes' corners in registers, each updated or kept without a branch: AlignedBox::extend's
+// min and max, the same values.)
 std::pair<double, double> volumesPerPoint(const Eigen::Vector3f* pts, const std::uint8_t* mask, std::size_t n) {
-    Eigen::AlignedBox3f box[2];
-    std::size_t m[2] = {0, 0};
+    constexpr float hi = std::numeric_limits<float>::max(), lo = std::numeric_limits<float>::lowest();  // an empty box
+    float inMin[3] = {hi, hi, hi}, inMax[3] = {lo, lo, lo}, outMin[3] = {hi, hi, hi}, outMax[3] = {lo, lo, lo};
+    std::size_t mIn = 0, mOut = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        const int in = mask[i] == 1 ? 1 : (mask[i] == 0 ? 0 : -1);
-        if (in >= 0) box[in].extend(pts[i]), ++m[in];
+        const bool in = mask[i] == 1, out = mask[i] == 0;
+        for (int a = 0; a < 3; ++a) {
+            const float v = pts[i][a];
+            inMin[a] = in ? std::min(inMin[a], v) : inMin[a];
+            inMax[a] = in ? std::max(inMax[a], v) : inMax[a];
+            outMin[a] = out ? std::min(outMin[a], v) : outMin[a];
+            outMax[a] = out ? std::max(outMax[a], v) : outMax[a];
+        }
+        mIn += in, mOut += out;
     }
-    const auto perPoint = [&](int k) { return m[k] == 0 ? 0.0 : double(box[k].volume()) / double(m[k]); };
-    return {perPoint(1), perPoint(0)};
+    const auto perPoint = [](const float* mn, const float* mx, std::size_t m) {
+        const Eigen::AlignedBox3f box(Eigen::Vector3f(mn[0], mn[1], mn[2]), Eigen::Vector3f(mx[0], mx[1], mx[2]));
+        return m == 0 ? 0.0 : double(box.volume()) / double(m);
+    };
+    return {perPoint(inMin, inMax, mIn), perPoint(outMin, outMax, mOut)};
 }
 
 // The z range of the points of one Phase I cell that Phase I did not accept.
@@ -80,7 +93,11 @@ struct CellState {
 }  // namespace
 
 struct detail::Workspace {
-    Grid grid;  // its points(): the points grouped by cell, aligned with grid.order()
+    // One grid per phase (its points(): the points grouped by cell, aligned with order()), so that
+    // neither shrinks the other's buffers (a vector grown again is filled again); `grid`: the
+    // current phase's (after run(): Phase II's).
+    Grid phaseGrids[2];
+    Grid* grid = &phaseGrids[0];
     ColumnIndex columns;                  // the columns (ix, iy) of the finite points, shared by both phases
     std::vector<std::uint32_t> input, phase1Ground, phase2Ground;
     std::vector<std::uint32_t> inputColumns;          // the column id of each point of input, in its order
@@ -110,9 +127,11 @@ struct detail::Workspace {
     // called non-ground (cells too small to classify excepted). Phase II sees only Phase I's
     // ground, so this is how it knows what stands below its cells.
     std::vector<RejectedSpan> rejected;
+    std::vector<std::uint32_t> rejectedStart;  // per column id c: the spans of c are rejected[rejectedStart[c] .. rejectedStart[c + 1])
     std::vector<Eigen::Vector3f> normals;  // per candidate (aligned with centroids)
     std::vector<std::int32_t> parents;     // per candidate: the candidate it was reached from (expandRegion)
     BelowGroundScratch belowGround;
+    std::vector<std::uint8_t> groundInColumn;  // per column id: it holds a ground cell (Phase I's recovery)
     std::vector<GroundColumn> groundColumns;  // flagBelowGround: the lowest ground of each Phase II ground cell
 };
 
@@ -163,7 +182,7 @@ struct PhaseSettings {
     }
 };
 
-/// One phase of GSeg3D over the points `input`; appends the indices it calls ground to `ground`.
+/// One phase of GSeg3D over the points `input`; replaces the contents of `ground` with the indices it calls ground.
 ///
 /// Which steps are the paper's (Lodhi and Hertzberg, ICRCV 2025), which the authors' public
 /// implementation's (dfki-ric/ground_segmentation, where the paper is vague) and which our own:
@@ -201,7 +220,8 @@ public:
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
-        ws.grid.build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
+        ws.grid = &ws.phaseGrids[set_.number - 1];
+        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -217,9 +237,9 @@ public:
 
 private:
     void classifyCells(detail::Workspace& ws) const {
-        const auto& pts = ws.grid.points();
+        const auto& pts = ws.grid->points();
         ws.inlier.assign(pts.size(), 0);
-        ws.cells.assign(ws.grid.cells().size(), CellState());
+        ws.cells.assign(ws.grid->cells().size(), CellState());
         // Cells are independent: each writes its own state and its own points' flags.
         ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
             for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
@@ -227,8 +247,8 @@ private:
     }
 
     void classifyOne(detail::Workspace& ws, std::size_t c) const {
-        const auto& pts = ws.grid.points();
-        const GridCell& g = ws.grid.cells()[c];
+        const auto& pts = ws.grid->points();
+        const GridCell& g = ws.grid->cells()[c];
         const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_);
         CellState& s = ws.cells[c];
         s.cellClass = cls.cellClass;
@@ -255,22 +275,24 @@ private:
     void fitOne(detail::Workspace& ws, std::size_t c, detail::Workspace::ThreadScratch& scratch) const {
         CellState& s = ws.cells[c];
         if (s.cellClass != CellClass::Plane) return;
-        const GridCell& g = ws.grid.cells()[c];
+        const GridCell& g = ws.grid->cells()[c];
         if (s.steepNormal) {  // a wall, a car side or a hedge face: no plane fit can make it ground
             s.outcome = CellOutcome::Steep;
             return;
         }
-        const PlaneFitResult fit = fitPlane(&ws.grid.points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
+        const PlaneFitResult fit = fitPlane(&ws.grid->points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
                                             scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
         if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
             s.outcome = CellOutcome::Steep;
             return;
         }
+        // (Pointers at hand: a byte store may alias anything, and would have them reloaded per point.)
+        const std::uint8_t* const mask = scratch.mask.data();
+        const Eigen::Vector3f* const pts = ws.grid->points().data() + g.begin;
+        std::copy(mask, mask + g.size(), ws.inlier.begin() + g.begin);
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        for (std::uint32_t i = 0; i < g.size(); ++i) {
-            ws.inlier[g.begin + i] = scratch.mask[i];
-            if (scratch.mask[i]) sum += ws.grid.points()[g.begin + i];
-        }
+        for (std::uint32_t i = 0; i < g.size(); ++i)
+            if (mask[i]) sum += pts[i];
         s.inliers = std::uint32_t(fit.numInliers);
         s.ground = sum / float(fit.numInliers);
         s.normal = fit.normal;
@@ -283,11 +305,11 @@ private:
         for (std::size_t c = 0; c < ws.cells.size(); ++c) {
             CellState& s = ws.cells[c];
             if (s.outcome != CellOutcome::NotReached) continue;
-            const GridCell& g = ws.grid.cells()[c];
+            const GridCell& g = ws.grid->cells()[c];
             // A handful of outliers has no meaningful bounding box: only a population of at least
             // minPointsPerCell outliers can compete with the inliers.
             if (g.size() - s.inliers >= std::uint32_t(p_.minPointsPerCell)) {
-                const auto volumes = volumesPerPoint(&ws.grid.points()[g.begin], &ws.inlier[g.begin], g.size());
+                const auto volumes = volumesPerPoint(&ws.grid->points()[g.begin], &ws.inlier[g.begin], g.size());
                 const Sparsity in = sparsityBucket(volumes.first, p_);
                 const Sparsity out = sparsityBucket(volumes.second, p_);
                 s.ambiguous = in == out;
@@ -304,7 +326,7 @@ private:
     // An occupied cell classified non-ground lies directly below cell c (same column, lower z); in
     // Phase II also any point Phase I called non-ground below the cell's bottom.
     bool floating(const detail::Workspace& ws, std::size_t c) const {
-        const auto& g = ws.grid.cells();
+        const auto& g = ws.grid->cells();
         for (std::size_t b = c; b-- > 0 && g[b].ix == g[c].ix && g[b].iy == g[c].iy;) {
             const CellOutcome o = ws.cells[b].outcome;
             if (o == CellOutcome::Steep || o == CellOutcome::NonPlanar) return true;
@@ -312,13 +334,11 @@ private:
         if (!set_.belowRejected) return false;
         // Only points between floatingMinHeight and floatingMaxDepth below the cell's bottom count:
         // closer, a step of the ground; deeper, a reflection under it.
-        const std::uint32_t column = ws.grid.cellColumns()[c];
+        const std::uint32_t column = ws.grid->cellColumns()[c];
         const double bottom = originZ() + double(g[c].iz) * set_.cellSizeZ;
         const double top = bottom - p_.floatingMinHeight, deep = bottom - p_.floatingMaxDepth;
-        for (auto it = std::lower_bound(ws.rejected.begin(), ws.rejected.end(), column,
-                                        [](const RejectedSpan& a, std::uint32_t k) { return a.column < k; });
-             it != ws.rejected.end() && it->column == column; ++it)
-            if (double(it->low) < top && double(it->high) >= deep) return true;
+        for (std::uint32_t k = ws.rejectedStart[column], e = ws.rejectedStart[column + 1]; k < e; ++k)
+            if (double(ws.rejected[k].low) < top && double(ws.rejected[k].high) >= deep) return true;
         return false;
     }
 
@@ -360,20 +380,36 @@ private:
 
     void collect(detail::Workspace& ws, std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
                  std::vector<Eigen::Vector3f>* groundPoints, PhaseReport& r, bool keepCells) const {
-        const auto& order = ws.grid.order();
-        const auto& grid = ws.grid.cells();
+        const auto& grid = ws.grid->cells();
         r.occupiedCells = grid.size();
         r.candidateCells = ws.candidateCell.size();
         if (keepCells) r.cells.reserve(grid.size());
         if (set_.recordRejected) ws.rejected.clear();
         // recover() reads only the ground cells, which it never changes: every cell on its own.
-        if (set_.recover)
+        if (set_.recover) {
+            // The columns holding a ground cell (recover() looks into no other).
+            ws.groundInColumn.assign(ws.columns.size(), 0);
+            for (std::size_t c = 0; c < grid.size(); ++c)
+                if (ws.cells[c].outcome == CellOutcome::Ground) ws.groundInColumn[ws.grid->cellColumns()[c]] = 1;
             ws.forCells(grid.size(), [&](std::size_t begin, std::size_t end, unsigned) {
                 for (std::size_t c = begin; c < end; ++c)
                     if (ws.cells[c].outcome != CellOutcome::Ground &&
                         (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
                         recover(ws, c);
             });
+        }
+        // The accepted points replace the outputs' contents, written in place without a check per
+        // point: room for every point of the ground and recovered cells (and one more: the
+        // branch-free compaction writes one past its last point), cut to what was written at the
+        // end. (The outputs keep their size from the previous scan until then: resizing within it
+        // fills nothing.)
+        std::size_t room = 1;
+        for (std::size_t c = 0; c < grid.size(); ++c)
+            if (ws.cells[c].outcome == CellOutcome::Ground || ws.cells[c].recovered) room += grid[c].size();
+        ground.resize(room);
+        if (groundPoints) groundPoints->resize(room);
+        if (groundColumns) groundColumns->resize(room);
+        std::size_t written = 0;
         for (std::size_t c = 0; c < grid.size(); ++c) {
             const GridCell& g = grid[c];
             const CellState& s = ws.cells[c];
@@ -383,12 +419,8 @@ private:
                     ++r.groundCells;
                 else
                     r.recoveredPoints += s.inliers;
-                for (std::uint32_t k = g.begin; k < g.end; ++k)
-                    if (ws.inlier[k]) {
-                        ground.push_back(order[k]);
-                        if (groundPoints) groundPoints->push_back(ws.grid.points()[k]);
-                        if (groundColumns) groundColumns->push_back(ws.grid.cellColumns()[c]);
-                    }
+                written = groundPoints ? appendInliers<true>(ws, c, written, ground, groundColumns, groundPoints)
+                                       : appendInliers<false>(ws, c, written, ground, groundColumns, groundPoints);
             } else if (s.outcome == CellOutcome::TooFewPoints) {
                 r.unlabelledCellPoints += g.size();
             } else if (s.outcome == CellOutcome::NotReached) {
@@ -398,7 +430,51 @@ private:
                 r.cells.push_back({g.ix, g.iy, g.iz, g.size(), s.inliers, s.cellClass, s.outcome, s.ground.z(),
                                    s.candidate < 0 ? -2 : reachedFromCell(ws, std::size_t(s.candidate))});
         }
+        ground.resize(written);
+        if (groundPoints) groundPoints->resize(written);
+        if (groundColumns) groundColumns->resize(written);
         r.groundPoints = ground.size();
+        if (set_.recordRejected) {
+            // Where each column's spans begin (they come by column id): no search per cell later.
+            ws.rejectedStart.assign(std::size_t(ws.columns.size()) + 1, 0);
+            for (const RejectedSpan& span : ws.rejected) ++ws.rejectedStart[span.column + 1];
+            for (std::size_t k = 1; k < ws.rejectedStart.size(); ++k) ws.rejectedStart[k] += ws.rejectedStart[k - 1];
+        }
+    }
+
+    // Writes the inliers of cell c (their indices, and with kPoints their points and column ids
+    // too) from position `at` of the outputs, which have room for all the cell's points and one
+    // more; returns the position after the last one written. (Every point is written, and the
+    // position advances past the inliers only: no branch per point.)
+    template <bool kPoints>
+    static std::size_t appendInliers(const detail::Workspace& ws, std::size_t c, std::size_t at,
+                                     std::vector<std::uint32_t>& ground, std::vector<std::uint32_t>* groundColumns,
+                                     std::vector<Eigen::Vector3f>* groundPoints) {
+        const GridCell& g = ws.grid->cells()[c];
+        const std::uint32_t* const order = ws.grid->order().data();
+        const Eigen::Vector3f* const pts = ws.grid->points().data();
+        const std::uint8_t* const inlier = ws.inlier.data();
+        std::uint32_t* const outIdx = ground.data();
+        Eigen::Vector3f* const outPts = kPoints ? groundPoints->data() : nullptr;
+        std::uint32_t* const outCol = kPoints && groundColumns ? groundColumns->data() : nullptr;
+        const std::uint32_t column = ws.grid->cellColumns()[c];
+        if (ws.cells[c].inliers == g.size()) {  // every point (s.inliers: the cell's inlier flags)
+            std::copy(order + g.begin, order + g.end, outIdx + at);
+            if (kPoints) {
+                std::copy(pts + g.begin, pts + g.end, outPts + at);
+                if (outCol) std::fill(outCol + at, outCol + at + g.size(), column);
+            }
+            return at + g.size();
+        }
+        for (std::uint32_t k = g.begin; k < g.end; ++k) {
+            outIdx[at] = order[k];
+            if (kPoints) {
+                outPts[at] = pts[k];
+                if (outCol) outCol[at] = column;
+            }
+            at += inlier[k];
+        }
+        return at;
     }
 
     // Phase I, a cell that is not ground: its points that lie on the ground plane of a ground cell
@@ -406,8 +482,8 @@ private:
     // the authors' implementation: the road at the foot of a wall, the grass between bushes, the
     // sidewalk in a cell that a pedestrian made steep. Phase II judges them like any other point.
     void recover(detail::Workspace& ws, std::size_t c) const {
-        const auto& cells = ws.grid.cells();
-        const auto& columnCells = ws.grid.columnCells();
+        const auto& cells = ws.grid->cells();
+        const auto& columnCells = ws.grid->columnCells();
         const GridCell& g = cells[c];
         std::uint32_t nb[17];
         int count = 0;
@@ -416,7 +492,7 @@ private:
         for (int dx = -1; dx <= 1; ++dx)
             for (int dy = -1; dy <= 1; ++dy) {
                 const std::int64_t column = ws.columns.find(g.ix + dx, g.iy + dy);
-                if (column < 0) continue;
+                if (column < 0 || !ws.groundInColumn[std::size_t(column)]) continue;
                 for (std::uint32_t b = columnCells[std::size_t(column)], e = columnCells[std::size_t(column) + 1]; b < e; ++b) {
                     if (cells[b].iz > g.iz) break;
                     if (cells[b].iz < g.iz - 1 || b == c) continue;
@@ -428,22 +504,41 @@ private:
         s.inliers = 0;
         if (count == 0) return;
         const float thr = float(set_.recoveryThreshold);
+        // The neighbours' ground centroids (x, y) at hand.
+        const CellState* nbs[17];
+        float gx[17], gy[17];
+        for (int j = 0; j < count; ++j) {
+            nbs[j] = &ws.cells[nb[j]];
+            gx[j] = nbs[j]->ground.x(), gy[j] = nbs[j]->ground.y();
+        }
+        const Eigen::Vector3f* const pts = ws.grid->points().data();
+        std::uint8_t* const inlier = ws.inlier.data();
+        // Without a branch per point; the cell's state written once at the end: its count, and the
+        // plane and the point of the last point recovered.
+        std::uint32_t inliers = 0, last = 0;
+        int lastBest = 0;
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = ws.grid.points()[k];
-            // The plane of the neighbour whose ground centroid is horizontally nearest.
-            const CellState* best = nullptr;
+            const Eigen::Vector3f& q = pts[k];
+            // The plane of the neighbour whose ground centroid is horizontally nearest (the first
+            // of equals): (ground - q).head<2>().squaredNorm(), without a branch.
+            int best = 0;
             float bestD = std::numeric_limits<float>::infinity();
             for (int j = 0; j < count; ++j) {
-                const CellState& n = ws.cells[nb[j]];
-                const float d = (n.ground - q).head<2>().squaredNorm();
-                if (d < bestD) bestD = d, best = &n;
+                const float dx = gx[j] - q.x(), dy = gy[j] - q.y();
+                const float d = dx * dx + dy * dy;
+                best = d < bestD ? j : best;
+                bestD = d < bestD ? d : bestD;
             }
-            if (std::abs(best->normal.dot(q - best->ground)) <= thr) {
-                ws.inlier[k] = 1, ++s.inliers;
-                s.normal = best->normal, s.ground = q;
-            }
+            const CellState& n = *nbs[best];
+            const bool on = std::abs(n.normal.dot(q - n.ground)) <= thr;
+            inlier[k] = on;
+            inliers += on;
+            last = on ? k : last;
+            lastBest = on ? best : lastBest;
         }
-        s.recovered = s.inliers > 0;
+        s.inliers = inliers;
+        if (inliers > 0) s.normal = nbs[lastBest]->normal, s.ground = pts[last];
+        s.recovered = inliers > 0;
     }
 
     std::int32_t reachedFromCell(const detail::Workspace& ws, std::size_t candidate) const {
@@ -458,14 +553,22 @@ private:
     // something standing below the cells above; and in a recovered cell, points more than
     // floatingMaxDepth below the plane it was recovered onto (reflections under the road).
     void recordRejected(detail::Workspace& ws, std::size_t c) const {
-        const GridCell& g = ws.grid.cells()[c];
+        const GridCell& g = ws.grid->cells()[c];
         const CellState& s = ws.cells[c];
         const bool ground = s.outcome == CellOutcome::Ground;
-        RejectedSpan span{ws.grid.cellColumns()[c], std::numeric_limits<float>::infinity(),
+        if (ground && s.inliers == g.size()) return;  // every point accepted (s.inliers: the cell's inlier flags)
+        RejectedSpan span{ws.grid->cellColumns()[c], std::numeric_limits<float>::infinity(),
                           -std::numeric_limits<float>::infinity()};
+        if (!ground && !s.recovered) {  // every point counts: the z range of the cell
+            const Eigen::Vector3f* const pts = ws.grid->points().data();
+            for (std::uint32_t k = g.begin; k < g.end; ++k)
+                span.low = std::min(span.low, pts[k].z()), span.high = std::max(span.high, pts[k].z());
+            ws.rejected.push_back(span);  // a cell holds at least one point
+            return;
+        }
         for (std::uint32_t k = g.begin; k < g.end; ++k) {
             if (ground && ws.inlier[k]) continue;
-            const Eigen::Vector3f& q = ws.grid.points()[k];
+            const Eigen::Vector3f& q = ws.grid->points()[k];
             if (ground && p_.floatingIgnoresLowOutliers && s.normal.dot(q - s.ground) < 0) continue;
             if (s.recovered && s.normal.dot(q - s.ground) < -p_.floatingMaxDepth) continue;
             span.low = std::min(span.low, q.z());
@@ -511,12 +614,8 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     ws.input.resize(numFinite);
     r.numNonFinite = cloud.size() - ws.input.size();
     ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
-    ws.phase1Ground.clear();
-    ws.phase2Ground.clear();
 
     // Phase I: tall cells over the whole cloud, no height gate.
-    ws.phase1GroundPoints.clear();
-    ws.phase1GroundColumns.clear();
     Phase(params, PhaseSettings::first(params))
         .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.phase1Ground, &ws.phase1GroundColumns,
              &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
@@ -532,12 +631,12 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     // Ours, not the paper's: reflections far below the ground (below_ground.hpp), the ground's
     // columns taken from Phase II's grid, still in the workspace (a ground cell holds its inliers).
     ws.groundColumns.clear();
-    const auto& cells = ws.grid.cells();
+    const auto& cells = ws.grid->cells();
     for (std::size_t c = 0; c < cells.size(); ++c) {
         if (ws.cells[c].outcome != CellOutcome::Ground) continue;
         float lowest = std::numeric_limits<float>::infinity();
         for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid.points()[k].z());
+            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid->points()[k].z());
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);

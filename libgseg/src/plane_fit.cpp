@@ -1,3 +1,4 @@
+#include <gseg/cell_classifier.hpp>
 #include <gseg/plane_fit.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -32,18 +33,11 @@ std::size_t markInliers(const PlaneFitScratch& s, std::size_t n, const Eigen::Ve
 // Least-squares plane through the masked points: normal = smallest principal axis.
 bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vector<std::uint8_t>& mask,
                        float thr, Eigen::Vector3f& normal, float& d) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     std::size_t m = 0;
-    for (std::size_t i = 0; i < n; ++i)
-        if (mask[i]) mean += pts[i].cast<double>(), ++m;
+    Eigen::Vector3d mean = detail::pointSum(pts, n, mask.data(), &m);
     if (m < 3) return false;
     mean /= double(m);
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < n; ++i)
-        if (mask[i]) {
-            const Eigen::Vector3d q = pts[i].cast<double>() - mean;
-            cov.noalias() += q * q.transpose();
-        }
+    const Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean, mask.data());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     // Inliers spread less than the inlier distance across their main axis: a line, no plane.
@@ -99,7 +93,8 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
     PlaneFitResult res;
     inlier.assign(n, 0);
     if (n < 3) return res;
-    scratch.x.resize(n), scratch.y.resize(n), scratch.z.resize(n);
+    // Grown, never shrunk (a vector grown again fills its new part): the first n are this cell's.
+    if (scratch.x.size() < n) scratch.x.resize(n), scratch.y.resize(n), scratch.z.resize(n);
     for (std::size_t i = 0; i < n; ++i) scratch.x[i] = pts[i].x(), scratch.y[i] = pts[i].y(), scratch.z[i] = pts[i].z();
     const float thr = float(params.groundInlierThreshold);
     const double logFail = std::log(1.0 - params.ransacConfidence);

@@ -90,34 +90,37 @@ private:
         const float* const ys = y_.data();
         const float* const zs = z_.data();
         const float qx = q.x(), qy = q.y(), qz = q.z();
-        for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx)
-            for (std::int64_t cy = k.second - 2; cy <= k.second + 2; ++cy) {
-                std::size_t b = 0, e = 0;
-                if (!columnRange(cx, cy, b, e)) continue;
-                for (std::size_t t = b; t < e; ++t) {
-                    if (kSkipReached && reached[t]) continue;
-                    // squaredDistance(q, p), term by term in the same order
-                    const float dx = qx - xs[t], dy = qy - ys[t], dz = qz - zs[t];
-                    float r = 0.f;
-                    r += dx * dx;
-                    r += dy * dy;
-                    r += dz * dz;
-                    if (r < radiusSq) f(items[t]);
-                }
+        for (std::int64_t cx = k.first - 2; cx <= k.first + 2; ++cx) {
+            // The columns (cx, cy - 2 .. cy + 2) hold consecutive slots: one range per cx.
+            std::size_t b = 0, e = 0;
+            if (!columnsRange(cx, k.second - 2, k.second + 2, b, e)) continue;
+            for (std::size_t t = b; t < e; ++t) {
+                if (kSkipReached && reached[t]) continue;
+                // squaredDistance(q, p), term by term in the same order
+                const float dx = qx - xs[t], dy = qy - ys[t], dz = qz - zs[t];
+                float r = 0.f;
+                r += dx * dx;
+                r += dy * dy;
+                r += dz * dz;
+                if (r < radiusSq) f(items[t]);
             }
+        }
     }
 
-    // The slots [b, e) of column (cx, cy); false where it lies outside the dense table.
-    bool columnRange(std::int64_t cx, std::int64_t cy, std::size_t& b, std::size_t& e) const {
+    // The slots [b, e) of the columns (cx, cy0 .. cy1), which follow each other in the slots (the
+    // columns' order: by cx, then cy); false where none lies in the dense table.
+    bool columnsRange(std::int64_t cx, std::int64_t cy0, std::int64_t cy1, std::size_t& b, std::size_t& e) const {
         if (dense_) {
-            if (cx < lo_[0] || cy < lo_[1] || cx >= lo_[0] + w_ || cy >= lo_[1] + h_) return false;
-            const std::size_t c = std::size_t(index(cx, cy));
-            b = start_[c], e = start_[c + 1];
+            cy0 = std::max(cy0, lo_[1]), cy1 = std::min(cy1, lo_[1] + h_ - 1);
+            if (cx < lo_[0] || cx >= lo_[0] + w_ || cy0 > cy1) return false;
+            b = start_[std::size_t(index(cx, cy0))], e = start_[std::size_t(index(cx, cy1)) + 1];
         } else {
-            const auto range = std::equal_range(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy));
-            b = std::size_t(range.first - sortedKeys_.begin()), e = std::size_t(range.second - sortedKeys_.begin());
+            b = std::size_t(std::lower_bound(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy0)) -
+                            sortedKeys_.begin());
+            e = std::size_t(std::upper_bound(sortedKeys_.begin(), sortedKeys_.end(), std::make_pair(cx, cy1)) -
+                            sortedKeys_.begin());
         }
-        return true;
+        return b < e;
     }
     std::int64_t coord(float v) const {
         const double c = std::floor(double(v) / size_);

@@ -35,6 +35,20 @@ struct SlopeLimit {
 /// The same with the slope limit's sine and cosine given (the segmenter computes them once per scan).
 CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope);
 
+namespace detail {
+/// The sum of the points `pts[0..n)` whose `mask` is non-zero (mask null: every point), in double,
+/// in the points' order (bit for bit Eigen's `sum += p.cast<double>()`, kept in registers);
+/// `count` (optional) receives how many were summed.
+Eigen::Vector3d pointSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask = nullptr,
+                         std::size_t* count = nullptr);
+/// The scatter matrix sum over the points i of (p_i - mean)(p_i - mean)^T [m^2], the differences
+/// and sums in double, of the points `pts[0..n)` whose `mask` is non-zero (mask null: every
+/// point): the same value, bit for bit, as Eigen's `cov.noalias() += d * d.transpose()` summed in
+/// the points' order (each symmetric pair computed once; SSE2 where there is).
+Eigen::Matrix3d scatterMatrix(const Eigen::Vector3f* pts, std::size_t n, const Eigen::Vector3d& mean,
+                              const std::uint8_t* mask = nullptr);
+}  // namespace detail
+
 /// Bounding-box sparsity of Algorithm 1: box volume / point count, in m^3 per point.
 enum class Sparsity : std::uint8_t { Low, Medium, High };
 

@@ -27,6 +27,12 @@ inline std::int32_t cellCoord(float v, double size, double origin = 0.0) {
     return static_cast<std::int32_t>(t > q ? t - 1.0 : t);
 }
 
+namespace detail {
+/// out[k] = cellCoord(v[k], size, origin) for k < n, in loops that vectorise (AVX2 where the CPU
+/// has it, checked once): the same values.
+void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out);
+}  // namespace detail
+
 /// One occupied cell: its index and the range [begin, end) of its points in Grid::order().
 struct GridCell {
     std::int32_t ix = 0, iy = 0, iz = 0;
@@ -50,7 +56,13 @@ public:
     /// Number of column ids (ids are 0 .. size() - 1).
     std::uint32_t size() const { return size_; }
     /// Id of column (ix, iy), or -1 where it holds no point (dense ids: outside the box).
-    std::int64_t find(std::int32_t ix, std::int32_t iy) const;
+    /// (Dense ids inline: the recovery asks for nine columns per cell.)
+    std::int64_t find(std::int32_t ix, std::int32_t iy) const {
+        if (!dense_) return findSparse(ix, iy);
+        const std::int64_t x = std::int64_t(ix) - lo_[0], y = std::int64_t(iy) - lo_[1];
+        if (x < 0 || y < 0 || y >= extY_ || x * extY_ + y >= std::int64_t(size_)) return -1;
+        return x * extY_ + y;
+    }
     /// Column index along x and y of the column `id`.
     std::int32_t ix(std::uint32_t id) const;
     std::int32_t iy(std::uint32_t id) const;
@@ -61,6 +73,8 @@ public:
     std::int64_t extentY() const { return extY_; }
 
 private:
+    std::int64_t findSparse(std::int32_t ix, std::int32_t iy) const;
+
     bool dense_ = true;
     std::int32_t lo_[2] = {0, 0};
     std::int64_t extY_ = 1;
@@ -114,6 +128,7 @@ private:
     std::vector<std::uint32_t> order_;
     std::vector<std::int32_t> coords_;  // ix, iy, iz per input index
     std::vector<std::uint32_t> keys_, counts_;
+    std::vector<std::uint32_t> zCounts_;  // one column's counting sort by z cell (small: keys_ keeps its size)
     std::vector<std::uint64_t> sortKeys_;
     std::vector<Eigen::Vector3f> points_, byColumnPoints_;
     std::vector<std::uint32_t> columnCells_, cellColumns_, byColumn_;
