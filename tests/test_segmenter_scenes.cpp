@@ -426,18 +426,19 @@ double besideRoadRecall(const gseg::test::NamedScan& n, const std::vector<std::u
 TEST(Scenes, GroundBesideTheRoadRoughTerrainAndSparseSensors) {
     // Floors about half a point under what this version measures (printed). What is missed is far
     // out: on every scene the ground beyond the range where the rings lie more than the search
-    // radius apart (HDL-64E at 1.73 m: about 35 m; HDL-32E at 1.84 m: about 25 m) is not reached,
-    // and on the HDL-32E the terrain 20-30 m out is reached by Phase I but stopped by Phase II's
-    // height gate between single-ring (line) cells. Issue #20's analysis: loosening either costs
+    // radius apart (HDL-64E at 1.73 m: about 35 m; HDL-32E at 1.84 m: about 25 m) is reached only
+    // where a bridge (bridgeRadius) finds it level with the ground before it, and on the HDL-32E
+    // part of the terrain 20-30 m out is reached by Phase I but stopped by Phase II's height gate
+    // between single-ring (line) cells. Issue #20's analysis: loosening either costs
     // precision on the real scans. Floors raised with issue #20's rules (sparseRecoveryThreshold and
     // the floating check's window); grass_verge_5cm gave 0.3 of precision for 1.4 of recall.
     const RecallCase cases[] = {
         // name                   P      R      beside  auto P  auto R    (measured P / R / beside; auto P / R)
         {"grass_verge_5cm", 0.978, 0.950, 0.905, 0.980, 0.950},      // 98.08 / 95.66 / 91.42; 98.37 / 95.63
-        {"grass_verge_15cm", 0.977, 0.945, 0.930, 0.975, 0.955},     // 98.22 / 95.01 / 93.55; 98.08 / 96.39
-        {"embankment_12", 0.990, 0.970, 0.950, 0.990, 0.960},        // 99.32 / 97.47 / 95.68; 99.26 / 96.77
+        {"grass_verge_15cm", 0.977, 0.950, 0.935, 0.975, 0.960},     // 98.23 / 95.43 / 93.89; 98.09 / 96.82
+        {"embankment_12", 0.990, 0.970, 0.950, 0.990, 0.965},        // 99.32 / 97.62 / 95.86; 99.26 / 96.95
         {"gravel_road", 0.995, 0.940, 0.900, 0.995, 0.940},          // 99.82 / 94.72 / 90.79; 99.79 / 94.67
-        {"hdl32_road_terrain", 0.995, 0.890, 0.820, 0.995, 0.890},   // 99.90 / 89.57 / 82.48; 99.90 / 89.56
+        {"hdl32_road_terrain", 0.995, 0.910, 0.850, 0.995, 0.910},   // 99.91 / 91.60 / 85.80; 99.91 / 91.66
         {"vlp16_rolling_grass", 0.990, 0.880, 0.830, 0.990, 0.880},  // 99.54 / 88.80 / 83.75; 99.50 / 88.63
     };
     for (const RecallCase& c : cases) {
@@ -530,4 +531,32 @@ TEST(Scenes, SparseCellsOnAGroundNeighboursPlaneAreGround) {
     EXPECT_LT(off.all.recall, 0.93);
     EXPECT_GE(o.all.precision, off.all.precision - 0.001);
     EXPECT_GT(o.result.phase2.recoveredPoints, 0u);
+}
+
+TEST(Scenes, BridgesReachTheTerrainTheExpansionStoppedShortOf) {
+    // bridgeRadius / bridgeGate / bridgeMaxAngleDegrees: once Phase II's expansion stops, a Phase I
+    // ground cell it never reached is reached from the nearest ground cell within 10 m where it lies
+    // within 0.1 m of that cell's plane and height and the two planes agree within 10 deg. The
+    // HDL-32E's terrain beside the road, 20-30 m out, is a step above the road between single-ring
+    // cells and its far rings lie more than the search radius apart: without bridges recall 89.57 %
+    // (beside the road 82.48 %), with them 91.60 % (85.80 %), precision 99.90 -> 99.91 %. A kerb
+    // beside the robot: 93.63 -> 96.38 %. Without the normals' agreement the solid-state sensor on
+    // vegetated hills (auto height) lost 0.24 points of precision to bushes' tops for no recall.
+    for (const char* name : {"hdl32_road_terrain", "curb_near", "solid_state_hills"}) {
+        const auto n = gseg::test::scene(name);
+        const Outcome o = runScene(n);
+        const Outcome off = runWith(n, {{"bridgeRadius", "0"}});
+        std::printf("%-20s bridges: P %.4f R %.4f; none: P %.4f R %.4f\n", name, o.all.precision, o.all.recall,
+                    off.all.precision, off.all.recall);
+        EXPECT_GE(o.all.precision, off.all.precision - 0.0005) << name;
+        EXPECT_GE(o.all.recall, off.all.recall) << name;
+        if (std::string(name) == "solid_state_hills") {
+            const AutoOutcome a = runAuto(n);
+            EXPECT_GE(a.o.all.precision, 0.978) << name;  // measured 97.89 % (without the angle 97.65 %)
+        } else {
+            EXPECT_GT(o.all.recall, off.all.recall + 0.015) << name;  // the rule is what reaches them
+        }
+    }
+    const auto n = gseg::test::scene("hdl32_road_terrain");
+    EXPECT_GE(besideRoadRecall(n, runScene(n).result.labels, 4.3), 0.85);  // measured 85.80 %; none: 82.48 %
 }
