@@ -438,7 +438,7 @@ TEST(Scenes, GroundBesideTheRoadRoughTerrainAndSparseSensors) {
         {"grass_verge_15cm", 0.977, 0.950, 0.935, 0.975, 0.960},     // 98.23 / 95.43 / 93.89; 98.09 / 96.82
         {"embankment_12", 0.990, 0.970, 0.950, 0.990, 0.965},        // 99.32 / 97.62 / 95.86; 99.26 / 96.95
         {"gravel_road", 0.995, 0.940, 0.900, 0.995, 0.940},          // 99.82 / 94.72 / 90.79; 99.79 / 94.67
-        {"hdl32_road_terrain", 0.995, 0.910, 0.850, 0.995, 0.910},   // 99.91 / 91.60 / 85.80; 99.91 / 91.66
+        {"hdl32_road_terrain", 0.995, 0.918, 0.865, 0.995, 0.918},   // 99.91 / 92.31 / 87.11; 99.91 / 92.36
         {"vlp16_rolling_grass", 0.990, 0.880, 0.830, 0.990, 0.880},  // 99.54 / 88.80 / 83.75; 99.50 / 88.63
     };
     for (const RecallCase& c : cases) {
@@ -534,14 +534,15 @@ TEST(Scenes, SparseCellsOnAGroundNeighboursPlaneAreGround) {
 }
 
 TEST(Scenes, BridgesReachTheTerrainTheExpansionStoppedShortOf) {
-    // bridgeRadius / bridgeGate / bridgeMaxAngleDegrees: once Phase II's expansion stops, a Phase I
-    // ground cell it never reached is reached from the nearest ground cell within 10 m where it lies
-    // within 0.1 m of that cell's plane and height and the two planes agree within 10 deg. The
-    // HDL-32E's terrain beside the road, 20-30 m out, is a step above the road between single-ring
-    // cells and its far rings lie more than the search radius apart: without bridges recall 89.57 %
-    // (beside the road 82.48 %), with them 91.60 % (85.80 %), precision 99.90 -> 99.91 %. A kerb
-    // beside the robot: 93.63 -> 96.38 %. Without the normals' agreement the solid-state sensor on
-    // vegetated hills (auto height) lost 0.24 points of precision to bushes' tops for no recall.
+    // bridgeRadius / bridgeGate / bridgeMaxDrop / bridgeMaxAngleDegrees: once Phase II's expansion
+    // stops, a Phase I ground cell it never reached is reached from the nearest ground cell within
+    // 10 m where it lies within 0.1 m of that cell's plane, at most 0.1 m above and 0.3 m below its
+    // height, and the two planes agree within 10 deg. The HDL-32E's terrain beside the road, 20-30 m
+    // out, is a step above the road between single-ring cells and its far rings lie more than the
+    // search radius apart: without bridges recall 89.57 % (beside the road 82.48 %), with them
+    // 92.31 % (87.11 %), precision 99.90 -> 99.91 %. A kerb beside the robot: 93.63 -> 96.38 %.
+    // Without the normals' agreement the solid-state sensor on vegetated hills (auto height) lost
+    // 0.24 points of precision to bushes' tops for no recall.
     for (const char* name : {"hdl32_road_terrain", "curb_near", "solid_state_hills"}) {
         const auto n = gseg::test::scene(name);
         const Outcome o = runScene(n);
@@ -554,9 +555,26 @@ TEST(Scenes, BridgesReachTheTerrainTheExpansionStoppedShortOf) {
             const AutoOutcome a = runAuto(n);
             EXPECT_GE(a.o.all.precision, 0.978) << name;  // measured 97.89 % (without the angle 97.65 %)
         } else {
-            EXPECT_GT(o.all.recall, off.all.recall + 0.015) << name;  // the rule is what reaches them
+            EXPECT_GT(o.all.recall, off.all.recall + 0.02) << name;  // the rule is what reaches them
         }
     }
     const auto n = gseg::test::scene("hdl32_road_terrain");
-    EXPECT_GE(besideRoadRecall(n, runScene(n).result.labels, 4.3), 0.85);  // measured 85.80 %; none: 82.48 %
+    EXPECT_GE(besideRoadRecall(n, runScene(n).result.labels, 4.3), 0.865);  // measured 87.11 %; none: 82.48 %
+}
+
+TEST(Scenes, BridgesFollowTheGroundDownWhereItsPlaneSaysSo) {
+    // bridgeMaxDrop: a bridge may lead up to 0.3 m down (still within bridgeGate of the plane it
+    // starts from): the far rings of a road falling at 10 deg, which a height gate of 0.1 m across a
+    // 5-10 m gap stops. Ramp down: recall 90.85 -> 92.00 % (with 0.1: 90.85 %); HDL-32E terrain
+    // 91.60 -> 92.31 %. Measured in height alone (not along the plane), a drop of 0.3 m led down
+    // the faces of bushes on the solid-state sensor's hills: precision 97.89 -> 97.75 % (auto).
+    for (const char* name : {"ramp_down_10", "hdl32_road_terrain"}) {
+        const auto n = gseg::test::scene(name);
+        const Outcome o = runScene(n);
+        const Outcome level = runWith(n, {{"bridgeMaxDrop", "0"}});
+        EXPECT_GE(o.all.precision, level.all.precision - 0.0005) << name;
+        EXPECT_GT(o.all.recall, level.all.recall + 0.005) << name;
+    }
+    const auto hills = gseg::test::scene("solid_state_hills");
+    EXPECT_GE(runAuto(hills).o.all.precision, 0.978);
 }

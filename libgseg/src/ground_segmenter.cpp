@@ -136,6 +136,7 @@ struct PhaseSettings {
     bool recoverSparseOnly = false;  ///< recover only the points of cells too small to classify
     double recoveryThreshold = 0;    ///< [m] point-to-plane distance of a recovered point
     double bridgeRadius = 0, bridgeGate = 0;  ///< [m] the expansion's bridges (ExpansionSettings; 0: none)
+    double bridgeMaxDrop = 0;                 ///< [m] ... the largest fall in height across one
     double bridgeMaxAngleDegrees = 0;         ///< [deg] ... the largest angle between the two planes' normals
     bool recordRejected = false;  ///< record per cell the z range of the points this phase rejected (for the next phase)
     bool belowRejected = false;   ///< a cell above a point the previous phase rejected is floating
@@ -163,6 +164,7 @@ struct PhaseSettings {
         s.recoveryThreshold = p.sparseRecoveryThreshold;
         s.bridgeRadius = p.bridgeRadius;
         s.bridgeGate = p.bridgeGate;
+        s.bridgeMaxDrop = p.bridgeMaxDrop;
         s.bridgeMaxAngleDegrees = p.bridgeMaxAngleDegrees;
         return s;
     }
@@ -337,6 +339,7 @@ private:
         es.heightGate = set_.heightGate;
         es.bridgeRadius = set_.bridgeRadius;
         es.bridgeGate = set_.bridgeGate;
+        es.bridgeMaxDrop = set_.bridgeMaxDrop;
         es.bridgeMinNormalCos = std::cos(set_.bridgeMaxAngleDegrees * M_PI / 180.0);
         es.normals = &ws.normals;
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot

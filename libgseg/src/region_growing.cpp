@@ -169,8 +169,9 @@ private:
 
 // One round of bridges (ExpansionSettings::bridgeRadius): per candidate never reached (state 0),
 // in index order, the accepted candidate (state 2) horizontally nearest within bridgeRadius (ties:
-// the lower index) if the candidate lies within bridgeGate of its ground plane and of its height
-// and the two planes' normals agree within bridgeMinNormalCos; -1 where none.
+// the lower index) if the candidate lies within bridgeGate of its ground plane, at most bridgeGate
+// above it and at most bridgeMaxDrop below it, and the two planes' normals agree within
+// bridgeMinNormalCos; -1 where none.
 // `fresh` (optional): the candidates accepted since the last round, the only ones that can change
 // a candidate's answer (it had none then); a candidate none of them lies near is not searched.
 std::vector<std::int32_t> bridges(const std::vector<Eigen::Vector3f>& centroids, const ExpansionSettings& s,
@@ -191,11 +192,13 @@ std::vector<std::int32_t> bridges(const std::vector<Eigen::Vector3f>& centroids,
         const Eigen::Vector3f d = centroids[j] - centroids[k];
         // Both along k's ground plane and in height: across a gap of up to bridgeRadius, a plane
         // tilted by a few degrees (a slab of a bush's top, one ring's line) would lift the gate.
+        // Downwards the height may fall by up to bridgeMaxDrop (ground falling away from the
+        // road, a downhill beyond a gap) where k's plane predicts it.
         const float along = s.normals ? std::abs((*s.normals)[k].dot(d)) : 0.f;
-        const float step = std::max(along, std::abs(d.z()));
+        const float gate = float(s.bridgeGate), drop = std::max(gate, float(s.bridgeMaxDrop));
         // The two ground planes agree (a bush's top, a car's bonnet beside the road tilt away).
         if (s.normals && (*s.normals)[j].dot((*s.normals)[k]) < s.bridgeMinNormalCos) continue;
-        if (step <= s.bridgeGate) from[j] = std::int32_t(k);
+        if (along <= gate && d.z() <= gate && d.z() >= -drop) from[j] = std::int32_t(k);
     }
     return from;
 }
