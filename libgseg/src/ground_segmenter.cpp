@@ -136,6 +136,7 @@ struct PhaseSettings {
     bool recoverSparseOnly = false;  ///< recover only the points of cells too small to classify
     double recoveryThreshold = 0;    ///< [m] point-to-plane distance of a recovered point
     double bridgeRadius = 0, bridgeGate = 0;  ///< [m] the expansion's bridges (ExpansionSettings; 0: none)
+    double bridgeGapGate = 0;                 ///< [m] ... the gate across a gap wider than the search radius
     double bridgeMaxDrop = 0;                 ///< [m] ... the largest fall in height across one
     double bridgeMaxAngleDegrees = 0;         ///< [deg] ... the largest angle between the two planes' normals
     bool recordRejected = false;  ///< record per cell the z range of the points this phase rejected (for the next phase)
@@ -164,6 +165,7 @@ struct PhaseSettings {
         s.recoveryThreshold = p.sparseRecoveryThreshold;
         s.bridgeRadius = p.bridgeRadius;
         s.bridgeGate = p.bridgeGate;
+        s.bridgeGapGate = p.bridgeGapGate;
         s.bridgeMaxDrop = p.bridgeMaxDrop;
         s.bridgeMaxAngleDegrees = p.bridgeMaxAngleDegrees;
         return s;
@@ -339,6 +341,7 @@ private:
         es.heightGate = set_.heightGate;
         es.bridgeRadius = set_.bridgeRadius;
         es.bridgeGate = set_.bridgeGate;
+        es.bridgeGapGate = set_.bridgeGapGate;
         es.bridgeMaxDrop = set_.bridgeMaxDrop;
         es.bridgeMinNormalCos = std::cos(set_.bridgeMaxAngleDegrees * M_PI / 180.0);
         es.normals = &ws.normals;

@@ -38,6 +38,7 @@ const OptionTable<Params>& table() {
         {"sparseRecoveryThreshold", &Params::sparseRecoveryThreshold},
         {"bridgeRadius", &Params::bridgeRadius},
         {"bridgeGate", &Params::bridgeGate},
+        {"bridgeGapGate", &Params::bridgeGapGate},
         {"bridgeMaxDrop", &Params::bridgeMaxDrop},
         {"bridgeMaxAngleDegrees", &Params::bridgeMaxAngleDegrees},
         {"sparsityLow", &Params::sparsityLow},
@@ -98,6 +99,7 @@ void Params::validate() const {
             sparseRecoveryThreshold, "must be >= 0");
     require(finite(bridgeRadius) && bridgeRadius >= 0, "bridgeRadius", bridgeRadius, "must be >= 0");
     require(finite(bridgeGate) && bridgeGate >= 0, "bridgeGate", bridgeGate, "must be >= 0");
+    require(finite(bridgeGapGate) && bridgeGapGate >= 0, "bridgeGapGate", bridgeGapGate, "must be >= 0");
     require(finite(bridgeMaxDrop) && bridgeMaxDrop >= 0, "bridgeMaxDrop", bridgeMaxDrop, "must be >= 0");
     require(finite(bridgeMaxAngleDegrees) && bridgeMaxAngleDegrees >= 0 && bridgeMaxAngleDegrees <= 90,
             "bridgeMaxAngleDegrees", bridgeMaxAngleDegrees, "must be in [0, 90]");

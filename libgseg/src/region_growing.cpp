@@ -170,8 +170,8 @@ private:
 // One round of bridges (ExpansionSettings::bridgeRadius): per candidate never reached (state 0),
 // in index order, the accepted candidate (state 2) horizontally nearest within bridgeRadius (ties:
 // the lower index) if the candidate lies within bridgeGate of its ground plane, at most bridgeGate
-// above it and at most bridgeMaxDrop below it, and the two planes' normals agree within
-// bridgeMinNormalCos; -1 where none.
+// above it and at most bridgeMaxDrop below it (bridgeGapGate for bridgeGate beyond `radius`), and
+// the two planes' normals agree within bridgeMinNormalCos; -1 where none.
 // `fresh` (optional): the candidates accepted since the last round, the only ones that can change
 // a candidate's answer (it had none then); a candidate none of them lies near is not searched.
 std::vector<std::int32_t> bridges(const std::vector<Eigen::Vector3f>& centroids, const ExpansionSettings& s,
@@ -194,8 +194,12 @@ std::vector<std::int32_t> bridges(const std::vector<Eigen::Vector3f>& centroids,
         // tilted by a few degrees (a slab of a bush's top, one ring's line) would lift the gate.
         // Downwards the height may fall by up to bridgeMaxDrop (ground falling away from the
         // road, a downhill beyond a gap) where k's plane predicts it.
+        // Across a gap (k farther than `radius`: the walk never compared the two, e.g. far rings)
+        // the gate is bridgeGapGate: the ground's own rise over 5-10 m.
         const float along = s.normals ? std::abs((*s.normals)[k].dot(d)) : 0.f;
-        const float gate = float(s.bridgeGate), drop = std::max(gate, float(s.bridgeMaxDrop));
+        const bool gap = d.head<2>().squaredNorm() > float(s.radius * s.radius);
+        const float gate = float(gap ? std::max(s.bridgeGate, s.bridgeGapGate) : s.bridgeGate);
+        const float drop = std::max(gate, float(s.bridgeMaxDrop));
         // The two ground planes agree (a bush's top, a car's bonnet beside the road tilt away).
         if (s.normals && (*s.normals)[j].dot((*s.normals)[k]) < s.bridgeMinNormalCos) continue;
         if (along <= gate && d.z() <= gate && d.z() >= -drop) from[j] = std::int32_t(k);
