@@ -66,6 +66,8 @@ public:
 
     /// Marks centroid i reached: nearUnreached() leaves it out from now on.
     void markReached(std::uint32_t i) { reached_[slotOf_[i]] = 1; }
+    /// Marks centroid i accepted: nearestAccepted() considers it from now on.
+    void markAccepted(std::uint32_t i) { reached_[slotOf_[i]] = 2; }
 
     /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
     /// centroid `from` (radiusSq at most the square of the radius given at construction), in the
@@ -80,11 +82,10 @@ public:
         search<true>(q, from, radiusSq, f);
     }
 
-    /// The centroid horizontally nearest to q (ties: the lower index) among those for which
-    /// keep(i) holds, no farther than `radius` horizontally; -1 if none. Searches rings of columns
+    /// The centroid horizontally nearest to q (ties: the lower index) among those marked accepted
+    /// (markAccepted), no farther than `radius` horizontally; -1 if none. Searches rings of columns
     /// outward from q's and stops once no farther ring can hold a nearer one.
-    template <class Keep>
-    std::int64_t nearestHorizontal(const Eigen::Vector3f& q, double radius, Keep&& keep) const {
+    std::int64_t nearestAccepted(const Eigen::Vector3f& q, double radius) const {
         const std::int64_t kx = coord(q.x()), ky = coord(q.y());
         const float radiusSq = float(radius * radius);
         float best = std::numeric_limits<float>::infinity();
@@ -98,10 +99,11 @@ public:
                     std::size_t b = 0, e = 0;
                     if (!columnRange(cx, cy, b, e)) continue;
                     for (std::size_t t = b; t < e; ++t) {
+                        if (reached_[t] != 2) continue;
                         const float dx = q.x() - x_[t], dy = q.y() - y_[t];
                         const float d = dx * dx + dy * dy;
                         const std::uint32_t i = items_[t];
-                        if (d > radiusSq || d > best || (d == best && std::int64_t(i) > found) || !keep(i)) continue;
+                        if (d > radiusSq || d > best || (d == best && std::int64_t(i) > found)) continue;
                         best = d, found = i;
                     }
                 }
@@ -163,7 +165,7 @@ private:
     std::vector<std::pair<std::int64_t, std::int64_t>> keys_, sortedKeys_;
     std::vector<std::uint32_t> start_, items_;
     std::vector<std::uint32_t> slotOf_;  // per centroid: its slot in items_ (and x_, y_, z_)
-    std::vector<std::uint8_t> reached_;  // per slot: marked reached (markReached)
+    std::vector<std::uint8_t> reached_;  // per slot: 1 marked reached (markReached), 2 accepted (markAccepted)
     std::vector<float> x_, y_, z_;
 };
 
@@ -185,8 +187,7 @@ std::vector<std::int32_t> bridges(const std::vector<Eigen::Vector3f>& centroids,
                 return (centroids[f] - centroids[j]).head<2>().squaredNorm() <= radiusSq;
             }))
             continue;
-        const std::int64_t found =
-            columns.nearestHorizontal(centroids[j], s.bridgeRadius, [&](std::uint32_t i) { return state[i] == 2; });
+        const std::int64_t found = columns.nearestAccepted(centroids[j], s.bridgeRadius);
         if (found < 0) continue;
         const std::size_t k = std::size_t(found);
         const Eigen::Vector3f d = centroids[j] - centroids[k];
@@ -331,6 +332,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
                 if (!accept(c, neighbours)) continue;
                 state[c] = 2;
                 accepted.push_back(c);
+                columns.markAccepted(c);
                 // The centroids marked reached are those with state != 0.
                 columns.nearUnreached(centroids[c], c, radiusSq, [&](std::uint32_t j) {
                     if (j != c && gated(c, j)) reach(c, j);
@@ -340,6 +342,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
             if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
             state[c] = 2;
             accepted.push_back(c);
+            columns.markAccepted(c);
             for (std::uint32_t j : neighbours)
                 if (state[j] == 0) reach(c, j);
         }
