@@ -313,7 +313,9 @@ TEST(Params, ValidateNamesTheOffendingKey) {
                {"sparsityMedium", "0.0001"},  {"minGroundInlierRatio", "1"}, {"distToGround", "inf"},
                {"seedHeightTolerance", "0"},  {"recoveryThreshold", "-1"},   {"stripMinSpread", "nan"},
                {"belowGroundMargin", "-0.5"}, {"sparseRecoveryThreshold", "-0.1"}, {"floatingMinHeight", "inf"},
-               {"floatingMaxDepth", "-1"}};
+               {"floatingMaxDepth", "-1"},    {"bridgeRadius", "-5"},       {"bridgeGate", "nan"},
+               {"bridgeMaxAngleDegrees", "91"}, {"bridgeMaxDrop", "-0.3"},
+               {"bridgeGapGate", "inf"}};
     for (const auto& b : bad) {
         gseg::Params p;
         p.set(b.key, b.value);

@@ -426,18 +426,19 @@ double besideRoadRecall(const gseg::test::NamedScan& n, const std::vector<std::u
 TEST(Scenes, GroundBesideTheRoadRoughTerrainAndSparseSensors) {
     // Floors about half a point under what this version measures (printed). What is missed is far
     // out: on every scene the ground beyond the range where the rings lie more than the search
-    // radius apart (HDL-64E at 1.73 m: about 35 m; HDL-32E at 1.84 m: about 25 m) is not reached,
-    // and on the HDL-32E the terrain 20-30 m out is reached by Phase I but stopped by Phase II's
-    // height gate between single-ring (line) cells. Issue #20's analysis: loosening either costs
+    // radius apart (HDL-64E at 1.73 m: about 35 m; HDL-32E at 1.84 m: about 25 m) is reached only
+    // where a bridge (bridgeRadius) finds it level with the ground before it, and on the HDL-32E
+    // part of the terrain 20-30 m out is reached by Phase I but stopped by Phase II's height gate
+    // between single-ring (line) cells. Issue #20's analysis: loosening either costs
     // precision on the real scans. Floors raised with issue #20's rules (sparseRecoveryThreshold and
     // the floating check's window); grass_verge_5cm gave 0.3 of precision for 1.4 of recall.
     const RecallCase cases[] = {
         // name                   P      R      beside  auto P  auto R    (measured P / R / beside; auto P / R)
         {"grass_verge_5cm", 0.978, 0.950, 0.905, 0.980, 0.950},      // 98.08 / 95.66 / 91.42; 98.37 / 95.63
-        {"grass_verge_15cm", 0.977, 0.945, 0.930, 0.975, 0.955},     // 98.22 / 95.01 / 93.55; 98.08 / 96.39
-        {"embankment_12", 0.990, 0.970, 0.950, 0.990, 0.960},        // 99.32 / 97.47 / 95.68; 99.26 / 96.77
+        {"grass_verge_15cm", 0.977, 0.950, 0.935, 0.975, 0.960},     // 98.23 / 95.43 / 93.89; 98.09 / 96.82
+        {"embankment_12", 0.990, 0.970, 0.950, 0.990, 0.965},        // 99.32 / 97.62 / 95.86; 99.26 / 96.95
         {"gravel_road", 0.995, 0.940, 0.900, 0.995, 0.940},          // 99.82 / 94.72 / 90.79; 99.79 / 94.67
-        {"hdl32_road_terrain", 0.995, 0.890, 0.820, 0.995, 0.890},   // 99.90 / 89.57 / 82.48; 99.90 / 89.56
+        {"hdl32_road_terrain", 0.995, 0.933, 0.890, 0.995, 0.933},   // 99.91 / 93.79 / 89.42; 99.91 / 93.85
         {"vlp16_rolling_grass", 0.990, 0.880, 0.830, 0.990, 0.880},  // 99.54 / 88.80 / 83.75; 99.50 / 88.63
     };
     for (const RecallCase& c : cases) {
@@ -530,4 +531,69 @@ TEST(Scenes, SparseCellsOnAGroundNeighboursPlaneAreGround) {
     EXPECT_LT(off.all.recall, 0.93);
     EXPECT_GE(o.all.precision, off.all.precision - 0.001);
     EXPECT_GT(o.result.phase2.recoveredPoints, 0u);
+}
+
+TEST(Scenes, BridgesReachTheTerrainTheExpansionStoppedShortOf) {
+    // bridgeRadius / bridgeGate / bridgeGapGate / bridgeMaxDrop / bridgeMaxAngleDegrees: once Phase
+    // II's expansion stops, a Phase I ground cell it never reached is reached from the nearest ground
+    // cell within 10 m where it lies within 0.1 m of that cell's plane, at most 0.1 m above (0.15 m
+    // across a gap wider than the search radius) and 0.3 m below its height, and the two planes agree
+    // within 10 deg. The HDL-32E's terrain beside the road, 20-30 m out, is a step above the road
+    // between single-ring cells and its far rings lie more than the search radius apart: without
+    // bridges recall 89.57 % (beside the road 82.48 %), with them 93.79 % (89.42 %; 92.31 % without
+    // bridgeGapGate), precision 99.90 -> 99.91 %. A kerb beside the robot: 93.63 -> 96.38 %.
+    // Without the normals' agreement the solid-state sensor on vegetated hills (auto height) lost
+    // 0.24 points of precision to bushes' tops for no recall.
+    for (const char* name : {"hdl32_road_terrain", "curb_near", "solid_state_hills"}) {
+        const auto n = gseg::test::scene(name);
+        const Outcome o = runScene(n);
+        const Outcome off = runWith(n, {{"bridgeRadius", "0"}});
+        std::printf("%-20s bridges: P %.4f R %.4f; none: P %.4f R %.4f\n", name, o.all.precision, o.all.recall,
+                    off.all.precision, off.all.recall);
+        EXPECT_GE(o.all.precision, off.all.precision - 0.0005) << name;
+        EXPECT_GE(o.all.recall, off.all.recall) << name;
+        if (std::string(name) == "solid_state_hills") {
+            const AutoOutcome a = runAuto(n);
+            EXPECT_GE(a.o.all.precision, 0.978) << name;  // measured 97.89 % (without the angle 97.65 %)
+        } else {
+            EXPECT_GT(o.all.recall, off.all.recall + 0.02) << name;  // the rule is what reaches them
+        }
+    }
+    const auto n = gseg::test::scene("hdl32_road_terrain");
+    EXPECT_GE(besideRoadRecall(n, runScene(n).result.labels, 4.3), 0.89);  // measured 89.42 %; none: 82.48 %
+}
+
+TEST(Scenes, BridgesFollowTheGroundDownWhereItsPlaneSaysSo) {
+    // bridgeMaxDrop: a bridge may lead up to 0.3 m down (still within bridgeGate of the plane it
+    // starts from): the far rings of a road falling at 10 deg, which a height gate of 0.1 m across a
+    // 5-10 m gap stops. Ramp down: recall 90.85 -> 92.00 % (with 0.1: 90.85 %); HDL-32E terrain
+    // 91.60 -> 92.31 %. Measured in height alone (not along the plane), a drop of 0.3 m led down
+    // the faces of bushes on the solid-state sensor's hills: precision 97.89 -> 97.75 % (auto).
+    for (const char* name : {"ramp_down_10", "hdl32_road_terrain"}) {
+        const auto n = gseg::test::scene(name);
+        const Outcome o = runScene(n);
+        const Outcome level = runWith(n, {{"bridgeMaxDrop", "0"}});
+        EXPECT_GE(o.all.precision, level.all.precision - 0.0005) << name;
+        EXPECT_GT(o.all.recall, level.all.recall + 0.005) << name;
+    }
+    const auto hills = gseg::test::scene("solid_state_hills");
+    EXPECT_GE(runAuto(hills).o.all.precision, 0.978);
+}
+
+TEST(Scenes, BridgesAcrossAGapBetweenFarRingsTakeTheGroundsRiseOverIt) {
+    // bridgeGapGate: where the nearest ground cell lies farther than centroidSearchRadius (rings
+    // farther apart than the search radius, which the expansion never compared), the bridge's gate
+    // above it is 0.15 m instead of 0.1: the rise of ground beside a road over 5-10 m. The
+    // HDL-32E's terrain rings 20-40 m out: recall 92.31 -> 93.79 % at the same precision.
+    const auto n = gseg::test::scene("hdl32_road_terrain");
+    const Outcome o = runScene(n);
+    const Outcome near = runWith(n, {{"bridgeGapGate", "0"}});
+    std::printf("gap gate: P %.4f R %.4f; bridgeGate alone: P %.4f R %.4f\n", o.all.precision, o.all.recall,
+                near.all.precision, near.all.recall);
+    EXPECT_GE(o.all.precision, near.all.precision - 0.0005);
+    EXPECT_GT(o.all.recall, near.all.recall + 0.01);
+    for (const char* name : {"grass_verge_15cm", "hedge", "solid_state_hills", "traffic_jam"}) {
+        const auto m = gseg::test::scene(name);  // no scene with cars, hedges, bushes loses precision
+        EXPECT_GE(runScene(m).all.precision, runWith(m, {{"bridgeGapGate", "0"}}).all.precision - 0.0005) << name;
+    }
 }

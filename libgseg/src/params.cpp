@@ -36,6 +36,11 @@ const OptionTable<Params>& table() {
         {"recoverNearGround", &Params::recoverNearGround},
         {"recoveryThreshold", &Params::recoveryThreshold},
         {"sparseRecoveryThreshold", &Params::sparseRecoveryThreshold},
+        {"bridgeRadius", &Params::bridgeRadius},
+        {"bridgeGate", &Params::bridgeGate},
+        {"bridgeGapGate", &Params::bridgeGapGate},
+        {"bridgeMaxDrop", &Params::bridgeMaxDrop},
+        {"bridgeMaxAngleDegrees", &Params::bridgeMaxAngleDegrees},
         {"sparsityLow", &Params::sparsityLow},
         {"sparsityMedium", &Params::sparsityMedium},
         {"maxGroundHeightDeviation", &Params::maxGroundHeightDeviation},
@@ -92,6 +97,12 @@ void Params::validate() const {
             "must be >= 0");
     require(finite(sparseRecoveryThreshold) && sparseRecoveryThreshold >= 0, "sparseRecoveryThreshold",
             sparseRecoveryThreshold, "must be >= 0");
+    require(finite(bridgeRadius) && bridgeRadius >= 0, "bridgeRadius", bridgeRadius, "must be >= 0");
+    require(finite(bridgeGate) && bridgeGate >= 0, "bridgeGate", bridgeGate, "must be >= 0");
+    require(finite(bridgeGapGate) && bridgeGapGate >= 0, "bridgeGapGate", bridgeGapGate, "must be >= 0");
+    require(finite(bridgeMaxDrop) && bridgeMaxDrop >= 0, "bridgeMaxDrop", bridgeMaxDrop, "must be >= 0");
+    require(finite(bridgeMaxAngleDegrees) && bridgeMaxAngleDegrees >= 0 && bridgeMaxAngleDegrees <= 90,
+            "bridgeMaxAngleDegrees", bridgeMaxAngleDegrees, "must be in [0, 90]");
     require(finite(sparsityLow) && sparsityLow >= 0, "sparsityLow", sparsityLow, "must be >= 0");
     require(finite(sparsityMedium) && sparsityMedium >= sparsityLow, "sparsityMedium", sparsityMedium,
             "must be >= sparsityLow");

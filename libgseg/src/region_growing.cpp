@@ -66,6 +66,8 @@ public:
 
     /// Marks centroid i reached: nearUnreached() leaves it out from now on.
     void markReached(std::uint32_t i) { reached_[slotOf_[i]] = 1; }
+    /// Marks centroid i accepted: nearestAccepted() considers it from now on.
+    void markAccepted(std::uint32_t i) { reached_[slotOf_[i]] = 2; }
 
     /// Calls f(j) for every centroid j with squaredDistance(q, centroid j) < radiusSq, where q is
     /// centroid `from` (radiusSq at most the square of the radius given at construction), in the
@@ -78,6 +80,38 @@ public:
     template <class F>
     void nearUnreached(const Eigen::Vector3f& q, std::uint32_t from, float radiusSq, F&& f) const {
         search<true>(q, from, radiusSq, f);
+    }
+
+    /// The centroid horizontally nearest to q (ties: the lower index) among those marked accepted
+    /// (markAccepted), no farther than `radius` horizontally; -1 if none. Searches rings of columns
+    /// outward from q's and stops once no farther ring can hold a nearer one.
+    std::int64_t nearestAccepted(const Eigen::Vector3f& q, double radius) const {
+        const std::int64_t kx = coord(q.x()), ky = coord(q.y());
+        const float radiusSq = float(radius * radius);
+        float best = std::numeric_limits<float>::infinity();
+        std::int64_t found = -1;
+        // Ring r's centroids lie at least (r - 1) column sizes away horizontally.
+        const std::int64_t rings = std::int64_t(std::ceil(radius / size_));
+        for (std::int64_t r = 0; r <= rings; ++r) {
+            for (std::int64_t cx = kx - r; cx <= kx + r; ++cx)
+                for (std::int64_t cy = ky - r; cy <= ky + r; ++cy) {
+                    if (std::max(std::abs(cx - kx), std::abs(cy - ky)) != r) continue;  // ring r only
+                    std::size_t b = 0, e = 0;
+                    if (!columnsRange(cx, cy, cy, b, e)) continue;
+                    for (std::size_t t = b; t < e; ++t) {
+                        if (reached_[t] != 2) continue;
+                        const float dx = q.x() - x_[t], dy = q.y() - y_[t];
+                        const float d = dx * dx + dy * dy;
+                        const std::uint32_t i = items_[t];
+                        if (d > radiusSq || d > best || (d == best && std::int64_t(i) > found)) continue;
+                        best = d, found = i;
+                    }
+                }
+            // Every centroid of ring r + 1 lies at least r column sizes away horizontally.
+            const double reach = double(r) * size_;
+            if (found >= 0 && double(best) <= reach * reach) break;
+        }
+        return found;
     }
 
 private:
@@ -134,9 +168,48 @@ private:
     std::vector<std::pair<std::int64_t, std::int64_t>> keys_, sortedKeys_;
     std::vector<std::uint32_t> start_, items_;
     std::vector<std::uint32_t> slotOf_;  // per centroid: its slot in items_ (and x_, y_, z_)
-    std::vector<std::uint8_t> reached_;  // per slot: marked reached (markReached)
+    std::vector<std::uint8_t> reached_;  // per slot: 1 marked reached (markReached), 2 accepted (markAccepted)
     std::vector<float> x_, y_, z_;
 };
+
+// One round of bridges (ExpansionSettings::bridgeRadius): per candidate never reached (state 0),
+// in index order, the accepted candidate (state 2) horizontally nearest within bridgeRadius (ties:
+// the lower index) if the candidate lies within bridgeGate of its ground plane, at most bridgeGate
+// above it and at most bridgeMaxDrop below it (bridgeGapGate for bridgeGate beyond `radius`), and
+// the two planes' normals agree within bridgeMinNormalCos; -1 where none.
+// `fresh` (optional): the candidates accepted since the last round, the only ones that can change
+// a candidate's answer (it had none then); a candidate none of them lies near is not searched.
+std::vector<std::int32_t> bridges(const std::vector<Eigen::Vector3f>& centroids, const ExpansionSettings& s,
+                                  const std::vector<std::uint8_t>& state, const CentroidColumns& columns,
+                                  const std::vector<std::uint32_t>* fresh) {
+    std::vector<std::int32_t> from(centroids.size(), -1);
+    const float radiusSq = float(s.bridgeRadius * s.bridgeRadius);
+    for (std::uint32_t j = 0; j < centroids.size(); ++j) {
+        if (state[j] != 0) continue;
+        if (fresh && std::none_of(fresh->begin(), fresh->end(), [&](std::uint32_t f) {
+                return (centroids[f] - centroids[j]).head<2>().squaredNorm() <= radiusSq;
+            }))
+            continue;
+        const std::int64_t found = columns.nearestAccepted(centroids[j], s.bridgeRadius);
+        if (found < 0) continue;
+        const std::size_t k = std::size_t(found);
+        const Eigen::Vector3f d = centroids[j] - centroids[k];
+        // Both along k's ground plane and in height: across a gap of up to bridgeRadius, a plane
+        // tilted by a few degrees (a slab of a bush's top, one ring's line) would lift the gate.
+        // Downwards the height may fall by up to bridgeMaxDrop (ground falling away from the
+        // road, a downhill beyond a gap) where k's plane predicts it.
+        // Across a gap (k farther than `radius`: the walk never compared the two, e.g. far rings)
+        // the gate is bridgeGapGate: the ground's own rise over 5-10 m.
+        const float along = s.normals ? std::abs((*s.normals)[k].dot(d)) : 0.f;
+        const bool gap = d.head<2>().squaredNorm() > float(s.radius * s.radius);
+        const float gate = float(gap ? std::max(s.bridgeGate, s.bridgeGapGate) : s.bridgeGate);
+        const float drop = std::max(gate, float(s.bridgeMaxDrop));
+        // The two ground planes agree (a bush's top, a car's bonnet beside the road tilt away).
+        if (s.normals && (*s.normals)[j].dot((*s.normals)[k]) < s.bridgeMinNormalCos) continue;
+        if (along <= gate && d.z() <= gate && d.z() >= -drop) from[j] = std::int32_t(k);
+    }
+    return from;
+}
 
 }  // namespace
 
@@ -243,30 +316,49 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         queue.push_back(j);
         if (parents) (*parents)[j] = std::int32_t(c);
     };
-    while (!queue.empty()) {
-        const std::uint32_t c = queue.front();
-        queue.pop_front();
-        if (!s.needsNeighbours || s.needsNeighbours(c)) {
-            if (!listStart.empty())
-                neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
-            else
-                neighboursOf(c, neighbours);
-        } else {
-            // accept() does not look at this candidate's neighbours: decide first, then visit only
-            // the neighbours not reached yet (the same ones, in the same order, as from the list).
-            neighbours.clear();
-            if (!accept(c, neighbours)) continue;
+    std::vector<std::uint32_t> accepted;  // in the order of acceptance
+    std::size_t bridgeRound = 0, acceptedBefore = 0;  // bridges: rounds so far; accepted before the last
+    // The walk; with bridges, rounds of bridges and walks until a round adds nothing.
+    for (;;) {
+        while (!queue.empty()) {
+            const std::uint32_t c = queue.front();
+            queue.pop_front();
+            if (!s.needsNeighbours || s.needsNeighbours(c)) {
+                if (!listStart.empty())
+                    neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
+                else
+                    neighboursOf(c, neighbours);
+            } else {
+                // accept() does not look at this candidate's neighbours: decide first, then visit only
+                // the neighbours not reached yet (the same ones, in the same order, as from the list).
+                neighbours.clear();
+                if (!accept(c, neighbours)) continue;
+                state[c] = 2;
+                accepted.push_back(c);
+                columns.markAccepted(c);
+                // The centroids marked reached are those with state != 0.
+                columns.nearUnreached(centroids[c], c, radiusSq, [&](std::uint32_t j) {
+                    if (j != c && gated(c, j)) reach(c, j);
+                });
+                continue;
+            }
+            if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
             state[c] = 2;
-            // The centroids marked reached are those with state != 0.
-            columns.nearUnreached(centroids[c], c, radiusSq, [&](std::uint32_t j) {
-                if (j != c && gated(c, j)) reach(c, j);
-            });
-            continue;
+            accepted.push_back(c);
+            columns.markAccepted(c);
+            for (std::uint32_t j : neighbours)
+                if (state[j] == 0) reach(c, j);
         }
-        if (!accept(c, neighbours)) continue;  // rejected: stays 1, does not propagate
-        state[c] = 2;
-        for (std::uint32_t j : neighbours)
-            if (state[j] == 0) reach(c, j);
+        if (!(s.bridgeRadius > 0)) break;
+        // After the first round only the candidates accepted since the last one can make a bridge
+        // (checked against each where they are few).
+        const std::vector<std::uint32_t> fresh(accepted.begin() + std::ptrdiff_t(acceptedBefore), accepted.end());
+        const bool fewFresh = bridgeRound > 0 && fresh.size() <= 64;
+        const std::vector<std::int32_t> from = bridges(centroids, s, state, columns, fewFresh ? &fresh : nullptr);
+        ++bridgeRound, acceptedBefore = accepted.size();
+        for (std::uint32_t j = 0; j < from.size(); ++j)
+            if (from[j] >= 0) reach(std::uint32_t(from[j]), j);
+        if (queue.empty()) break;
     }
     return state;
 }

@@ -47,6 +47,11 @@ struct Params {
     bool recoverNearGround = true;      ///< Phase I: points of non-ground cells that lie on the ground plane of a ground cell beside them (or one level below) go on to Phase II
     double recoveryThreshold = 0.1;     ///< [m] point-to-plane distance of such a recovered point
     double sparseRecoveryThreshold = 0.1;  ///< [m] Phase II: points of cells with fewer than minPointsPerCell points that lie within this of the ground plane of a ground cell beside them (or one level below) are ground (0: never)
+    double bridgeRadius = 10.0;  ///< [m] Phase II: once the expansion stops, a candidate it never reached whose horizontally nearest ground cell within this radius has it within bridgeGate of its ground plane is reached from that cell, and the expansion goes on (repeated until none is added): ground beyond a gap between rings, beside a step larger than heightGate (0: never)
+    double bridgeGate = 0.1;    ///< [m] ... the largest distance of such a candidate's ground centroid from that cell's ground plane (along its normal; line and small cells: vertical) and from its ground centroid's height
+    double bridgeGapGate = 0.15;  ///< [m] ... bridgeGate instead, where that cell lies farther than centroidSearchRadius horizontally (rings farther apart than the search radius, which the expansion never compared; used only where larger than bridgeGate)
+    double bridgeMaxDrop = 0.3;  ///< [m] ... such a candidate may lie up to this below that cell's ground centroid (up to bridgeGate above it; never less than bridgeGate): ground falling away from the road or downhill beyond a gap, where the cell's plane predicts it
+    double bridgeMaxAngleDegrees = 10.0;  ///< [deg] ... and the largest angle between the two cells' ground-plane normals (line and small cells: vertical; a bush's top, a slab of a bonnet tilt away from the ground beside them)
 
     // --- per-cell refinement ----------------------------------------------------------------------
     double sparsityLow = 0.001;              ///< [m^3/point] bounding-box volume per point below this: Low sparsity

@@ -40,6 +40,19 @@ struct ExpansionSettings {
     /// for which it returns false is decided with an empty list, and only if accepted are its
     /// neighbours searched, skipping those already reached: the same walk, with less searching.
     std::function<bool(std::uint32_t candidate)> needsNeighbours;
+    /// Bridges (0: none): once the walk has stopped, a candidate it never reached whose nearest
+    /// accepted candidate (horizontally, within bridgeRadius [m]) has it within bridgeGate [m] of
+    /// that candidate's ground plane (along its normal, where given), at most bridgeGate above it
+    /// and at most bridgeMaxDrop below it, and whose normal agrees with that candidate's (cosine at
+    /// least bridgeMinNormalCos), is reached from it (beyond `radius`, bridgeGapGate is the gate if
+    /// larger), and the walk goes
+    /// on; repeated until no candidate is added. Ground beyond a gap (rings farther apart than
+    /// `radius`) or a step of the ground larger than heightGate (a verge beside the road).
+    double bridgeRadius = 0.0;
+    double bridgeGate = 0.0;  ///< [m] see bridgeRadius
+    double bridgeMaxDrop = 0.0;  ///< [m] see bridgeRadius (at least bridgeGate is allowed)
+    double bridgeGapGate = 0.0;  ///< [m] see bridgeRadius (used where larger than bridgeGate)
+    double bridgeMinNormalCos = 1.0;  ///< [-] see bridgeRadius (cosine of the largest angle between the normals)
 };
 
 /// Decides a reached candidate: given its index and its neighbours (candidate indices within
