@@ -193,7 +193,7 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
     });
     EXPECT_EQ(entries, 3u);  // the scan, its ground, its obstacles
     EXPECT_EQ(ground + obstacles, 11305u);
-    EXPECT_EQ(ground, 2156u);  // the same as `gseg segment` with this config (distToGround: auto)
+    EXPECT_EQ(ground, 2224u);  // the same as `gseg segment` with this config (distToGround: auto)
 
     auto rep = rawlogGseg("-i '" + kVlp16 + "' -o '" + out +
                                       "' --replace");
