@@ -597,3 +597,14 @@ TEST(Scenes, BridgesAcrossAGapBetweenFarRingsTakeTheGroundsRiseOverIt) {
         EXPECT_GE(runScene(m).all.precision, runWith(m, {{"bridgeGapGate", "0"}}).all.precision - 0.0005) << name;
     }
 }
+
+TEST(Scenes, AHugeBridgeRadiusEndsAndActsAsOneReachingEverything) {
+    // The bridges' nearest-ground search walks rings of columns outward only as far as the
+    // centroids reach: a bridgeRadius of 1e12 m ends, with the labels of one that already covers the
+    // whole scene (hdl32_road_terrain lies within 100 m of the sensor).
+    const auto n = gseg::test::scene("hdl32_road_terrain");
+    const Outcome huge = runWith(n, {{"bridgeRadius", "1e12"}});
+    const Outcome whole = runWith(n, {{"bridgeRadius", "1000"}});
+    EXPECT_EQ(huge.result.labels, whole.result.labels);
+    EXPECT_GE(huge.all.recall, runScene(n).all.recall);  // reaches at least what 10 m reaches
+}

@@ -90,23 +90,32 @@ public:
         const float radiusSq = float(radius * radius);
         float best = std::numeric_limits<float>::infinity();
         std::int64_t found = -1;
-        // Ring r's centroids lie at least (r - 1) column sizes away horizontally.
-        const std::int64_t rings = std::int64_t(std::ceil(radius / size_));
+        // Ring r's centroids lie at least (r - 1) column sizes away horizontally. No ring beyond
+        // the centroids' columns holds one, whatever the radius (a huge one must not loop for ever).
+        const std::int64_t extent = std::max(std::max(kx - lo_[0], lo_[0] + w_ - 1 - kx),
+                                             std::max(ky - lo_[1], lo_[1] + h_ - 1 - ky));
+        const double ringsNeeded = std::ceil(radius / size_);
+        const std::int64_t rings = ringsNeeded < double(extent) ? std::int64_t(ringsNeeded) : extent;
+        const auto visit = [&](std::int64_t cx, std::int64_t cy) {
+            std::size_t b = 0, e = 0;
+            if (!columnsRange(cx, cy, cy, b, e)) return;
+            for (std::size_t t = b; t < e; ++t) {
+                if (reached_[t] != 2) continue;
+                const float dx = q.x() - x_[t], dy = q.y() - y_[t];
+                const float d = dx * dx + dy * dy;
+                const std::uint32_t i = items_[t];
+                if (d > radiusSq || d > best || (d == best && std::int64_t(i) > found)) continue;
+                best = d, found = i;
+            }
+        };
         for (std::int64_t r = 0; r <= rings; ++r) {
-            for (std::int64_t cx = kx - r; cx <= kx + r; ++cx)
-                for (std::int64_t cy = ky - r; cy <= ky + r; ++cy) {
-                    if (std::max(std::abs(cx - kx), std::abs(cy - ky)) != r) continue;  // ring r only
-                    std::size_t b = 0, e = 0;
-                    if (!columnsRange(cx, cy, cy, b, e)) continue;
-                    for (std::size_t t = b; t < e; ++t) {
-                        if (reached_[t] != 2) continue;
-                        const float dx = q.x() - x_[t], dy = q.y() - y_[t];
-                        const float d = dx * dx + dy * dy;
-                        const std::uint32_t i = items_[t];
-                        if (d > radiusSq || d > best || (d == best && std::int64_t(i) > found)) continue;
-                        best = d, found = i;
-                    }
-                }
+            // Ring r's columns only (its perimeter): the nearest with the lowest index wins, in any order.
+            if (r == 0) {
+                visit(kx, ky);
+            } else {
+                for (std::int64_t cx = kx - r; cx <= kx + r; ++cx) visit(cx, ky - r), visit(cx, ky + r);
+                for (std::int64_t cy = ky - r + 1; cy <= ky + r - 1; ++cy) visit(kx - r, cy), visit(kx + r, cy);
+            }
             // Every centroid of ring r + 1 lies at least r column sizes away horizontally.
             const double reach = double(r) * size_;
             if (found >= 0 && double(best) <= reach * reach) break;
