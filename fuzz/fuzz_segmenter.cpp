@@ -38,6 +38,9 @@ const Key kKeys[] = {
     {"sparseRecoveryThreshold", 0, 5, false, false},
     {"floatingMinHeight", 0, 5, false, false},     {"floatingMaxDepth", 0, 20, false, false},
     {"floatingIgnoresLowOutliers", 0, 1, false, true},
+    {"bridgeRadius", 0.001, 1e13, true, false},    {"bridgeGate", 0, 5, false, false},
+    {"bridgeGapGate", 0, 5, false, false},         {"bridgeMaxDrop", 0, 20, false, false},
+    {"bridgeMaxAngleDegrees", -1, 95, false, false},
 };
 
 std::string parametersYaml(gseg::fuzz::FuzzInput& in) {

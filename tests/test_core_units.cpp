@@ -155,6 +155,27 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         gseg::ColumnIndex columns;
         std::vector<std::uint32_t> columnOf;
         columns.build(cloud, idx, 1.5, 1.0, columnOf);
+        // `g` (a ColumnIndex form) has the cells and point order of `plain` (the plain form on the
+        // same input); its columns agree with the index, and its points are those of the cloud.
+        const auto expectSameAsPlain = [&](const gseg::Grid& plain, const gseg::Grid& g) {
+            ASSERT_EQ(plain.cells().size(), g.cells().size()) << far;
+            EXPECT_EQ(plain.order(), g.order()) << far;
+            for (std::size_t c = 0; c < g.cells().size(); ++c) {
+                const auto &a = plain.cells()[c], &b = g.cells()[c];
+                ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
+                const std::int64_t col = columns.find(a.ix, a.iy);
+                ASSERT_GE(col, 0);
+                EXPECT_EQ(columns.ix(std::uint32_t(col)), a.ix);
+                EXPECT_EQ(columns.iy(std::uint32_t(col)), a.iy);
+                EXPECT_EQ(g.cellColumns()[c], std::uint32_t(col));
+                EXPECT_GE(c, g.columnCells()[std::size_t(col)]);
+                EXPECT_LT(c, g.columnCells()[std::size_t(col) + 1]);
+            }
+            for (std::size_t k = 0; k < g.order().size(); ++k) {
+                const float* p = cloud.point(g.order()[k]);
+                EXPECT_EQ(g.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
+            }
+        };
         gseg::ForkJoinPool pool(3);  // the same ids with the per-point work on three threads
         std::vector<std::uint32_t> columnOfPooled;
         gseg::ColumnIndex pooled;
@@ -164,23 +185,7 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         gseg::Grid plain, byColumn;
         plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
         byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);
-        ASSERT_EQ(plain.cells().size(), byColumn.cells().size()) << far;
-        EXPECT_EQ(plain.order(), byColumn.order()) << far;
-        for (std::size_t c = 0; c < plain.cells().size(); ++c) {
-            const auto &a = plain.cells()[c], &b = byColumn.cells()[c];
-            ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
-            const std::int64_t col = columns.find(a.ix, a.iy);
-            ASSERT_GE(col, 0);
-            EXPECT_EQ(columns.ix(std::uint32_t(col)), a.ix);
-            EXPECT_EQ(columns.iy(std::uint32_t(col)), a.iy);
-            EXPECT_GE(c, byColumn.columnCells()[std::size_t(col)]);
-            EXPECT_LT(c, byColumn.columnCells()[std::size_t(col) + 1]);
-            EXPECT_EQ(byColumn.cellColumns()[c], std::uint32_t(col));
-        }
-        for (std::size_t k = 0; k < idx.size(); ++k) {
-            const float* p = cloud.point(byColumn.order()[k]);
-            EXPECT_EQ(byColumn.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
-        }
+        expectSameAsPlain(plain, byColumn);
         EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
 
         // Few (column, z cell) keys (Phase I's tall cells; no tall column): the single counting
@@ -191,20 +196,7 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         gseg::Grid plainLow, byKeyLow;
         plainLow.build(cloud, low, 1.5, 1.0, 1.5, -2.5);
         byKeyLow.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5);
-        ASSERT_EQ(plainLow.cells().size(), byKeyLow.cells().size()) << far;
-        EXPECT_EQ(plainLow.order(), byKeyLow.order()) << far;
-        for (std::size_t c = 0; c < plainLow.cells().size(); ++c) {
-            const auto &a = plainLow.cells()[c], &b = byKeyLow.cells()[c];
-            ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
-            EXPECT_EQ(columns.find(a.ix, a.iy), std::int64_t(byKeyLow.cellColumns()[c]));
-            const std::int64_t col = columns.find(a.ix, a.iy);
-            EXPECT_GE(c, byKeyLow.columnCells()[std::size_t(col)]);
-            EXPECT_LT(c, byKeyLow.columnCells()[std::size_t(col) + 1]);
-        }
-        for (std::size_t k = 0; k < low.size(); ++k) {
-            const float* p = cloud.point(byKeyLow.order()[k]);
-            EXPECT_EQ(byKeyLow.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
-        }
+        expectSameAsPlain(plainLow, byKeyLow);
 
         // Input already grouped by column (Phase II's: Phase I's cells in order) takes the path
         // without the scatter by column: the same cells and order as the plain form on that input,
@@ -220,19 +212,7 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         fromPoints.build(cloud, grouped, columns, groupedColumns.data(), 0.05, -0.7, byColumn.points().data());
         ASSERT_GT(plainGrouped.cells().size(), byColumn.cells().size()) << far;  // the thin cells reorder points
         EXPECT_NE(plainGrouped.order(), grouped) << far;
-        for (const gseg::Grid* g : {&fromCloud, &fromPoints}) {
-            ASSERT_EQ(plainGrouped.cells().size(), g->cells().size()) << far;
-            EXPECT_EQ(plainGrouped.order(), g->order()) << far;
-            for (std::size_t c = 0; c < g->cells().size(); ++c) {
-                const auto &a = plainGrouped.cells()[c], &b = g->cells()[c];
-                ASSERT_EQ(std::tie(a.ix, a.iy, a.iz, a.begin, a.end), std::tie(b.ix, b.iy, b.iz, b.begin, b.end)) << c;
-                EXPECT_EQ(columns.find(a.ix, a.iy), std::int64_t(g->cellColumns()[c]));
-            }
-            for (std::size_t k = 0; k < grouped.size(); ++k) {
-                const float* p = cloud.point(g->order()[k]);
-                EXPECT_EQ(g->points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
-            }
-        }
+        for (const gseg::Grid* g : {&fromCloud, &fromPoints}) expectSameAsPlain(plainGrouped, *g);
     }
 }
 

@@ -154,10 +154,7 @@ struct PhaseSettings {
     bool recover = false;      ///< recover the points of non-ground cells on a ground neighbour's plane (ours, after the authors' implementation)
     bool recoverSparseOnly = false;  ///< recover only the points of cells too small to classify
     double recoveryThreshold = 0;    ///< [m] point-to-plane distance of a recovered point
-    double bridgeRadius = 0, bridgeGate = 0;  ///< [m] the expansion's bridges (ExpansionSettings; 0: none)
-    double bridgeGapGate = 0;                 ///< [m] ... the gate across a gap wider than the search radius
-    double bridgeMaxDrop = 0;                 ///< [m] ... the largest fall in height across one
-    double bridgeMaxAngleDegrees = 0;         ///< [deg] ... the largest angle between the two planes' normals
+    bool bridges = false;      ///< the expansion builds bridges (Params::bridgeRadius and its keys)
     bool recordRejected = false;  ///< record per cell the z range of the points this phase rejected (for the next phase)
     bool belowRejected = false;   ///< a cell above a point the previous phase rejected is floating
 
@@ -182,11 +179,7 @@ struct PhaseSettings {
         s.recover = p.sparseRecoveryThreshold > 0;  // their points are final ground
         s.recoverSparseOnly = true;
         s.recoveryThreshold = p.sparseRecoveryThreshold;
-        s.bridgeRadius = p.bridgeRadius;
-        s.bridgeGate = p.bridgeGate;
-        s.bridgeGapGate = p.bridgeGapGate;
-        s.bridgeMaxDrop = p.bridgeMaxDrop;
-        s.bridgeMaxAngleDegrees = p.bridgeMaxAngleDegrees;
+        s.bridges = true;
         return s;
     }
 };
@@ -359,11 +352,13 @@ private:
         es.seedRadius = p_.robotRadius + p_.centroidSearchRadius;
         es.radius = p_.centroidSearchRadius;
         es.heightGate = set_.heightGate;
-        es.bridgeRadius = set_.bridgeRadius;
-        es.bridgeGate = set_.bridgeGate;
-        es.bridgeGapGate = set_.bridgeGapGate;
-        es.bridgeMaxDrop = set_.bridgeMaxDrop;
-        es.bridgeMinNormalCos = std::cos(set_.bridgeMaxAngleDegrees * M_PI / 180.0);
+        if (set_.bridges) {
+            es.bridgeRadius = p_.bridgeRadius;
+            es.bridgeGate = p_.bridgeGate;
+            es.bridgeGapGate = p_.bridgeGapGate;
+            es.bridgeMaxDrop = p_.bridgeMaxDrop;
+            es.bridgeMinNormalCos = std::cos(p_.bridgeMaxAngleDegrees * M_PI / 180.0);
+        }
         es.normals = &ws.normals;
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
