@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -363,6 +364,48 @@ TEST(PlaneFit, SingleRingIsALineNotATiltedPlane) {
     EXPECT_EQ(fit.numInliers, 20u);
     EXPECT_EQ(in.back(), 0);
     EXPECT_LT(gseg::planeSlopeDegrees(fit.normal), 5.0);
+}
+
+// The classification's moments (PointMoments) spare the least-squares refit its sums where RANSAC's
+// plane holds every point: the fit must be the same bit for bit, with and without outliers.
+TEST(PlaneFit, ClassificationMomentsGiveTheSameFitBitForBit) {
+    gseg::Params p;
+    const gseg::SlopeLimit slope(p);
+    int allInliers = 0;
+    for (std::uint32_t seed = 1; seed <= 40; ++seed) {
+        const auto pts = tiltedPlane(double(seed % 20), 20 + int(seed) * 7, seed % 3 == 0 ? int(seed) : 0, seed);
+        gseg::PointMoments m;
+        gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
+        ASSERT_EQ(m.count, pts.size());
+        std::vector<std::uint8_t> in1, in2;
+        gseg::PlaneFitScratch s1, s2;
+        const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in1, s1, 30.0, 0.5);
+        const auto b = gseg::fitPlane(pts.data(), pts.size(), p, seed, in2, s2, 30.0, 0.5, &m);
+        ASSERT_EQ(a.valid, b.valid) << seed;
+        EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), sizeof(float) * 3), 0) << seed;
+        EXPECT_EQ(std::memcmp(&a.d, &b.d, sizeof(float)), 0) << seed;
+        EXPECT_EQ(a.numInliers, b.numInliers) << seed;
+        EXPECT_EQ(in1, in2) << seed;
+        allInliers += a.valid && a.numInliers == pts.size();
+    }
+    EXPECT_GE(allInliers, 10);  // the case the moments serve was met
+    // Moments of another point count are not taken; moments of these points are (zeroed, the refit
+    // finds no plane through them and RANSAC's plane stays).
+    const auto pts = tiltedPlane(5, 100, 0, 7);
+    gseg::PointMoments m;
+    gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
+    std::vector<std::uint8_t> in;
+    gseg::PlaneFitScratch s;
+    const auto ref = gseg::fitPlane(pts.data(), pts.size(), p, 7, in, s, 30.0, 0.5);
+    ASSERT_EQ(ref.numInliers, pts.size());
+    gseg::PointMoments other = m;
+    other.count = pts.size() - 1;
+    other.scatter.setZero();
+    const auto ignored = gseg::fitPlane(pts.data(), pts.size(), p, 7, in, s, 30.0, 0.5, &other);
+    EXPECT_EQ(std::memcmp(ref.normal.data(), ignored.normal.data(), sizeof(float) * 3), 0);
+    other.count = pts.size();
+    const auto taken = gseg::fitPlane(pts.data(), pts.size(), p, 7, in, s, 30.0, 0.5, &other);
+    EXPECT_NE(std::memcmp(ref.normal.data(), taken.normal.data(), sizeof(float) * 3), 0);
 }
 
 TEST(PlaneFit, DegenerateInputIsInvalid) {

@@ -77,8 +77,10 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     return classifyCell(pts, n, params, SlopeLimit(params));
 }
 
-CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope) {
+CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope,
+                                PointMoments* moments) {
     CellClassification out;
+    if (moments) moments->count = 0;
     if (n == 0) return out;
     Eigen::Vector3d mean = detail::pointSum(pts, n);
     mean /= double(n);
@@ -86,6 +88,7 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     if (n < std::size_t(params.minPointsPerCell)) return out;  // TooFewPoints
 
     Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean);
+    if (moments) moments->count = n, moments->mean = mean, moments->scatter = cov;
     cov /= double(n);
 
     if (n < std::size_t(params.minPointsForPca)) {

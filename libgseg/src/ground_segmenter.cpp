@@ -121,6 +121,7 @@ struct detail::Workspace {
             body(std::size_t(0), n, 0u);
     }
     std::vector<CellState> cells;
+    std::vector<PointMoments> moments;  // per cell that the plane fit takes: its points' mean and scatter matrix (the classification's)
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (the expansion's points)
     // Per Phase I cell, in the grid's order (so by column id): the z range of its points Phase I
@@ -242,6 +243,7 @@ private:
         const auto& pts = ws.grid->points();
         ws.inlier.assign(pts.size(), 0);
         ws.cells.assign(ws.grid->cells().size(), CellState());
+        ws.moments.resize(ws.cells.size());  // written for the cells the plane fit takes, read for those only
         // Cells are independent: each writes its own state and its own points' flags.
         ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
             for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
@@ -251,7 +253,9 @@ private:
     void classifyOne(detail::Workspace& ws, std::size_t c) const {
         const auto& pts = ws.grid->points();
         const GridCell& g = ws.grid->cells()[c];
-        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_);
+        PointMoments moments;
+        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_, &moments);
+        if (cls.cellClass == CellClass::Plane && !cls.steepNormal) ws.moments[c] = moments;  // fitOne() takes them
         CellState& s = ws.cells[c];
         s.cellClass = cls.cellClass;
         s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
@@ -283,7 +287,8 @@ private:
             return;
         }
         const PlaneFitResult fit = fitPlane(&ws.grid->points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
-                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
+                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio,
+                                            &ws.moments[c]);
         if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
             s.outcome = CellOutcome::Steep;
             return;

@@ -30,14 +30,22 @@ std::size_t markInliers(const PlaneFitScratch& s, std::size_t n, const Eigen::Ve
     return count;
 }
 
-// Least-squares plane through the masked points: normal = smallest principal axis.
+// Least-squares plane through the masked points: normal = smallest principal axis. `all`
+// (optional): the moments of all n points, given where the mask holds every point (the masked
+// sums would add the same values in the same order).
 bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vector<std::uint8_t>& mask,
-                       float thr, Eigen::Vector3f& normal, float& d) {
-    std::size_t m = 0;
-    Eigen::Vector3d mean = detail::pointSum(pts, n, mask.data(), &m);
-    if (m < 3) return false;
-    mean /= double(m);
-    const Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean, mask.data());
+                       float thr, const PointMoments* all, Eigen::Vector3f& normal, float& d) {
+    std::size_t m = n;
+    Eigen::Vector3d mean;
+    Eigen::Matrix3d cov;
+    if (all) {
+        mean = all->mean, cov = all->scatter;
+    } else {
+        mean = detail::pointSum(pts, n, mask.data(), &m);
+        if (m < 3) return false;
+        mean /= double(m);
+        cov = detail::scatterMatrix(pts, n, mean, mask.data());
+    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     // Inliers spread less than the inlier distance across their main axis: a line, no plane.
@@ -89,7 +97,7 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
 
 PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
                         std::vector<std::uint8_t>& inlier, PlaneFitScratch& scratch, double maxSlopeDegrees,
-                        double minInlierRatio) {
+                        double minInlierRatio, const PointMoments* moments) {
     PlaneFitResult res;
     inlier.assign(n, 0);
     if (n < 3) return res;
@@ -145,7 +153,8 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
     markInliers(scratch, n, bestN, bestD, thr, inlier.data());
     Eigen::Vector3f refN;
     float refD;
-    if (leastSquaresPlane(pts, n, inlier, thr, refN, refD) && refN.z() >= minNz) {
+    const PointMoments* all = moments && moments->count == n && best == n ? moments : nullptr;
+    if (leastSquaresPlane(pts, n, inlier, thr, all, refN, refD) && refN.z() >= minNz) {
         std::vector<std::uint8_t>& refMask = scratch.mask;
         refMask.resize(n);
         const std::size_t refCount = markInliers(scratch, n, refN, refD, thr, refMask.data());
