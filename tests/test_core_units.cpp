@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <random>
@@ -419,6 +420,47 @@ TEST(PlaneFit, DegenerateInputIsInvalid) {
 }
 
 // --- classification ----------------------------------------------------------------------------
+
+// detail::pointSum and detail::scatterMatrix (SSE2, or AVX2 where the CPU has it) against Eigen's
+// plain double sums in the points' order, bit for bit: every point, masked, one point, none, and
+// far from the origin (where a different order of the sums would show).
+TEST(CellClassifier, PointSumAndScatterMatrixEqualEigensSumsBitForBit) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    std::uniform_int_distribution<int> coin(0, 3);
+    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(17), std::size_t(250)}) {
+        for (float offset : {0.f, 70.f, -3000.f}) {
+            // The points end where the buffer ends: nothing past the last point may be read.
+            auto buffer = std::make_unique<Eigen::Vector3f[]>(std::max<std::size_t>(n, 1));
+            std::vector<std::uint8_t> mask(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                buffer[i] = Eigen::Vector3f(offset + 10 * u(rng), offset * 0.5f + u(rng), u(rng) * 0.1f);
+                mask[i] = coin(rng) != 0;
+            }
+            const Eigen::Vector3f* pts = buffer.get();
+            for (const std::uint8_t* m : {static_cast<const std::uint8_t*>(nullptr), static_cast<const std::uint8_t*>(mask.data())}) {
+                Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+                std::size_t count = 0;
+                for (std::size_t i = 0; i < n; ++i)
+                    if (!m || m[i]) sum += pts[i].cast<double>(), ++count;
+                const Eigen::Vector3d mean = count ? Eigen::Vector3d(sum / double(count)) : Eigen::Vector3d::Zero();
+                Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+                for (std::size_t i = 0; i < n; ++i) {
+                    if (m && !m[i]) continue;
+                    const Eigen::Vector3d d = pts[i].cast<double>() - mean;
+                    cov.noalias() += d * d.transpose();
+                }
+                std::size_t gotCount = 99;
+                const Eigen::Vector3d gotSum = gseg::detail::pointSum(pts, n, m, &gotCount);
+                const Eigen::Matrix3d gotCov = gseg::detail::scatterMatrix(pts, n, mean, m);
+                EXPECT_EQ(gotCount, count) << n;
+                EXPECT_EQ(std::memcmp(gotSum.data(), sum.data(), sizeof(double) * 3), 0) << n << " " << offset;
+                EXPECT_EQ(std::memcmp(gotCov.data(), cov.data(), sizeof(double) * 9), 0) << n << " " << offset << "\n"
+                                                                                        << gotCov - cov;
+            }
+        }
+    }
+}
 
 TEST(CellClassifier, LinePlaneClutterAndSmallCells) {
     gseg::Params p;

@@ -1,5 +1,7 @@
 #include <gseg/grid.hpp>
 
+#include "cpu_features.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -47,13 +49,12 @@ __attribute__((target("avx2"))) void cellCoordsAvx2(const float* v, std::size_t 
     }
     for (; k < n; ++k) divided(k);
 }
-const bool kAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2") != 0);
 }  // namespace
 #endif
 
 void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out) {
 #if defined(__GNUC__) && defined(__x86_64__)
-    if (kAvx2) return cellCoordsAvx2(v, n, size, origin, out);
+    if (cpuHasAvx2()) return cellCoordsAvx2(v, n, size, origin, out);
 #endif
     for (std::size_t k = 0; k < n; ++k) out[k] = cellCoord(v[k], size, origin);
 }
