@@ -8,6 +8,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -531,28 +534,61 @@ private:
         // plane and the point of the last point recovered.
         std::uint32_t inliers = 0, last = 0;
         int lastBest = 0;
-        for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = pts[k];
-            // The plane of the neighbour whose ground centroid is horizontally nearest (the first
-            // of equals): (ground - q).head<2>().squaredNorm(), without a branch.
-            int best = 0;
-            float bestD = std::numeric_limits<float>::infinity();
-            for (int j = 0; j < count; ++j) {
-                const float dx = gx[j] - q.x(), dy = gy[j] - q.y();
-                const float d = dx * dx + dy * dy;
-                best = d < bestD ? j : best;
-                bestD = d < bestD ? d : bestD;
+        for (std::uint32_t k = g.begin; k < g.end;) {
+            // The plane of the neighbour whose ground centroid is horizontally nearest (up to four
+            // points at a time).
+            int best[4];
+            const std::uint32_t m = nearestCentroids(pts + k, std::min<std::uint32_t>(4, g.end - k), gx, gy, count, best);
+            for (std::uint32_t i = 0; i < m; ++i, ++k) {
+                const Eigen::Vector3f& q = pts[k];
+                const CellState& n = *nbs[best[i]];
+                const bool on = std::abs(n.normal.dot(q - n.ground)) <= thr;
+                inlier[k] = on;
+                inliers += on;
+                last = on ? k : last;
+                lastBest = on ? best[i] : lastBest;
             }
-            const CellState& n = *nbs[best];
-            const bool on = std::abs(n.normal.dot(q - n.ground)) <= thr;
-            inlier[k] = on;
-            inliers += on;
-            last = on ? k : last;
-            lastBest = on ? best : lastBest;
         }
         s.inliers = inliers;
         if (inliers > 0) s.normal = nbs[lastBest]->normal, s.ground = pts[last];
         s.recovered = inliers > 0;
+    }
+
+    // For each of the m (1 to 4) points q[0..m): the index j < count of the centroid (gx[j],
+    // gy[j]) horizontally nearest to it, the first of equals ((g - q).head<2>().squaredNorm() in
+    // float, compared strictly in j's order) into best[]; returns m. Four points at a time in
+    // SSE2 registers, each lane the scalar form's operations.
+    static std::uint32_t nearestCentroids(const Eigen::Vector3f* q, std::uint32_t m, const float* gx, const float* gy,
+                                          int count, int* best) {
+#if defined(__SSE2__)
+        if (m == 4) {
+            const __m128 qx = _mm_setr_ps(q[0].x(), q[1].x(), q[2].x(), q[3].x());
+            const __m128 qy = _mm_setr_ps(q[0].y(), q[1].y(), q[2].y(), q[3].y());
+            __m128 bestD = _mm_set1_ps(std::numeric_limits<float>::infinity());
+            __m128i bestJ = _mm_setzero_si128();
+            for (int j = 0; j < count; ++j) {
+                const __m128 dx = _mm_sub_ps(_mm_set1_ps(gx[j]), qx), dy = _mm_sub_ps(_mm_set1_ps(gy[j]), qy);
+                const __m128 d = _mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy));
+                const __m128i nearer = _mm_castps_si128(_mm_cmplt_ps(d, bestD));
+                bestJ = _mm_or_si128(_mm_and_si128(nearer, _mm_set1_epi32(j)), _mm_andnot_si128(nearer, bestJ));
+                bestD = _mm_min_ps(d, bestD);  // d < bestD ? d : bestD
+            }
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(best), bestJ);
+            return 4;
+        }
+#endif
+        for (std::uint32_t i = 0; i < m; ++i) {
+            int b = 0;
+            float bestD = std::numeric_limits<float>::infinity();
+            for (int j = 0; j < count; ++j) {
+                const float dx = gx[j] - q[i].x(), dy = gy[j] - q[i].y();
+                const float d = dx * dx + dy * dy;
+                b = d < bestD ? j : b;
+                bestD = d < bestD ? d : bestD;
+            }
+            best[i] = b;
+        }
+        return m;
     }
 
     std::int32_t reachedFromCell(const detail::Workspace& ws, std::size_t candidate) const {
