@@ -10,6 +10,7 @@
 #include <algorithm>
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#include <xmmintrin.h>
 #endif
 #include <chrono>
 #include <cmath>
@@ -72,6 +73,30 @@ std::pair<double, double> volumesPerPoint(const Eigen::Vector3f* pts, const std:
         return m == 0 ? 0.0 : double(box.volume()) / double(m);
     };
     return {perPoint(inMin, inMax, mIn), perPoint(outMin, outMax, mOut)};
+}
+
+// The sum of the points pts[0..n) whose mask is non-zero (mask null: every point), in float, in
+// the points' order: Eigen's `sum += p`, each coordinate in an SSE lane (the lane after z holds
+// whatever follows a point and is never read).
+Eigen::Vector3f floatSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask) {
+#if defined(__SSE2__)
+    __m128 sum = _mm_setzero_ps();
+    for (std::size_t i = 0; i + 1 < n; ++i)  // a point follows: one 16-byte load
+        if (!mask || mask[i]) sum = _mm_add_ps(sum, _mm_loadu_ps(pts[i].data()));
+    if (n > 0 && (!mask || mask[n - 1])) {  // the last point: nothing past it is read
+        const float* p = pts[n - 1].data();
+        const __m128 xy = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+        sum = _mm_add_ps(sum, _mm_movelh_ps(xy, _mm_load_ss(p + 2)));
+    }
+    alignas(16) float a[4];
+    _mm_store_ps(a, sum);
+    return Eigen::Vector3f(a[0], a[1], a[2]);
+#else
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (std::size_t i = 0; i < n; ++i)
+        if (!mask || mask[i]) sum += pts[i];
+    return sum;
+#endif
 }
 
 // The z range of the points of one Phase I cell that Phase I did not accept.
@@ -300,9 +325,7 @@ private:
         const std::uint8_t* const mask = scratch.mask.data();
         const Eigen::Vector3f* const pts = ws.grid->points().data() + g.begin;
         std::copy(mask, mask + g.size(), ws.inlier.begin() + g.begin);
-        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        for (std::uint32_t i = 0; i < g.size(); ++i)
-            if (mask[i]) sum += pts[i];
+        const Eigen::Vector3f sum = fit.numInliers == g.size() ? floatSum(pts, g.size(), nullptr) : floatSum(pts, g.size(), mask);
         s.inliers = std::uint32_t(fit.numInliers);
         s.ground = sum / float(fit.numInliers);
         s.normal = fit.normal;
