@@ -41,6 +41,42 @@ void checkCloud(const PointCloudView& cloud) {
 
 bool finitePoint(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
+// Writes the indices of the points of `cloud` whose x, y and z are finite, ascending, into
+// out[0..), which has room for every point; returns how many. (Written unconditionally, kept where
+// finite: no branch per point; in SSE2 four points are tested at once where a point follows the
+// fourth (each read as 16 bytes: x * 0 is NaN exactly where x is not finite), and only a group
+// holding a point that is not finite is tested point by point.)
+std::size_t finiteIndices(const PointCloudView& cloud, std::uint32_t* out) {
+    const std::uint32_t n = std::uint32_t(cloud.size());
+    std::size_t count = 0;
+    std::uint32_t i = 0;
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps();
+    const __m128i step = _mm_setr_epi32(0, 1, 2, 3);
+    for (; i + 4 < n; i += 4) {
+        const __m128 a = _mm_mul_ps(_mm_loadu_ps(cloud.point(i)), zero);
+        const __m128 b = _mm_mul_ps(_mm_loadu_ps(cloud.point(i + 1)), zero);
+        const __m128 c = _mm_mul_ps(_mm_loadu_ps(cloud.point(i + 2)), zero);
+        const __m128 d = _mm_mul_ps(_mm_loadu_ps(cloud.point(i + 3)), zero);
+        const __m128 any = _mm_add_ps(_mm_add_ps(a, b), _mm_add_ps(c, d));  // NaN in lane k: some point's coordinate k
+        if ((_mm_movemask_ps(_mm_cmpunord_ps(any, any)) & 7) == 0) {
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(out + count), _mm_add_epi32(_mm_set1_epi32(int(i)), step));
+            count += 4;
+            continue;
+        }
+        for (std::uint32_t k = i; k < i + 4; ++k) {
+            out[count] = k;
+            count += finitePoint(cloud.point(k)) ? 1 : 0;
+        }
+    }
+#endif
+    for (; i < n; ++i) {
+        out[count] = i;
+        count += finitePoint(cloud.point(i)) ? 1 : 0;
+    }
+    return count;
+}
+
 std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
     std::uint64_t s = base ^ (std::uint64_t(std::uint32_t(c.ix)) * 0x9E3779B97F4A7C15ull);
     s ^= std::uint64_t(std::uint32_t(c.iy)) * 0xC2B2AE3D27D4EB4Full;
@@ -676,15 +712,8 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     Result r;
 
     // Points with a NaN or infinite coordinate (no return) take no part; they are non-ground.
-    // (Written unconditionally, kept where finite: no branch per point.)
     ws.input.resize(cloud.size());
-    std::uint32_t* const input = ws.input.data();
-    std::size_t numFinite = 0;
-    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
-        input[numFinite] = i;
-        numFinite += finitePoint(cloud.point(i)) ? 1 : 0;
-    }
-    ws.input.resize(numFinite);
+    ws.input.resize(finiteIndices(cloud, ws.input.data()));
     r.numNonFinite = cloud.size() - ws.input.size();
     ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
 
