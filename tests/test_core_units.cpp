@@ -76,6 +76,23 @@ TEST(CellCoord, BranchFreeFormIsTheClampedFloorAndColumnIndexAgrees) {
 // the division only near a border) gives cellCoord's value for every input: on the borders of
 // every size and origin the segmenter uses and the floats next to them, far values, NaN and
 // infinities.
+TEST(CellCoord, ValueRangeIsTheMinimumAndMaximumOfEveryLength) {
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<std::int32_t> any(std::numeric_limits<std::int32_t>::min(),
+                                                    std::numeric_limits<std::int32_t>::max());
+    for (std::size_t n = 0; n <= 70; ++n) {
+        std::vector<std::int32_t> v(n);
+        for (auto& x : v) x = n % 2 ? any(rng) : std::int32_t(any(rng) % 100);
+        if (n > 5) v[n - 1] = std::numeric_limits<std::int32_t>::min(), v[n / 2] = std::numeric_limits<std::int32_t>::max();
+        std::int32_t lo = 7, hi = 7;  // starting values take part
+        gseg::detail::valueRange(v.data(), n, lo, hi);
+        std::int32_t wantLo = 7, wantHi = 7;
+        for (std::int32_t x : v) wantLo = std::min(wantLo, x), wantHi = std::max(wantHi, x);
+        EXPECT_EQ(lo, wantLo) << n;
+        EXPECT_EQ(hi, wantHi) << n;
+    }
+}
+
 TEST(CellCoord, VectorisedFormEqualsCellCoordOnAndNextToBorders) {
     std::mt19937 rng(11);
     std::uniform_int_distribution<int> cell(-700, 700);

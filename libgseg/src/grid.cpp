@@ -52,6 +52,29 @@ __attribute__((target("avx2"))) void cellCoordsAvx2(const float* v, std::size_t 
 }  // namespace
 #endif
 
+// lo = min(lo, v[k]) and hi = max(hi, v[k]) over k < n, in a loop that vectorises (inlined into
+// both forms of valueRange).
+__attribute__((always_inline)) inline void rangeLoop(const std::int32_t* v, std::size_t n, std::int32_t& lo,
+                                                     std::int32_t& hi) {
+    std::int32_t l = lo, h = hi;
+    for (std::size_t k = 0; k < n; ++k) l = std::min(l, v[k]), h = std::max(h, v[k]);
+    lo = l, hi = h;
+}
+#if defined(__GNUC__) && defined(__x86_64__)
+namespace {
+__attribute__((target("avx2"))) void rangeAvx2(const std::int32_t* v, std::size_t n, std::int32_t& lo, std::int32_t& hi) {
+    rangeLoop(v, n, lo, hi);  // eight lanes, one instruction each for min and max (SSE2 has neither)
+}
+}  // namespace
+#endif
+
+void valueRange(const std::int32_t* v, std::size_t n, std::int32_t& lo, std::int32_t& hi) {
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (cpuHasAvx2()) return rangeAvx2(v, n, lo, hi);
+#endif
+    rangeLoop(v, n, lo, hi);
+}
+
 void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out) {
 #if defined(__GNUC__) && defined(__x86_64__)
     if (cpuHasAvx2()) return cellCoordsAvx2(v, n, size, origin, out);
@@ -218,8 +241,8 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         detail::cellCoords(ys + b, e - b, sy, 0.0, cys + b);
         std::int32_t lx = std::numeric_limits<std::int32_t>::max(), ly = lx;
         std::int32_t hx = std::numeric_limits<std::int32_t>::min(), hy = hx;
-        for (std::size_t k = b; k < e; ++k) lx = std::min(lx, cxs[k]), hx = std::max(hx, cxs[k]);
-        for (std::size_t k = b; k < e; ++k) ly = std::min(ly, cys[k]), hy = std::max(hy, cys[k]);
+        detail::valueRange(cxs + b, e - b, lx, hx);
+        detail::valueRange(cys + b, e - b, ly, hy);
         std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
         box[0] = std::min(box[0], lx), box[2] = std::max(box[2], hx);
         box[1] = std::min(box[1], ly), box[3] = std::max(box[3], hy);
@@ -287,7 +310,7 @@ bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std:
     const std::uint32_t numColumns = columns.size();
     zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
     std::int32_t lo = izIn_[0], hi = izIn_[0];
-    for (std::size_t k = 1; k < n; ++k) lo = std::min(lo, izIn_[k]), hi = std::max(hi, izIn_[k]);
+    detail::valueRange(izIn_.data() + 1, n - 1, lo, hi);
     const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
     const std::uint64_t numKeys = range * numColumns;
     if (numKeys > 4 * std::uint64_t(n) + 65536 || numKeys >= (std::uint64_t(1) << 32)) return false;

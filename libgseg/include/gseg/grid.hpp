@@ -31,6 +31,8 @@ namespace detail {
 /// out[k] = cellCoord(v[k], size, origin) for k < n, in loops that vectorise (AVX2 where the CPU
 /// has it, checked once): the same values.
 void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out);
+/// lo = min(lo, v[k]), hi = max(hi, v[k]) for k < n (AVX2 where the CPU has it).
+void valueRange(const std::int32_t* v, std::size_t n, std::int32_t& lo, std::int32_t& hi);
 }  // namespace detail
 
 /// One occupied cell: its index and the range [begin, end) of its points in Grid::order().
