@@ -317,12 +317,14 @@ bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std:
     const std::uint32_t r = std::uint32_t(range);
     keys_.resize(n);
     counts_.assign(std::size_t(numKeys) + 1, 0);
-    for (std::size_t k = 0; k < n; ++k) {
-        const std::uint32_t key = columnOf[k] * r + std::uint32_t(izIn_[k] - lo);
-        keys_[k] = key;
-        ++counts_[key + 1];
-    }
-    for (std::size_t b = 1; b <= numKeys; ++b) counts_[b] += counts_[b - 1];
+    // The keys first (a loop that vectorises), then their counts.
+    std::uint32_t* const keys = keys_.data();
+    std::uint32_t* const counts = counts_.data();
+    const std::int32_t* const iz = izIn_.data();
+    for (std::size_t k = 0; k < n; ++k) keys[k] = columnOf[k] * r + std::uint32_t(iz[k] - lo);
+    for (std::size_t k = 0; k < n; ++k) ++counts[keys[k] + 1];
+    std::uint32_t sum = 0;  // the running sum in a register
+    for (std::size_t b = 1; b <= numKeys; ++b) sum += counts[b], counts[b] = sum;
     for (std::size_t k = 0; k < n; ++k) {
         const std::uint32_t at = counts_[keys_[k]]++;
         order_[at] = indices[k];
