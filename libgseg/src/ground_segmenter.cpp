@@ -733,12 +733,18 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     // Ours, not the paper's: reflections far below the ground (below_ground.hpp), the ground's
     // columns taken from Phase II's grid, still in the workspace (a ground cell holds its inliers).
     ws.groundColumns.clear();
+    // (Pointers at hand; a cell whose every point is an inlier takes no look at the flags.)
     const auto& cells = ws.grid->cells();
+    const Eigen::Vector3f* const pts = ws.grid->points().data();
+    const std::uint8_t* const inlier = ws.inlier.data();
     for (std::size_t c = 0; c < cells.size(); ++c) {
         if (ws.cells[c].outcome != CellOutcome::Ground) continue;
         float lowest = std::numeric_limits<float>::infinity();
-        for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid->points()[k].z());
+        if (ws.cells[c].inliers == cells[c].size())
+            for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k) lowest = std::min(lowest, pts[k].z());
+        else
+            for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
+                lowest = inlier[k] ? std::min(lowest, pts[k].z()) : lowest;
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);
