@@ -201,10 +201,15 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         pooled.build(cloud, idx, 1.5, 1.0, columnOfPooled, &pool);
         EXPECT_EQ(columnOfPooled, columnOf) << far;
         EXPECT_EQ(pooled.size(), columns.size()) << far;
-        gseg::Grid plain, byColumn;
+        gseg::Grid plain, byColumn, byColumnZ;
         plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
         byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);
         expectSameAsPlain(plain, byColumn);
+        // The z the columns' numbering gathered (ColumnIndex::z(), in idx's order) instead of the cloud's.
+        ASSERT_EQ(columns.z().size(), idx.size());
+        for (std::size_t k = 0; k < idx.size(); ++k) ASSERT_EQ(columns.z()[k], cloud.z(idx[k])) << k;
+        byColumnZ.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9, nullptr, columns.z().data());
+        expectSameAsPlain(plain, byColumnZ);
         EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
 
         // Few (column, z cell) keys (Phase I's tall cells; no tall column): the single counting
@@ -212,10 +217,14 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         std::vector<std::uint32_t> low, lowColumns;
         for (std::size_t k = 0; k < idx.size(); ++k)
             if (std::abs(cloud.z(idx[k])) < 5.f) low.push_back(idx[k]), lowColumns.push_back(columnOf[k]);
-        gseg::Grid plainLow, byKeyLow;
+        gseg::Grid plainLow, byKeyLow, byKeyLowZ;
         plainLow.build(cloud, low, 1.5, 1.0, 1.5, -2.5);
         byKeyLow.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5);
         expectSameAsPlain(plainLow, byKeyLow);
+        std::vector<float> lowZ;
+        for (std::uint32_t i : low) lowZ.push_back(cloud.z(i));
+        byKeyLowZ.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5, nullptr, lowZ.data());
+        expectSameAsPlain(plainLow, byKeyLowZ);
 
         // Input already grouped by column (Phase II's: Phase I's cells in order) takes the path
         // without the scatter by column: the same cells and order as the plain form on that input,

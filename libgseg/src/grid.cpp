@@ -197,14 +197,19 @@ private:
 };
 }  // namespace
 
-// The z cells of the points `indices` in their order, computed in loops that vectorise.
+// The z cells of the points `indices` in their order, computed in loops that vectorise (from
+// zOfIndices where the caller has their z at hand).
 void Grid::zCells(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
-                  const Eigen::Vector3f* pointsOfIndices, double sz, double originZ, std::vector<std::int32_t>& out) {
+                  const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices, double sz, double originZ,
+                  std::vector<std::int32_t>& out) {
     const std::size_t n = indices.size();
-    zs_.resize(n);
     out.resize(n);
-    for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
-    detail::cellCoords(zs_.data(), n, sz, originZ, out.data());
+    if (!zOfIndices) {
+        zs_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+        zOfIndices = zs_.data();
+    }
+    detail::cellCoords(zOfIndices, n, sz, originZ, out.data());
 }
 
 void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
@@ -227,13 +232,15 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
     }
     xy_.resize(2 * n);
+    z_.resize(n);
     forPoints([&](std::size_t b, std::size_t e) {
         // The coordinates gathered first, then the cells and the box in loops that vectorise.
         float* const xs = xy_.data();
         float* const ys = xy_.data() + n;
+        float* const zs = z_.data();
         for (std::size_t k = b; k < e; ++k) {
             const float* p = cloud.point(indices[k]);
-            xs[k] = p[0], ys[k] = p[1];
+            xs[k] = p[0], ys[k] = p[1], zs[k] = p[2];
         }
         std::int32_t* const cxs = coords_.data();
         std::int32_t* const cys = coords_.data() + n;
@@ -305,10 +312,10 @@ std::int32_t ColumnIndex::iy(std::uint32_t id) const {
 // done) where there would be too many keys.
 bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
                              const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
-                             const Eigen::Vector3f* pointsOfIndices) {
+                             const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
-    zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
+    zCells(cloud, indices, pointsOfIndices, zOfIndices, sz, originZ, izIn_);
     std::int32_t lo = izIn_[0], hi = izIn_[0];
     detail::valueRange(izIn_.data() + 1, n - 1, lo, hi);
     const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
@@ -354,7 +361,7 @@ bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std:
 // build()'s stable sort by (ix, iy, iz).
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
                  const std::uint32_t* columnOf, double sz, double originZ,
-                 const Eigen::Vector3f* pointsOfIndices) {
+                 const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
     cells_.clear();
@@ -373,7 +380,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         for (std::size_t k = b; k < e; ++k) down |= columnOf[k] < columnOf[k - 1] ? 1u : 0u;
         sorted = down == 0;
     }
-    if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices)) return;
+    if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices, zOfIndices)) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
     if (!sorted) {
         for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
@@ -399,12 +406,12 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             for (std::size_t k = 0; k < n; ++k) byColumnPoints_[k] = pointOf(cloud, indices, nullptr, k);
             byColumnPoints = byColumnPoints_.data();
         }
-        zCells(cloud, indices, byColumnPoints, sz, originZ, iz_);
+        zCells(cloud, indices, byColumnPoints, zOfIndices, sz, originZ, iz_);
     } else {
         byColumn_.resize(n);
         byColumnPoints_.resize(n);
         // The z cells in the input's order first (vectorised), then carried along.
-        zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
+        zCells(cloud, indices, pointsOfIndices, zOfIndices, sz, originZ, izIn_);
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint32_t at = counts_[columnOf[k]]++;
             byColumn_[at] = indices[k];

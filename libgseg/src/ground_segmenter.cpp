@@ -276,10 +276,11 @@ class Phase {
 public:
     Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings), slope_(p) {}
 
-    /// `inputPoints` (optional): the points of `input` in its order; `groundPoints` (optional)
+    /// `inputPoints` (optional): the points of `input` in its order; `inputZ` (optional): their z
+    /// likewise (Phase I: as the columns' numbering gathered them); `groundPoints` (optional)
     /// receives the points of `ground` likewise (Phase I hands them to Phase II).
     void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const std::uint32_t* inputColumns,
-             const Eigen::Vector3f* inputPoints, std::vector<std::uint32_t>& ground,
+             const Eigen::Vector3f* inputPoints, const float* inputZ, std::vector<std::uint32_t>& ground,
              std::vector<std::uint32_t>* groundColumns, std::vector<Eigen::Vector3f>* groundPoints,
              detail::Workspace& ws, PhaseReport& report, bool keepCells) {
         report.inputPoints = input.size();
@@ -288,7 +289,7 @@ public:
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
         ws.grid = &ws.phaseGrids[set_.number - 1];
-        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
+        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints, inputZ);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -719,11 +720,11 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
 
     // Phase I: tall cells over the whole cloud, no height gate.
     Phase(params, PhaseSettings::first(params))
-        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.phase1Ground, &ws.phase1GroundColumns,
+        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.columns.z().data(), ws.phase1Ground, &ws.phase1GroundColumns,
              &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
     Phase(params, PhaseSettings::second(params))
-        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), ws.phase2Ground,
+        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), nullptr, ws.phase2Ground,
              nullptr, nullptr, ws, r.phase2, keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
