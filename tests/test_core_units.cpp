@@ -14,7 +14,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <random>
@@ -74,6 +76,23 @@ TEST(CellCoord, BranchFreeFormIsTheClampedFloorAndColumnIndexAgrees) {
 // the division only near a border) gives cellCoord's value for every input: on the borders of
 // every size and origin the segmenter uses and the floats next to them, far values, NaN and
 // infinities.
+TEST(CellCoord, ValueRangeIsTheMinimumAndMaximumOfEveryLength) {
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<std::int32_t> any(std::numeric_limits<std::int32_t>::min(),
+                                                    std::numeric_limits<std::int32_t>::max());
+    for (std::size_t n = 0; n <= 70; ++n) {
+        std::vector<std::int32_t> v(n);
+        for (auto& x : v) x = n % 2 ? any(rng) : std::int32_t(any(rng) % 100);
+        if (n > 5) v[n - 1] = std::numeric_limits<std::int32_t>::min(), v[n / 2] = std::numeric_limits<std::int32_t>::max();
+        std::int32_t lo = 7, hi = 7;  // starting values take part
+        gseg::detail::valueRange(v.data(), n, lo, hi);
+        std::int32_t wantLo = 7, wantHi = 7;
+        for (std::int32_t x : v) wantLo = std::min(wantLo, x), wantHi = std::max(wantHi, x);
+        EXPECT_EQ(lo, wantLo) << n;
+        EXPECT_EQ(hi, wantHi) << n;
+    }
+}
+
 TEST(CellCoord, VectorisedFormEqualsCellCoordOnAndNextToBorders) {
     std::mt19937 rng(11);
     std::uniform_int_distribution<int> cell(-700, 700);
@@ -182,10 +201,15 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         pooled.build(cloud, idx, 1.5, 1.0, columnOfPooled, &pool);
         EXPECT_EQ(columnOfPooled, columnOf) << far;
         EXPECT_EQ(pooled.size(), columns.size()) << far;
-        gseg::Grid plain, byColumn;
+        gseg::Grid plain, byColumn, byColumnZ;
         plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
         byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);
         expectSameAsPlain(plain, byColumn);
+        // The z the columns' numbering gathered (ColumnIndex::z(), in idx's order) instead of the cloud's.
+        ASSERT_EQ(columns.z().size(), idx.size());
+        for (std::size_t k = 0; k < idx.size(); ++k) ASSERT_EQ(columns.z()[k], cloud.z(idx[k])) << k;
+        byColumnZ.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9, nullptr, columns.z().data());
+        expectSameAsPlain(plain, byColumnZ);
         EXPECT_EQ(columns.find(1 << 29, 1 << 29), -1);
 
         // Few (column, z cell) keys (Phase I's tall cells; no tall column): the single counting
@@ -193,10 +217,14 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         std::vector<std::uint32_t> low, lowColumns;
         for (std::size_t k = 0; k < idx.size(); ++k)
             if (std::abs(cloud.z(idx[k])) < 5.f) low.push_back(idx[k]), lowColumns.push_back(columnOf[k]);
-        gseg::Grid plainLow, byKeyLow;
+        gseg::Grid plainLow, byKeyLow, byKeyLowZ;
         plainLow.build(cloud, low, 1.5, 1.0, 1.5, -2.5);
         byKeyLow.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5);
         expectSameAsPlain(plainLow, byKeyLow);
+        std::vector<float> lowZ;
+        for (std::uint32_t i : low) lowZ.push_back(cloud.z(i));
+        byKeyLowZ.build(cloud, low, columns, lowColumns.data(), 1.5, -2.5, nullptr, lowZ.data());
+        expectSameAsPlain(plainLow, byKeyLowZ);
 
         // Input already grouped by column (Phase II's: Phase I's cells in order) takes the path
         // without the scatter by column: the same cells and order as the plain form on that input,
@@ -365,6 +393,48 @@ TEST(PlaneFit, SingleRingIsALineNotATiltedPlane) {
     EXPECT_LT(gseg::planeSlopeDegrees(fit.normal), 5.0);
 }
 
+// The classification's moments (PointMoments) spare the least-squares refit its sums where RANSAC's
+// plane holds every point: the fit must be the same bit for bit, with and without outliers.
+TEST(PlaneFit, ClassificationMomentsGiveTheSameFitBitForBit) {
+    gseg::Params p;
+    const gseg::SlopeLimit slope(p);
+    int allInliers = 0;
+    for (std::uint32_t seed = 1; seed <= 40; ++seed) {
+        const auto pts = tiltedPlane(double(seed % 20), 20 + int(seed) * 7, seed % 3 == 0 ? int(seed) : 0, seed);
+        gseg::PointMoments m;
+        gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
+        ASSERT_EQ(m.count, pts.size());
+        std::vector<std::uint8_t> in1, in2;
+        gseg::PlaneFitScratch s1, s2;
+        const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in1, s1, 30.0, 0.5);
+        const auto b = gseg::fitPlane(pts.data(), pts.size(), p, seed, in2, s2, 30.0, 0.5, &m);
+        ASSERT_EQ(a.valid, b.valid) << seed;
+        EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), sizeof(float) * 3), 0) << seed;
+        EXPECT_EQ(std::memcmp(&a.d, &b.d, sizeof(float)), 0) << seed;
+        EXPECT_EQ(a.numInliers, b.numInliers) << seed;
+        EXPECT_EQ(in1, in2) << seed;
+        allInliers += a.valid && a.numInliers == pts.size();
+    }
+    EXPECT_GE(allInliers, 10);  // the case the moments serve was met
+    // Moments of another point count are not taken; moments of these points are (zeroed, the refit
+    // finds no plane through them and RANSAC's plane stays).
+    const auto pts = tiltedPlane(5, 100, 0, 7);
+    gseg::PointMoments m;
+    gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
+    std::vector<std::uint8_t> in;
+    gseg::PlaneFitScratch s;
+    const auto ref = gseg::fitPlane(pts.data(), pts.size(), p, 7, in, s, 30.0, 0.5);
+    ASSERT_EQ(ref.numInliers, pts.size());
+    gseg::PointMoments other = m;
+    other.count = pts.size() - 1;
+    other.scatter.setZero();
+    const auto ignored = gseg::fitPlane(pts.data(), pts.size(), p, 7, in, s, 30.0, 0.5, &other);
+    EXPECT_EQ(std::memcmp(ref.normal.data(), ignored.normal.data(), sizeof(float) * 3), 0);
+    other.count = pts.size();
+    const auto taken = gseg::fitPlane(pts.data(), pts.size(), p, 7, in, s, 30.0, 0.5, &other);
+    EXPECT_NE(std::memcmp(ref.normal.data(), taken.normal.data(), sizeof(float) * 3), 0);
+}
+
 TEST(PlaneFit, DegenerateInputIsInvalid) {
     gseg::Params p;
     std::vector<std::uint8_t> in;
@@ -376,6 +446,47 @@ TEST(PlaneFit, DegenerateInputIsInvalid) {
 }
 
 // --- classification ----------------------------------------------------------------------------
+
+// detail::pointSum and detail::scatterMatrix (SSE2, or AVX2 where the CPU has it) against Eigen's
+// plain double sums in the points' order, bit for bit: every point, masked, one point, none, and
+// far from the origin (where a different order of the sums would show).
+TEST(CellClassifier, PointSumAndScatterMatrixEqualEigensSumsBitForBit) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    std::uniform_int_distribution<int> coin(0, 3);
+    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(17), std::size_t(250)}) {
+        for (float offset : {0.f, 70.f, -3000.f}) {
+            // The points end where the buffer ends: nothing past the last point may be read.
+            auto buffer = std::make_unique<Eigen::Vector3f[]>(std::max<std::size_t>(n, 1));
+            std::vector<std::uint8_t> mask(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                buffer[i] = Eigen::Vector3f(offset + 10 * u(rng), offset * 0.5f + u(rng), u(rng) * 0.1f);
+                mask[i] = coin(rng) != 0;
+            }
+            const Eigen::Vector3f* pts = buffer.get();
+            for (const std::uint8_t* m : {static_cast<const std::uint8_t*>(nullptr), static_cast<const std::uint8_t*>(mask.data())}) {
+                Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+                std::size_t count = 0;
+                for (std::size_t i = 0; i < n; ++i)
+                    if (!m || m[i]) sum += pts[i].cast<double>(), ++count;
+                const Eigen::Vector3d mean = count ? Eigen::Vector3d(sum / double(count)) : Eigen::Vector3d::Zero();
+                Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+                for (std::size_t i = 0; i < n; ++i) {
+                    if (m && !m[i]) continue;
+                    const Eigen::Vector3d d = pts[i].cast<double>() - mean;
+                    cov.noalias() += d * d.transpose();
+                }
+                std::size_t gotCount = 99;
+                const Eigen::Vector3d gotSum = gseg::detail::pointSum(pts, n, m, &gotCount);
+                const Eigen::Matrix3d gotCov = gseg::detail::scatterMatrix(pts, n, mean, m);
+                EXPECT_EQ(gotCount, count) << n;
+                EXPECT_EQ(std::memcmp(gotSum.data(), sum.data(), sizeof(double) * 3), 0) << n << " " << offset;
+                EXPECT_EQ(std::memcmp(gotCov.data(), cov.data(), sizeof(double) * 9), 0) << n << " " << offset << "\n"
+                                                                                        << gotCov - cov;
+            }
+        }
+    }
+}
 
 TEST(CellClassifier, LinePlaneClutterAndSmallCells) {
     gseg::Params p;

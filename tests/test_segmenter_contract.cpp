@@ -119,6 +119,26 @@ TEST(Contract, NonFinitePointsAreNonGroundCountedAndDoNotDisturbTheRest) {
     EXPECT_EQ(allBad.numGround, 0u);
 }
 
+TEST(Contract, NonFiniteTestReadsOnlyXyzWhateverTheStrideAndReachesTheLastPoint) {
+    // A KITTI-like layout (stride 16) whose fourth float is NaN everywhere: it is not a coordinate.
+    // Bad points in the last group of four and as the very last point.
+    const auto scan = busyScene();
+    const std::size_t n = scan.size();
+    std::vector<float> xyz = scan.xyz;
+    xyz[3 * (n - 5) + 1] = std::numeric_limits<float>::quiet_NaN();
+    xyz[3 * (n - 1) + 2] = std::numeric_limits<float>::infinity();
+    std::vector<float> xyzi(4 * n, std::numeric_limits<float>::quiet_NaN());
+    for (std::size_t i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a) xyzi[4 * i + a] = xyz[3 * i + a];
+    const gseg::Result packed = gseg::GroundSegmenter().segment(gseg::PointCloudView(xyz.data(), n));
+    const gseg::Result strided = gseg::GroundSegmenter().segment(gseg::PointCloudView(xyzi.data(), n, 16));
+    EXPECT_EQ(packed.numNonFinite, 2u);
+    EXPECT_EQ(strided.numNonFinite, 2u);
+    EXPECT_EQ(packed.labels, strided.labels);
+    EXPECT_EQ(strided.labels[n - 5], 0);
+    EXPECT_EQ(strided.labels[n - 1], 0);
+}
+
 TEST(Contract, AnotherHeightPerCallEqualsASegmenterMadeWithIt) {
     const auto scan = busyScene();
     gseg::Params p;

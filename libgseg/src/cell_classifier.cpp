@@ -1,15 +1,83 @@
 #include <gseg/cell_classifier.hpp>
 
+#include "cpu_features.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define GSEG_AVX2_FORMS 1
+#endif
 
 namespace gseg {
 
+#if defined(GSEG_AVX2_FORMS)
+namespace {
+// pointSum and scatterMatrix on CPUs with AVX2: a point's x, y, z in the lanes 0-2 of one register
+// of four doubles, each lane adding (and multiplying) what the SSE2 form's lane or scalar does, in
+// the points' order: the same values. (Lane 3 holds whatever follows a point and is never read.)
+// Point p as (x, y, z, *) in doubles: one 16-byte load where a point follows it (its x is the
+// fourth float), two loads for the last point (nothing may be read past it).
+__attribute__((target("avx2"))) inline __m256d loadFollowed(const float* p) { return _mm256_cvtps_pd(_mm_loadu_ps(p)); }
+__attribute__((target("avx2"))) inline __m256d loadLast(const float* p) {
+    const __m128 xy = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+    return _mm256_cvtps_pd(_mm_movelh_ps(xy, _mm_load_ss(p + 2)));
+}
+
+template <bool kMasked>
+__attribute__((target("avx2"))) Eigen::Vector3d pointSumAvx2(const Eigen::Vector3f* pts, std::size_t n,
+                                                               const std::uint8_t* mask, std::size_t& count) {
+    __m256d sum = _mm256_setzero_pd();
+    if (n == 0) return Eigen::Vector3d::Zero();
+    std::size_t m = 0;  // (a local: the caller's count would be stored per point)
+    for (std::size_t i = 0; i + 1 < n; ++i) {
+        if (kMasked && !mask[i]) continue;
+        sum = _mm256_add_pd(sum, loadFollowed(pts[i].data()));
+        ++m;
+    }
+    if (!kMasked || mask[n - 1]) sum = _mm256_add_pd(sum, loadLast(pts[n - 1].data())), ++m;
+    count = m;
+    alignas(32) double a[4];
+    _mm256_store_pd(a, sum);
+    return Eigen::Vector3d(a[0], a[1], a[2]);
+}
+
+template <bool kMasked>
+__attribute__((target("avx2"))) Eigen::Matrix3d scatterMatrixAvx2(const Eigen::Vector3f* pts, std::size_t n,
+                                                                    const Eigen::Vector3d& mean, const std::uint8_t* mask) {
+    const __m256d m = _mm256_set_pd(0.0, mean.z(), mean.y(), mean.x());
+    __m256d lower = _mm256_setzero_pd(), rest = _mm256_setzero_pd();  // (xx, yx, zx, *) and (yy, zy, zz, *)
+    // (dx dx, dy dx, dz dx, *) and (dy dy, dz dy, dz dz, *): d times lane 0, lanes (1, 2, 2) times lanes (1, 1, 2).
+    const auto add = [&](__m256d p) __attribute__((target("avx2"))) {
+        const __m256d d = _mm256_sub_pd(p, m);  // (dx, dy, dz, *)
+        lower = _mm256_add_pd(lower, _mm256_mul_pd(d, _mm256_permute4x64_pd(d, 0x00)));
+        rest = _mm256_add_pd(rest, _mm256_mul_pd(_mm256_permute4x64_pd(d, 0xE9), _mm256_permute4x64_pd(d, 0xE5)));
+    };
+    if (n == 0) return Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i + 1 < n; ++i)
+        if (!kMasked || mask[i]) add(loadFollowed(pts[i].data()));
+    if (!kMasked || mask[n - 1]) add(loadLast(pts[n - 1].data()));
+    alignas(32) double a[4], b[4];
+    _mm256_store_pd(a, lower), _mm256_store_pd(b, rest);
+    Eigen::Matrix3d out;
+    out << a[0], a[1], a[2], a[1], b[0], b[1], a[2], b[1], b[2];
+    return out;
+}
+}  // namespace
+#endif
+
 Eigen::Vector3d detail::pointSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask, std::size_t* count) {
     std::size_t m = 0;
+#if defined(GSEG_AVX2_FORMS)
+    if (cpuHasAvx2()) {
+        const Eigen::Vector3d sum = mask ? pointSumAvx2<true>(pts, n, mask, m) : pointSumAvx2<false>(pts, n, mask, m);
+        if (count) *count = m;
+        return sum;
+    }
+#endif
 #if defined(__SSE2__)
     __m128d xy = _mm_setzero_pd();
     double z = 0;
@@ -40,6 +108,9 @@ Eigen::Matrix3d detail::scatterMatrix(const Eigen::Vector3f* pts, std::size_t n,
                                       const std::uint8_t* mask) {
     // Element (r, c) sums d_r d_c in the points' order, as Eigen's outer product does; (c, r) is
     // the same product (multiplication commutes exactly), so only the lower triangle is summed.
+#if defined(GSEG_AVX2_FORMS)
+    if (cpuHasAvx2()) return mask ? scatterMatrixAvx2<true>(pts, n, mean, mask) : scatterMatrixAvx2<false>(pts, n, mean, mask);
+#endif
 #if defined(__SSE2__)
     const __m128d mxy = _mm_set_pd(mean.y(), mean.x());  // lanes (x, y)
     const __m128d mz = _mm_set_sd(mean.z());
@@ -77,8 +148,10 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     return classifyCell(pts, n, params, SlopeLimit(params));
 }
 
-CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope) {
+CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope,
+                                PointMoments* moments) {
     CellClassification out;
+    if (moments) moments->count = 0;
     if (n == 0) return out;
     Eigen::Vector3d mean = detail::pointSum(pts, n);
     mean /= double(n);
@@ -86,6 +159,7 @@ CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const
     if (n < std::size_t(params.minPointsPerCell)) return out;  // TooFewPoints
 
     Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean);
+    if (moments) moments->count = n, moments->mean = mean, moments->scatter = cov;
     cov /= double(n);
 
     if (n < std::size_t(params.minPointsForPca)) {

@@ -1,5 +1,7 @@
 #include <gseg/grid.hpp>
 
+#include "cpu_features.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -47,13 +49,35 @@ __attribute__((target("avx2"))) void cellCoordsAvx2(const float* v, std::size_t 
     }
     for (; k < n; ++k) divided(k);
 }
-const bool kAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2") != 0);
 }  // namespace
 #endif
 
+// lo = min(lo, v[k]) and hi = max(hi, v[k]) over k < n, in a loop that vectorises (inlined into
+// both forms of valueRange).
+__attribute__((always_inline)) inline void rangeLoop(const std::int32_t* v, std::size_t n, std::int32_t& lo,
+                                                     std::int32_t& hi) {
+    std::int32_t l = lo, h = hi;
+    for (std::size_t k = 0; k < n; ++k) l = std::min(l, v[k]), h = std::max(h, v[k]);
+    lo = l, hi = h;
+}
+#if defined(__GNUC__) && defined(__x86_64__)
+namespace {
+__attribute__((target("avx2"))) void rangeAvx2(const std::int32_t* v, std::size_t n, std::int32_t& lo, std::int32_t& hi) {
+    rangeLoop(v, n, lo, hi);  // eight lanes, one instruction each for min and max (SSE2 has neither)
+}
+}  // namespace
+#endif
+
+void valueRange(const std::int32_t* v, std::size_t n, std::int32_t& lo, std::int32_t& hi) {
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (cpuHasAvx2()) return rangeAvx2(v, n, lo, hi);
+#endif
+    rangeLoop(v, n, lo, hi);
+}
+
 void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out) {
 #if defined(__GNUC__) && defined(__x86_64__)
-    if (kAvx2) return cellCoordsAvx2(v, n, size, origin, out);
+    if (cpuHasAvx2()) return cellCoordsAvx2(v, n, size, origin, out);
 #endif
     for (std::size_t k = 0; k < n; ++k) out[k] = cellCoord(v[k], size, origin);
 }
@@ -173,14 +197,19 @@ private:
 };
 }  // namespace
 
-// The z cells of the points `indices` in their order, computed in loops that vectorise.
+// The z cells of the points `indices` in their order, computed in loops that vectorise (from
+// zOfIndices where the caller has their z at hand).
 void Grid::zCells(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
-                  const Eigen::Vector3f* pointsOfIndices, double sz, double originZ, std::vector<std::int32_t>& out) {
+                  const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices, double sz, double originZ,
+                  std::vector<std::int32_t>& out) {
     const std::size_t n = indices.size();
-    zs_.resize(n);
     out.resize(n);
-    for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
-    detail::cellCoords(zs_.data(), n, sz, originZ, out.data());
+    if (!zOfIndices) {
+        zs_.resize(n);
+        for (std::size_t k = 0; k < n; ++k) zs_[k] = pointsOfIndices ? pointsOfIndices[k].z() : cloud.z(indices[k]);
+        zOfIndices = zs_.data();
+    }
+    detail::cellCoords(zOfIndices, n, sz, originZ, out.data());
 }
 
 void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
@@ -203,13 +232,15 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
     }
     xy_.resize(2 * n);
+    z_.resize(n);
     forPoints([&](std::size_t b, std::size_t e) {
         // The coordinates gathered first, then the cells and the box in loops that vectorise.
         float* const xs = xy_.data();
         float* const ys = xy_.data() + n;
+        float* const zs = z_.data();
         for (std::size_t k = b; k < e; ++k) {
             const float* p = cloud.point(indices[k]);
-            xs[k] = p[0], ys[k] = p[1];
+            xs[k] = p[0], ys[k] = p[1], zs[k] = p[2];
         }
         std::int32_t* const cxs = coords_.data();
         std::int32_t* const cys = coords_.data() + n;
@@ -217,8 +248,8 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         detail::cellCoords(ys + b, e - b, sy, 0.0, cys + b);
         std::int32_t lx = std::numeric_limits<std::int32_t>::max(), ly = lx;
         std::int32_t hx = std::numeric_limits<std::int32_t>::min(), hy = hx;
-        for (std::size_t k = b; k < e; ++k) lx = std::min(lx, cxs[k]), hx = std::max(hx, cxs[k]);
-        for (std::size_t k = b; k < e; ++k) ly = std::min(ly, cys[k]), hy = std::max(hy, cys[k]);
+        detail::valueRange(cxs + b, e - b, lx, hx);
+        detail::valueRange(cys + b, e - b, ly, hy);
         std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
         box[0] = std::min(box[0], lx), box[2] = std::max(box[2], hx);
         box[1] = std::min(box[1], ly), box[3] = std::max(box[3], hy);
@@ -281,24 +312,26 @@ std::int32_t ColumnIndex::iy(std::uint32_t id) const {
 // done) where there would be too many keys.
 bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
                              const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
-                             const Eigen::Vector3f* pointsOfIndices) {
+                             const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
-    zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
+    zCells(cloud, indices, pointsOfIndices, zOfIndices, sz, originZ, izIn_);
     std::int32_t lo = izIn_[0], hi = izIn_[0];
-    for (std::size_t k = 1; k < n; ++k) lo = std::min(lo, izIn_[k]), hi = std::max(hi, izIn_[k]);
+    detail::valueRange(izIn_.data() + 1, n - 1, lo, hi);
     const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
     const std::uint64_t numKeys = range * numColumns;
     if (numKeys > 4 * std::uint64_t(n) + 65536 || numKeys >= (std::uint64_t(1) << 32)) return false;
     const std::uint32_t r = std::uint32_t(range);
     keys_.resize(n);
     counts_.assign(std::size_t(numKeys) + 1, 0);
-    for (std::size_t k = 0; k < n; ++k) {
-        const std::uint32_t key = columnOf[k] * r + std::uint32_t(izIn_[k] - lo);
-        keys_[k] = key;
-        ++counts_[key + 1];
-    }
-    for (std::size_t b = 1; b <= numKeys; ++b) counts_[b] += counts_[b - 1];
+    // The keys first (a loop that vectorises), then their counts.
+    std::uint32_t* const keys = keys_.data();
+    std::uint32_t* const counts = counts_.data();
+    const std::int32_t* const iz = izIn_.data();
+    for (std::size_t k = 0; k < n; ++k) keys[k] = columnOf[k] * r + std::uint32_t(iz[k] - lo);
+    for (std::size_t k = 0; k < n; ++k) ++counts[keys[k] + 1];
+    std::uint32_t sum = 0;  // the running sum in a register
+    for (std::size_t b = 1; b <= numKeys; ++b) sum += counts[b], counts[b] = sum;
     for (std::size_t k = 0; k < n; ++k) {
         const std::uint32_t at = counts_[keys_[k]]++;
         order_[at] = indices[k];
@@ -328,7 +361,7 @@ bool Grid::buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std:
 // build()'s stable sort by (ix, iy, iz).
 void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
                  const std::uint32_t* columnOf, double sz, double originZ,
-                 const Eigen::Vector3f* pointsOfIndices) {
+                 const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices) {
     const std::size_t n = indices.size();
     const std::uint32_t numColumns = columns.size();
     cells_.clear();
@@ -347,7 +380,7 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
         for (std::size_t k = b; k < e; ++k) down |= columnOf[k] < columnOf[k - 1] ? 1u : 0u;
         sorted = down == 0;
     }
-    if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices)) return;
+    if (!sorted && buildByColumnAndZ(cloud, indices, columns, columnOf, sz, originZ, pointsOfIndices, zOfIndices)) return;
     counts_.assign(std::size_t(numColumns) + 1, 0);
     if (!sorted) {
         for (std::size_t k = 0; k < n; ++k) ++counts_[columnOf[k] + 1];
@@ -373,12 +406,12 @@ void Grid::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& 
             for (std::size_t k = 0; k < n; ++k) byColumnPoints_[k] = pointOf(cloud, indices, nullptr, k);
             byColumnPoints = byColumnPoints_.data();
         }
-        zCells(cloud, indices, byColumnPoints, sz, originZ, iz_);
+        zCells(cloud, indices, byColumnPoints, zOfIndices, sz, originZ, iz_);
     } else {
         byColumn_.resize(n);
         byColumnPoints_.resize(n);
         // The z cells in the input's order first (vectorised), then carried along.
-        zCells(cloud, indices, pointsOfIndices, sz, originZ, izIn_);
+        zCells(cloud, indices, pointsOfIndices, zOfIndices, sz, originZ, izIn_);
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint32_t at = counts_[columnOf[k]]++;
             byColumn_[at] = indices[k];

@@ -8,6 +8,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -36,6 +40,42 @@ void checkCloud(const PointCloudView& cloud) {
 }
 
 bool finitePoint(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+
+// Writes the indices of the points of `cloud` whose x, y and z are finite, ascending, into
+// out[0..), which has room for every point; returns how many. (Written unconditionally, kept where
+// finite: no branch per point; in SSE2 four points are tested at once where a point follows the
+// fourth (each read as 16 bytes: x * 0 is NaN exactly where x is not finite), and only a group
+// holding a point that is not finite is tested point by point.)
+std::size_t finiteIndices(const PointCloudView& cloud, std::uint32_t* out) {
+    const std::uint32_t n = std::uint32_t(cloud.size());
+    std::size_t count = 0;
+    std::uint32_t i = 0;
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps();
+    const __m128i step = _mm_setr_epi32(0, 1, 2, 3);
+    for (; i + 4 < n; i += 4) {
+        const __m128 a = _mm_mul_ps(_mm_loadu_ps(cloud.point(i)), zero);
+        const __m128 b = _mm_mul_ps(_mm_loadu_ps(cloud.point(i + 1)), zero);
+        const __m128 c = _mm_mul_ps(_mm_loadu_ps(cloud.point(i + 2)), zero);
+        const __m128 d = _mm_mul_ps(_mm_loadu_ps(cloud.point(i + 3)), zero);
+        const __m128 any = _mm_add_ps(_mm_add_ps(a, b), _mm_add_ps(c, d));  // NaN in lane k: some point's coordinate k
+        if ((_mm_movemask_ps(_mm_cmpunord_ps(any, any)) & 7) == 0) {
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(out + count), _mm_add_epi32(_mm_set1_epi32(int(i)), step));
+            count += 4;
+            continue;
+        }
+        for (std::uint32_t k = i; k < i + 4; ++k) {
+            out[count] = k;
+            count += finitePoint(cloud.point(k)) ? 1 : 0;
+        }
+    }
+#endif
+    for (; i < n; ++i) {
+        out[count] = i;
+        count += finitePoint(cloud.point(i)) ? 1 : 0;
+    }
+    return count;
+}
 
 std::uint64_t cellSeed(std::uint64_t base, const GridCell& c, int phase) {
     std::uint64_t s = base ^ (std::uint64_t(std::uint32_t(c.ix)) * 0x9E3779B97F4A7C15ull);
@@ -69,6 +109,30 @@ std::pair<double, double> volumesPerPoint(const Eigen::Vector3f* pts, const std:
         return m == 0 ? 0.0 : double(box.volume()) / double(m);
     };
     return {perPoint(inMin, inMax, mIn), perPoint(outMin, outMax, mOut)};
+}
+
+// The sum of the points pts[0..n) whose mask is non-zero (mask null: every point), in float, in
+// the points' order: Eigen's `sum += p`, each coordinate in an SSE lane (the lane after z holds
+// whatever follows a point and is never read).
+Eigen::Vector3f floatSum(const Eigen::Vector3f* pts, std::size_t n, const std::uint8_t* mask) {
+#if defined(__SSE2__)
+    __m128 sum = _mm_setzero_ps();
+    for (std::size_t i = 0; i + 1 < n; ++i)  // a point follows: one 16-byte load
+        if (!mask || mask[i]) sum = _mm_add_ps(sum, _mm_loadu_ps(pts[i].data()));
+    if (n > 0 && (!mask || mask[n - 1])) {  // the last point: nothing past it is read
+        const float* p = pts[n - 1].data();
+        const __m128 xy = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+        sum = _mm_add_ps(sum, _mm_movelh_ps(xy, _mm_load_ss(p + 2)));
+    }
+    alignas(16) float a[4];
+    _mm_store_ps(a, sum);
+    return Eigen::Vector3f(a[0], a[1], a[2]);
+#else
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (std::size_t i = 0; i < n; ++i)
+        if (!mask || mask[i]) sum += pts[i];
+    return sum;
+#endif
 }
 
 // The z range of the points of one Phase I cell that Phase I did not accept.
@@ -121,6 +185,7 @@ struct detail::Workspace {
             body(std::size_t(0), n, 0u);
     }
     std::vector<CellState> cells;
+    std::vector<PointMoments> moments;  // per cell that the plane fit takes: its points' mean and scatter matrix (the classification's)
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
     std::vector<Eigen::Vector3f> centroids;    // candidate ground centroids (the expansion's points)
     // Per Phase I cell, in the grid's order (so by column id): the z range of its points Phase I
@@ -211,10 +276,11 @@ class Phase {
 public:
     Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings), slope_(p) {}
 
-    /// `inputPoints` (optional): the points of `input` in its order; `groundPoints` (optional)
+    /// `inputPoints` (optional): the points of `input` in its order; `inputZ` (optional): their z
+    /// likewise (Phase I: as the columns' numbering gathered them); `groundPoints` (optional)
     /// receives the points of `ground` likewise (Phase I hands them to Phase II).
     void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const std::uint32_t* inputColumns,
-             const Eigen::Vector3f* inputPoints, std::vector<std::uint32_t>& ground,
+             const Eigen::Vector3f* inputPoints, const float* inputZ, std::vector<std::uint32_t>& ground,
              std::vector<std::uint32_t>* groundColumns, std::vector<Eigen::Vector3f>* groundPoints,
              detail::Workspace& ws, PhaseReport& report, bool keepCells) {
         report.inputPoints = input.size();
@@ -223,7 +289,7 @@ public:
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
         ws.grid = &ws.phaseGrids[set_.number - 1];
-        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints);
+        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints, inputZ);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -242,6 +308,7 @@ private:
         const auto& pts = ws.grid->points();
         ws.inlier.assign(pts.size(), 0);
         ws.cells.assign(ws.grid->cells().size(), CellState());
+        ws.moments.resize(ws.cells.size());  // written for the cells the plane fit takes, read for those only
         // Cells are independent: each writes its own state and its own points' flags.
         ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
             for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
@@ -251,7 +318,9 @@ private:
     void classifyOne(detail::Workspace& ws, std::size_t c) const {
         const auto& pts = ws.grid->points();
         const GridCell& g = ws.grid->cells()[c];
-        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_);
+        PointMoments moments;
+        const CellClassification cls = classifyCell(&pts[g.begin], g.size(), p_, slope_, &moments);
+        if (cls.cellClass == CellClass::Plane && !cls.steepNormal) ws.moments[c] = moments;  // fitOne() takes them
         CellState& s = ws.cells[c];
         s.cellClass = cls.cellClass;
         s.outcome = cls.groundCandidate ? CellOutcome::NotReached : cls.rejection;
@@ -283,7 +352,8 @@ private:
             return;
         }
         const PlaneFitResult fit = fitPlane(&ws.grid->points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
-                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio);
+                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio,
+                                            &ws.moments[c]);
         if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
             s.outcome = CellOutcome::Steep;
             return;
@@ -292,9 +362,7 @@ private:
         const std::uint8_t* const mask = scratch.mask.data();
         const Eigen::Vector3f* const pts = ws.grid->points().data() + g.begin;
         std::copy(mask, mask + g.size(), ws.inlier.begin() + g.begin);
-        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        for (std::uint32_t i = 0; i < g.size(); ++i)
-            if (mask[i]) sum += pts[i];
+        const Eigen::Vector3f sum = fit.numInliers == g.size() ? floatSum(pts, g.size(), nullptr) : floatSum(pts, g.size(), mask);
         s.inliers = std::uint32_t(fit.numInliers);
         s.ground = sum / float(fit.numInliers);
         s.normal = fit.normal;
@@ -526,28 +594,61 @@ private:
         // plane and the point of the last point recovered.
         std::uint32_t inliers = 0, last = 0;
         int lastBest = 0;
-        for (std::uint32_t k = g.begin; k < g.end; ++k) {
-            const Eigen::Vector3f& q = pts[k];
-            // The plane of the neighbour whose ground centroid is horizontally nearest (the first
-            // of equals): (ground - q).head<2>().squaredNorm(), without a branch.
-            int best = 0;
-            float bestD = std::numeric_limits<float>::infinity();
-            for (int j = 0; j < count; ++j) {
-                const float dx = gx[j] - q.x(), dy = gy[j] - q.y();
-                const float d = dx * dx + dy * dy;
-                best = d < bestD ? j : best;
-                bestD = d < bestD ? d : bestD;
+        for (std::uint32_t k = g.begin; k < g.end;) {
+            // The plane of the neighbour whose ground centroid is horizontally nearest (up to four
+            // points at a time).
+            int best[4];
+            const std::uint32_t m = nearestCentroids(pts + k, std::min<std::uint32_t>(4, g.end - k), gx, gy, count, best);
+            for (std::uint32_t i = 0; i < m; ++i, ++k) {
+                const Eigen::Vector3f& q = pts[k];
+                const CellState& n = *nbs[best[i]];
+                const bool on = std::abs(n.normal.dot(q - n.ground)) <= thr;
+                inlier[k] = on;
+                inliers += on;
+                last = on ? k : last;
+                lastBest = on ? best[i] : lastBest;
             }
-            const CellState& n = *nbs[best];
-            const bool on = std::abs(n.normal.dot(q - n.ground)) <= thr;
-            inlier[k] = on;
-            inliers += on;
-            last = on ? k : last;
-            lastBest = on ? best : lastBest;
         }
         s.inliers = inliers;
         if (inliers > 0) s.normal = nbs[lastBest]->normal, s.ground = pts[last];
         s.recovered = inliers > 0;
+    }
+
+    // For each of the m (1 to 4) points q[0..m): the index j < count of the centroid (gx[j],
+    // gy[j]) horizontally nearest to it, the first of equals ((g - q).head<2>().squaredNorm() in
+    // float, compared strictly in j's order) into best[]; returns m. Four points at a time in
+    // SSE2 registers, each lane the scalar form's operations.
+    static std::uint32_t nearestCentroids(const Eigen::Vector3f* q, std::uint32_t m, const float* gx, const float* gy,
+                                          int count, int* best) {
+#if defined(__SSE2__)
+        if (m == 4) {
+            const __m128 qx = _mm_setr_ps(q[0].x(), q[1].x(), q[2].x(), q[3].x());
+            const __m128 qy = _mm_setr_ps(q[0].y(), q[1].y(), q[2].y(), q[3].y());
+            __m128 bestD = _mm_set1_ps(std::numeric_limits<float>::infinity());
+            __m128i bestJ = _mm_setzero_si128();
+            for (int j = 0; j < count; ++j) {
+                const __m128 dx = _mm_sub_ps(_mm_set1_ps(gx[j]), qx), dy = _mm_sub_ps(_mm_set1_ps(gy[j]), qy);
+                const __m128 d = _mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy));
+                const __m128i nearer = _mm_castps_si128(_mm_cmplt_ps(d, bestD));
+                bestJ = _mm_or_si128(_mm_and_si128(nearer, _mm_set1_epi32(j)), _mm_andnot_si128(nearer, bestJ));
+                bestD = _mm_min_ps(d, bestD);  // d < bestD ? d : bestD
+            }
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(best), bestJ);
+            return 4;
+        }
+#endif
+        for (std::uint32_t i = 0; i < m; ++i) {
+            int b = 0;
+            float bestD = std::numeric_limits<float>::infinity();
+            for (int j = 0; j < count; ++j) {
+                const float dx = gx[j] - q[i].x(), dy = gy[j] - q[i].y();
+                const float d = dx * dx + dy * dy;
+                b = d < bestD ? j : b;
+                bestD = d < bestD ? d : bestD;
+            }
+            best[i] = b;
+        }
+        return m;
     }
 
     std::int32_t reachedFromCell(const detail::Workspace& ws, std::size_t candidate) const {
@@ -612,25 +713,18 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     Result r;
 
     // Points with a NaN or infinite coordinate (no return) take no part; they are non-ground.
-    // (Written unconditionally, kept where finite: no branch per point.)
     ws.input.resize(cloud.size());
-    std::uint32_t* const input = ws.input.data();
-    std::size_t numFinite = 0;
-    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
-        input[numFinite] = i;
-        numFinite += finitePoint(cloud.point(i)) ? 1 : 0;
-    }
-    ws.input.resize(numFinite);
+    ws.input.resize(finiteIndices(cloud, ws.input.data()));
     r.numNonFinite = cloud.size() - ws.input.size();
     ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
 
     // Phase I: tall cells over the whole cloud, no height gate.
     Phase(params, PhaseSettings::first(params))
-        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.phase1Ground, &ws.phase1GroundColumns,
+        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.columns.z().data(), ws.phase1Ground, &ws.phase1GroundColumns,
              &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
     // Phase II: thin cells over Phase I's ground, with the height gate.
     Phase(params, PhaseSettings::second(params))
-        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), ws.phase2Ground,
+        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), nullptr, ws.phase2Ground,
              nullptr, nullptr, ws, r.phase2, keepCellDiagnostics);
 
     r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
@@ -640,12 +734,18 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     // Ours, not the paper's: reflections far below the ground (below_ground.hpp), the ground's
     // columns taken from Phase II's grid, still in the workspace (a ground cell holds its inliers).
     ws.groundColumns.clear();
+    // (Pointers at hand; a cell whose every point is an inlier takes no look at the flags.)
     const auto& cells = ws.grid->cells();
+    const Eigen::Vector3f* const pts = ws.grid->points().data();
+    const std::uint8_t* const inlier = ws.inlier.data();
     for (std::size_t c = 0; c < cells.size(); ++c) {
         if (ws.cells[c].outcome != CellOutcome::Ground) continue;
         float lowest = std::numeric_limits<float>::infinity();
-        for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
-            if (ws.inlier[k]) lowest = std::min(lowest, ws.grid->points()[k].z());
+        if (ws.cells[c].inliers == cells[c].size())
+            for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k) lowest = std::min(lowest, pts[k].z());
+        else
+            for (std::uint32_t k = cells[c].begin; k < cells[c].end; ++k)
+                lowest = inlier[k] ? std::min(lowest, pts[k].z()) : lowest;
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);

@@ -1,6 +1,8 @@
 #include <gseg/cell_classifier.hpp>
 #include <gseg/plane_fit.hpp>
 
+#include "cpu_features.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -8,36 +10,67 @@
 namespace gseg {
 namespace {
 
-// The points within `thr` of the plane n . p + d = 0 (n . p as Eigen's dot: n0 p0 + (n1 p1 + n2 p2),
-// so that the same points count as with Eigen::Vector3f); writes 1/0 per point into `mask` if given.
+// The points within `thr` of the plane n . p + d = 0 among x, y, z[0..n) (n . p as Eigen's dot:
+// n0 p0 + (n1 p1 + n2 p2), so that the same points count as with Eigen::Vector3f); with kMask,
+// writes 1/0 per point into `mask`. (Inlined into both forms below; the loop vectorises, each lane
+// the scalar operations.)
+template <bool kMask>
+__attribute__((always_inline)) inline std::size_t inliersOver(const float* x, const float* y, const float* z, std::size_t n,
+                                                              float nx, float ny, float nz, float d, float thr,
+                                                              std::uint8_t* mask) {
+    std::uint32_t count = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool in = std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + d) <= thr;
+        if (kMask) mask[i] = in;
+        count += in ? 1u : 0u;
+    }
+    return count;
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+// The same loop on CPUs with AVX2: eight points per operation instead of four (no fused
+// multiply-add: the same values).
+template <bool kMask>
+__attribute__((target("avx2"))) std::size_t inliersOverAvx2(const float* x, const float* y, const float* z, std::size_t n,
+                                                            float nx, float ny, float nz, float d, float thr,
+                                                            std::uint8_t* mask) {
+    return inliersOver<kMask>(x, y, z, n, nx, ny, nz, d, thr, mask);
+}
+#endif
+
+// The points of the scratch's x, y, z[0..n) within `thr` of the plane n . p + d = 0; writes 1/0
+// per point into `mask` if given.
 std::size_t markInliers(const PlaneFitScratch& s, std::size_t n, const Eigen::Vector3f& normal, float d, float thr,
                         std::uint8_t* mask) {
     const float nx = normal.x(), ny = normal.y(), nz = normal.z();
     const float* x = s.x.data();
     const float* y = s.y.data();
     const float* z = s.z.data();
-    if (mask) {
-        std::size_t count = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            const bool in = std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + d) <= thr;
-            mask[i] = in;
-            count += in;
-        }
-        return count;
-    }
-    std::uint32_t count = 0;
-    for (std::size_t i = 0; i < n; ++i) count += std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + d) <= thr ? 1u : 0u;
-    return count;
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (detail::cpuHasAvx2())
+        return mask ? inliersOverAvx2<true>(x, y, z, n, nx, ny, nz, d, thr, mask)
+                    : inliersOverAvx2<false>(x, y, z, n, nx, ny, nz, d, thr, mask);
+#endif
+    return mask ? inliersOver<true>(x, y, z, n, nx, ny, nz, d, thr, mask)
+                : inliersOver<false>(x, y, z, n, nx, ny, nz, d, thr, mask);
 }
 
-// Least-squares plane through the masked points: normal = smallest principal axis.
+// Least-squares plane through the masked points: normal = smallest principal axis. `all`
+// (optional): the moments of all n points, given where the mask holds every point (the masked
+// sums would add the same values in the same order).
 bool leastSquaresPlane(const Eigen::Vector3f* pts, std::size_t n, const std::vector<std::uint8_t>& mask,
-                       float thr, Eigen::Vector3f& normal, float& d) {
-    std::size_t m = 0;
-    Eigen::Vector3d mean = detail::pointSum(pts, n, mask.data(), &m);
-    if (m < 3) return false;
-    mean /= double(m);
-    const Eigen::Matrix3d cov = detail::scatterMatrix(pts, n, mean, mask.data());
+                       float thr, const PointMoments* all, Eigen::Vector3f& normal, float& d) {
+    std::size_t m = n;
+    Eigen::Vector3d mean;
+    Eigen::Matrix3d cov;
+    if (all) {
+        mean = all->mean, cov = all->scatter;
+    } else {
+        mean = detail::pointSum(pts, n, mask.data(), &m);
+        if (m < 3) return false;
+        mean /= double(m);
+        cov = detail::scatterMatrix(pts, n, mean, mask.data());
+    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     // Inliers spread less than the inlier distance across their main axis: a line, no plane.
@@ -89,7 +122,7 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
 
 PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
                         std::vector<std::uint8_t>& inlier, PlaneFitScratch& scratch, double maxSlopeDegrees,
-                        double minInlierRatio) {
+                        double minInlierRatio, const PointMoments* moments) {
     PlaneFitResult res;
     inlier.assign(n, 0);
     if (n < 3) return res;
@@ -142,10 +175,14 @@ PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params&
 
     // Least-squares refinement on the inliers; kept only if it is well defined (inliers not
     // collinear at the noise scale), within the slope limit, and does not lose inliers.
-    markInliers(scratch, n, bestN, bestD, thr, inlier.data());
+    if (best == n)
+        std::fill(inlier.begin(), inlier.end(), 1);  // the count over the same plane found every point in
+    else
+        markInliers(scratch, n, bestN, bestD, thr, inlier.data());
     Eigen::Vector3f refN;
     float refD;
-    if (leastSquaresPlane(pts, n, inlier, thr, refN, refD) && refN.z() >= minNz) {
+    const PointMoments* all = moments && moments->count == n && best == n ? moments : nullptr;
+    if (leastSquaresPlane(pts, n, inlier, thr, all, refN, refD) && refN.z() >= minNz) {
         std::vector<std::uint8_t>& refMask = scratch.mask;
         refMask.resize(n);
         const std::size_t refCount = markInliers(scratch, n, refN, refD, thr, refMask.data());

@@ -32,8 +32,20 @@ struct SlopeLimit {
     explicit SlopeLimit(const Params& params);
 };
 
-/// The same with the slope limit's sine and cosine given (the segmenter computes them once per scan).
-CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope);
+/// The mean and the scatter matrix of a cell's points, as the classification computes them (the
+/// plane fit's least-squares pass takes them where its inliers are all the cell's points: the same
+/// sums in the same order, so it need not sum them again).
+struct PointMoments {
+    std::size_t count = 0;                                  ///< [points] how many points they cover (0: none computed)
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();         ///< [m] detail::pointSum of the points / count
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();      ///< [m^2] detail::scatterMatrix about `mean` (not divided by count)
+};
+
+/// The same with the slope limit's sine and cosine given (the segmenter computes them once per
+/// scan); `moments` (optional) receives the points' mean and scatter matrix where they were
+/// computed (at least Params::minPointsPerCell points; otherwise its count is 0).
+CellClassification classifyCell(const Eigen::Vector3f* pts, std::size_t n, const Params& params, const SlopeLimit& slope,
+                                PointMoments* moments = nullptr);
 
 namespace detail {
 /// The sum of the points `pts[0..n)` whose `mask` is non-zero (mask null: every point), in double,

@@ -31,6 +31,8 @@ namespace detail {
 /// out[k] = cellCoord(v[k], size, origin) for k < n, in loops that vectorise (AVX2 where the CPU
 /// has it, checked once): the same values.
 void cellCoords(const float* v, std::size_t n, double size, double origin, std::int32_t* out);
+/// lo = min(lo, v[k]), hi = max(hi, v[k]) for k < n (AVX2 where the CPU has it).
+void valueRange(const std::int32_t* v, std::size_t n, std::int32_t& lo, std::int32_t& hi);
 }  // namespace detail
 
 /// One occupied cell: its index and the range [begin, end) of its points in Grid::order().
@@ -71,6 +73,9 @@ public:
     std::int64_t loX() const { return lo_[0]; }
     std::int64_t loY() const { return lo_[1]; }
     std::int64_t extentY() const { return extY_; }
+    /// [m] The z of each point of the last build()'s `indices`, in their order (gathered with
+    /// their x and y: Phase I's grid takes them from here instead of the cloud).
+    const std::vector<float>& z() const { return z_; }
 
 private:
     std::int64_t findSparse(std::int32_t ix, std::int32_t iy) const;
@@ -82,6 +87,7 @@ private:
     std::vector<std::uint64_t> keys_;    // sparse ids: sorted keys of the occupied columns
     std::vector<std::int32_t> coords_;   // ix of every input position, then iy of every one (scratch)
     std::vector<float> xy_;              // [m] x of every input position, then y of every one (scratch)
+    std::vector<float> z_;               // [m] z of every input position (z())
     std::vector<std::int32_t> bounds_;   // per chunk of points: their columns' bounding box (scratch)
 };
 
@@ -99,10 +105,11 @@ public:
     /// columns' sizes: points are binned per column and only their z cell is computed here. Also
     /// fills points(), columnCells() and cellColumns().
     /// `pointsOfIndices`, if given, holds the points of `indices` in their order (a copy the caller
-    /// has at hand, read sequentially instead of the cloud).
+    /// has at hand, read sequentially instead of the cloud); `zOfIndices`, if given, their z
+    /// coordinates [m] in their order (as ColumnIndex::z() keeps them).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, const ColumnIndex& columns,
                const std::uint32_t* columnOf, double sz, double originZ = 0.0,
-               const Eigen::Vector3f* pointsOfIndices = nullptr);
+               const Eigen::Vector3f* pointsOfIndices = nullptr, const float* zOfIndices = nullptr);
 
     const std::vector<GridCell>& cells() const { return cells_; }
     /// [m] The points (x, y, z) aligned with order() (filled by the ColumnIndex form of build()).
@@ -119,10 +126,11 @@ private:
     // The ColumnIndex form's single counting sort by (column, z cell) where the keys are few;
     // false: not done.
     void zCells(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
-                const Eigen::Vector3f* pointsOfIndices, double sz, double originZ, std::vector<std::int32_t>& out);
+                const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices, double sz, double originZ,
+                std::vector<std::int32_t>& out);
     bool buildByColumnAndZ(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices,
                            const ColumnIndex& columns, const std::uint32_t* columnOf, double sz, double originZ,
-                           const Eigen::Vector3f* pointsOfIndices);
+                           const Eigen::Vector3f* pointsOfIndices, const float* zOfIndices);
 
     std::vector<GridCell> cells_;
     std::vector<std::uint32_t> order_;

@@ -2,6 +2,7 @@
 /// \file plane_fit.hpp
 /// Seeded, adaptive RANSAC plane fit with least-squares refinement (paper step 3).
 
+#include <gseg/cell_classifier.hpp>
 #include <gseg/params.hpp>
 
 #include <Eigen/Core>
@@ -42,9 +43,12 @@ struct PlaneFitScratch {
 };
 
 /// The same, allocating nothing once `scratch` (and `inlier`) have grown to the largest cell.
+/// `moments` (optional): the mean and scatter matrix of all n points as classifyCell() computed
+/// them (count n); where RANSAC's best plane holds every point, the least-squares refit takes them
+/// instead of summing the same points again (the same values, bit for bit).
 PlaneFitResult fitPlane(const Eigen::Vector3f* pts, std::size_t n, const Params& params, std::uint64_t seed,
                         std::vector<std::uint8_t>& inlier, PlaneFitScratch& scratch, double maxSlopeDegrees = 90.0,
-                        double minInlierRatio = 0.0);
+                        double minInlierRatio = 0.0, const PointMoments* moments = nullptr);
 
 /// Angle [deg] between a unit normal and the z axis (0 = horizontal plane).
 double planeSlopeDegrees(const Eigen::Vector3f& normal);
