@@ -117,6 +117,35 @@ TEST(EvalTool, SingleScanMode) {
     EXPECT_NE(out.find("1 frames evaluated, 0 skipped"), std::string::npos) << out;
 }
 
+// --ring-step / --point-step: the frame scored (and its predictions) is the thinned scan of
+// gseg::io::kittiThinned, and absurd steps are usage errors.
+TEST(EvalTool, ThinnedScansScoreTheKeptPointsOnly) {
+    const std::string scan = gseg::test::sharedData("semantickitti/sequences/08/velodyne/000000.bin");
+    const std::string label = gseg::test::sharedData("semantickitti/sequences/08/labels/000000.label");
+    if (scan.empty() || label.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/08");
+    const std::vector<float> pts = gseg::io::readKittiBin(scan);
+    const std::size_t kept = gseg::io::kittiThinned(pts.data(), pts.size() / 4, 2, 3).size();
+    ASSERT_GT(kept, pts.size() / 4 / 8);
+    ASSERT_LT(kept, pts.size() / 4 / 5);
+    const fs::path dir = kDir / "thinned";
+    fs::remove_all(dir);
+    int status = -1;
+    const std::string out = runGseg("eval", "--scan '" + scan + "' --labels '" + label + "' --ring-step 2 --point-step 3 "
+                                    "--report '" + (dir / "r").string() + "' --labels-out-dir '" + (dir / "pred").string() + "'",
+                                    status);
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("thinned: --ring-step 2, --point-step 3"), std::string::npos) << out;
+    const std::string csv = slurp(dir / "r_frames.csv");
+    const std::string row = csv.substr(csv.find('\n') + 1);
+    EXPECT_EQ(row.rfind("scan,000000," + std::to_string(kept) + ",", 0), 0u) << csv;
+    EXPECT_EQ(fs::file_size(dir / "pred" / "scan_000000.pred"), kept);
+    for (const char* bad : {"--ring-step 0", "--ring-step 65", "--point-step 0"}) {
+        const std::string msg = runGseg("eval", "--scan '" + scan + "' --labels '" + label + "' " + bad, status);
+        EXPECT_EQ(status, 2) << bad << ": " << msg;
+        EXPECT_NE(msg.find("--ring-step and --point-step take 1..64"), std::string::npos) << msg;
+    }
+}
+
 TEST(EvalTool, BadTrees) {
     int status = -1;
     fs::remove_all(kDir / "bad");

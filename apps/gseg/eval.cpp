@@ -42,6 +42,8 @@ struct Setup {
     std::string predDir;      ///< write each frame's predictions here ("" = not)
     bool breakdown = false;   ///< count where the errors are
     std::string pictureDir;   ///< breakdown picture per frame here ("" = none)
+    unsigned ringStep = 1;    ///< score every ringStep-th laser ring only (a sparser sensor)
+    unsigned pointStep = 1;   ///< ... and every pointStep-th point along the rings
 };
 
 /// The frames found, and one line per sequence that gave none although asked for (or could not be
@@ -135,9 +137,10 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
         return out;
     }
     try {
-        const std::vector<float> pts = io::readKittiBin(f.scan);
+        std::vector<float> pts = io::readKittiBin(f.scan);
+        std::vector<std::uint32_t> labels = io::readKittiLabels(f.label, pts.size() / 4);
+        if (setup.ringStep > 1 || setup.pointStep > 1) io::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);
         const PointCloudView cloud(pts.data(), pts.size() / 4, 4 * sizeof(float));
-        const std::vector<std::uint32_t> labels = io::readKittiLabels(f.label, cloud.size());
         std::string note;
         if (warmUp) seg.segment(cloud, note);
         const Result r = seg.segment(cloud, note);
@@ -237,6 +240,7 @@ struct Cli {
     int threads = 1;
     bool breakdown = false;
     bool overwrite = false;  ///< -w
+    int ringStep = 1, pointStep = 1;
 };
 
 Setup makeSetup(const Cli& cli) {
@@ -252,6 +256,7 @@ Setup makeSetup(const Cli& cli) {
                   mrpt::toYaml(cfg).c_str());
     setup.predDir = cli.predDir;
     setup.breakdown = cli.breakdown;
+    setup.ringStep = unsigned(cli.ringStep), setup.pointStep = unsigned(cli.pointStep);
     if (cli.breakdown && !cli.report.empty()) setup.pictureDir = cli.report + "_breakdown";
     return setup;
 }
@@ -322,6 +327,8 @@ int run(const Cli& cli, tools::Ranks& ranks) {
                      results[i].skipped.c_str());
     }
     tools::say("%zu frames evaluated, %zu skipped", rows.size(), frames.size() - rows.size());
+    if (cli.ringStep > 1 || cli.pointStep > 1)
+        tools::say(" (thinned: --ring-step %d, --point-step %d)", cli.ringStep, cli.pointStep);
     if (!sequenceProblems.empty()) tools::say(", %zu sequence(s) without frames (named above)", sequenceProblems.size());
     if (setup.autoHeight) tools::say(", %zu without a height estimate (fallback used)", fallbacks);
     tools::say("\n");
@@ -393,15 +400,23 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
                                "labelled ground and range, missed ground by class and range, per frame and "
                                "sequence; with --report also PREFIX_breakdown.csv and a top-down PNG per frame "
                                "(true / false / missed ground) in PREFIX_breakdown/", cmd, false);
+    TCLAP::ValueArg<int> ringStep("", "ring-step", "score each scan with only every Nth laser ring, as a sensor with N "
+                                  "times fewer beams would see it (1-64; rings found from the order KITTI stores its "
+                                  "points in, one azimuth sweep after another; --labels-out-dir then holds the kept "
+                                  "points' predictions)", false, 1, "N", cmd);
+    TCLAP::ValueArg<int> pointStep("", "point-step", "... and only every Nth point along the rings (1-64: a coarser "
+                                   "azimuth step)", false, 1, "N", cmd);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     ranks.setTimeout("gseg eval", line.mpiTimeout());
     if (!input.getValue().empty() && !root.getValue().empty())
         return line.usageError("give the root once: -i ROOT (or the old form, gseg eval ROOT)");
     cli = {input.getValue().empty() ? root.getValue() : input.getValue(), scan.getValue(), labels.getValue(),
            cfg.getValue(), report.getValue(), preds.getValue(), splitCommas(seqs.getValue()), threads.getValue(),
-           breakdown.getValue(), line.overwrite()};
+           breakdown.getValue(), line.overwrite(), ringStep.getValue(), pointStep.getValue()};
     if (cli.root.empty() == cli.scan.empty() || cli.threads < 1 || cli.threads > 256)
         return line.usageError("give either -i ROOT or --scan X.bin --labels X.label, and --threads 1..256");
+    if (cli.ringStep < 1 || cli.ringStep > 64 || cli.pointStep < 1 || cli.pointStep > 64)
+        return line.usageError("--ring-step and --point-step take 1..64");
     try {
         return run(cli, ranks);
     } catch (const std::exception& e) {
