@@ -30,9 +30,9 @@ std::vector<std::uint32_t> parseKittiLabels(const std::uint8_t* data, std::size_
 /// The laser ring of each point of a KITTI velodyne scan, numbered from 0 in file order, found from
 /// the order the points are stored in: ring by ring, each ring sweeping once round in azimuth
 /// (counter-clockwise, atan2(y, x) rising). A new ring begins where the azimuth falls back by more
-/// than half a turn, if the ring before holds at least `minRingPoints` points (the few points right
+/// than half a turn, if the ring before holds more than `minRingPoints` points (the few points right
 /// behind the sensor jitter across the wrap; an HDL-64E ring holds 1,000-2,200 points). A point
-/// with a non-finite x or y never begins a ring. `xyzi`: 4 floats per point (x, y, z, intensity).
+/// with a non-finite x or y, and the point after it, never begin a ring. `xyzi`: 4 floats per point (x, y, z, intensity).
 std::vector<std::uint32_t> kittiRings(const float* xyzi, std::size_t points, std::size_t minRingPoints = 600);
 
 /// The points of a sparser sensor's scan taken out of a KITTI scan: the indices, in file order, of
