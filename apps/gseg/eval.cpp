@@ -139,7 +139,7 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
     try {
         std::vector<float> pts = io::readKittiBin(f.scan);
         std::vector<std::uint32_t> labels = io::readKittiLabels(f.label, pts.size() / 4);
-        if (setup.ringStep > 1 || setup.pointStep > 1) io::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);
+        io::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);  // (1, 1: as read)
         const PointCloudView cloud(pts.data(), pts.size() / 4, 4 * sizeof(float));
         std::string note;
         if (warmUp) seg.segment(cloud, note);

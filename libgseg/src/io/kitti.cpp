@@ -98,6 +98,7 @@ void thinKittiScan(std::vector<float>& xyzi, std::vector<std::uint32_t>& labels,
     if (xyzi.size() != 4 * labels.size())
         throw std::invalid_argument("thinKittiScan: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(xyzi.size() / 4) + " points");
+    if (ringStep == 1 && pointStep == 1) return;  // every point kept (0 is refused below)
     const std::vector<std::size_t> kept = kittiThinned(xyzi.data(), labels.size(), ringStep, pointStep);
     for (std::size_t k = 0; k < kept.size(); ++k) {
         for (std::size_t c = 0; c < 4; ++c) xyzi[4 * k + c] = xyzi[4 * kept[k] + c];
