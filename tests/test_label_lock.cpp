@@ -1,5 +1,5 @@
 // The label lock (issue #21): the segmenter's labels, byte for byte, on every shared labelled scan
-// (semantickitti, semantickitti-extra, the 30 frames of semantickitti-drives), on mrpt-common's
+// (semantickitti, semantickitti-extra, the 40 frames of semantickitti-drives), on mrpt-common's
 // VLP-16 rawlog scan and on every simulated scene of tests/support/scenes.cpp, each with a fixed
 // and with an estimated (`distToGround: auto`) sensor height, each with 1, 2 and 3 threads
 // (Params::threads: the labels must not depend on the count), against the golden FNV-1a 64 hashes
@@ -127,7 +127,7 @@ std::ostream* writeTarget(std::ofstream& file) {
 TEST(LabelLock, SharedLabelledScansFixedAndAutoHeight) {
     const auto scans = sharedScans();
     if (scans.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences");
-    EXPECT_EQ(scans.size(), 50u) << "the shared data holds 50 labelled scans (4 + 16 + 30)";
+    EXPECT_EQ(scans.size(), 60u) << "the shared data holds 60 labelled scans (4 + 16 + 40: four drives of 10)";
     const auto golden = readGolden();
     std::ofstream file;
     std::ostream* write = writeTarget(file);

@@ -69,7 +69,7 @@ std::string simulatedSequence(const std::string& dir, double height = 1.723) {
 }
 
 const char* const kSuffixes[] = {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png",
-                                 "_traversability.ply", "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"};
+                                 "_traversability.ply", "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png", "_layer_source.png"};
 
 /// kitti2rawlog of the first scan of simulatedSequence(dir/seq): dir/seq.rawlog and dir/seq.simplemap.
 gseg::test::CommandResult simulatedSimplemap(const std::string& dir) {

@@ -292,7 +292,9 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
         {"clampMin", "0.1"},   {"clampMax", "0.95"}, {"occupancyThreshold", "0.6"}, {"clearance", "2.5"},
         {"minGroundPoints", "4"}, {"maxSlope", "15"}, {"maxStep", "0.3"}, {"maxRoughness", "0.15"},
         {"maxGroundRise", "0.5"}, {"groundRiseRadius", "1.2"}, {"obstacleClearProbability", "0.2"},
-        {"minObstacleHeight", "0.25"}};
+        {"minObstacleHeight", "0.25"}, {"driveTerrain", "false"}, {"terrainTolerance", "0.08"}, {"terrainRadius", "1.5"},
+        {"terrainMinScans", "3"}, {"terrainPointTolerance", "0.04"}, {"terrainStandHeight", "0.4"}, {"fillGaps", "false"},
+        {"maxGapWidth", "1"}};
     ASSERT_EQ(heightValues.size(), gseg::SensorHeightOptions::keys().size());
     ASSERT_EQ(mapValues.size(), gseg::map::TraversabilityOptions::keys().size());
     for (const auto& key : gseg::SensorHeightOptions::keys()) {
@@ -315,7 +317,8 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
         EXPECT_EQ(a.sensorHeight.get(key), b.sensorHeight.get(key)) << key;
     }
     for (const auto& [key, value] : mapValues) {
-        EXPECT_DOUBLE_EQ(std::stod(a.traversability.get(key)), std::stod(value)) << key;
+        if (value == "true" || value == "false") EXPECT_EQ(a.traversability.get(key), value) << key;
+        else EXPECT_DOUBLE_EQ(std::stod(a.traversability.get(key)), std::stod(value)) << key;
         EXPECT_EQ(a.traversability.get(key), b.traversability.get(key)) << key;
     }
     // toYaml writes both maps, and reads back to the same configuration.

@@ -336,13 +336,19 @@ TEST(TerrainLayers, ScanUpdateCarriesGroundCellsThroughItsBytes) {
     EXPECT_FLOAT_EQ(shared.minZ, -0.02f);
     EXPECT_FLOAT_EQ(shared.maxZ, 0.02f);
     const std::string bytes = gseg::map::serializeScanUpdate(u);
-    EXPECT_EQ(bytes.substr(0, 4), "GSU2");
+    EXPECT_EQ(bytes.substr(0, 4), "GSU3");
     EXPECT_TRUE(gseg::map::deserializeScanUpdate(bytes) == u);
-    // Version 1 (no ground cells) is still read; a cut list is refused.
-    gseg::map::ScanUpdate v1 = u;
+    EXPECT_FALSE(u.terrain.empty());  // the terrain model's samples (#31) travel too
+    // Versions 2 (no terrain samples) and 1 (no ground cells either) are still read; a cut list is refused.
+    gseg::map::ScanUpdate v2 = u;
+    v2.terrain.clear();
+    std::string older = gseg::map::serializeScanUpdate(v2);
+    older = "GSU2" + older.substr(4, older.size() - 4 - 1);  // without the (empty) terrain list
+    EXPECT_TRUE(gseg::map::deserializeScanUpdate(older) == v2);
+    gseg::map::ScanUpdate v1 = v2;
     v1.groundCells.clear();
     std::string old = gseg::map::serializeScanUpdate(v1);
-    old = "GSU1" + old.substr(4, old.size() - 4 - 1);  // without the (empty) ground-cell list
+    old = "GSU1" + old.substr(4, old.size() - 4 - 2);  // without the (empty) ground-cell and terrain lists
     EXPECT_TRUE(gseg::map::deserializeScanUpdate(old) == v1);
     EXPECT_THROW(gseg::map::deserializeScanUpdate(bytes.substr(0, bytes.size() - 3)), std::runtime_error);
 }

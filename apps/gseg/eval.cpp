@@ -12,6 +12,8 @@
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/ordered_pipeline.hpp>
+#include <gseg/map/poses.hpp>
+#include <gseg/terrain_model.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -44,6 +46,7 @@ struct Setup {
     std::string pictureDir;   ///< breakdown picture per frame here ("" = none)
     unsigned ringStep = 1;    ///< score every ringStep-th laser ring only (a sparser sensor)
     unsigned pointStep = 1;   ///< ... and every pointStep-th point along the rings
+    map::TraversabilityOptions traversability;  ///< the drive context's terrain model options (traversability:)
 };
 
 /// The frames found, and one line per sequence that gave none although asked for (or could not be
@@ -234,6 +237,136 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
     return results;
 }
 
+/// Drive context (#31): the frames of a sequence that is a drive (poses.txt and calib.txt with
+/// Tr beside velodyne/) scored again with the labels TerrainModel::relabel() gives them, the model
+/// built from every frame of the drive (the offline form: pass 1 segments every frame and adds its
+/// samples in frame order, pass 2 segments each frame again and relabels it). The same frames,
+/// segmentation and thinning as the scores alone.
+struct DriveContext {
+    std::string sequence;
+    std::vector<FrameRow> alone, withContext;
+    std::size_t relabelled = 0;       ///< points turned ground, all frames
+    std::size_t anchors = 0, grown = 0;  ///< cells of the model
+    std::string skipped;               ///< why the sequence has no context figures ("" if it has)
+};
+
+/// The frames' world poses (Tr^-1 P_k Tr) by frame number, or throws naming the file.
+std::vector<Eigen::Isometry3d> drivePoses(const fs::path& seq) {
+    return map::kittiToVelodyneFrame(map::readKittiPoses((seq / "poses.txt").string()),
+                                     map::readKittiCalibTr((seq / "calib.txt").string()));
+}
+
+/// One frame segmented, in the world frame: its points (x, y, z), labels and segmentation.
+struct WorldFrame {
+    std::vector<float> xyz;
+    std::vector<std::uint32_t> truth;
+    std::vector<std::uint8_t> labels;
+    std::vector<float> sensorXyzi;  ///< as read (and thinned): what scoreFrame() scores
+};
+
+WorldFrame segmentInWorld(FrameSegmenter& seg, const Frame& f, const Setup& setup, const Eigen::Isometry3d& pose) {
+    WorldFrame w;
+    w.sensorXyzi = io::readKittiBin(f.scan);
+    w.truth = io::readKittiLabels(f.label, w.sensorXyzi.size() / 4);
+    io::thinKittiScan(w.sensorXyzi, w.truth, setup.ringStep, setup.pointStep);
+    const PointCloudView cloud(w.sensorXyzi.data(), w.sensorXyzi.size() / 4, 4 * sizeof(float));
+    std::string note;
+    w.labels = seg.segment(cloud, note).labels;
+    w.xyz.resize(3 * cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Eigen::Vector3d p = pose * Eigen::Vector3d(cloud.x(i), cloud.y(i), cloud.z(i));
+        w.xyz[3 * i] = float(p.x()), w.xyz[3 * i + 1] = float(p.y()), w.xyz[3 * i + 2] = float(p.z());
+    }
+    return w;
+}
+
+DriveContext driveContext(const fs::path& seq, const std::vector<const Frame*>& frames, const std::vector<FrameRow>& alone,
+                          const Setup& setup, const map::TraversabilityOptions& traversability) {
+    DriveContext out;
+    out.sequence = frames.front()->sequence;
+    std::vector<Eigen::Isometry3d> poses;
+    try {
+        poses = drivePoses(seq);
+    } catch (const std::exception& e) {
+        out.skipped = e.what();
+        return out;
+    }
+    std::vector<std::size_t> index;
+    for (const Frame* f : frames) {
+        std::size_t k = 0;
+        try {
+            k = std::stoul(f->name);
+        } catch (const std::exception&) {
+            k = poses.size();
+        }
+        if (k >= poses.size()) {
+            out.skipped = "frame " + f->name + " has no line in " + (seq / "poses.txt").string();
+            return out;
+        }
+        index.push_back(k);
+    }
+    FrameSegmenter seg(setup);
+    gseg::TerrainModel model(traversability.terrainOptions());
+    auto samplesOf = [&](const WorldFrame& w, const Eigen::Vector3d& origin) {
+        std::vector<float> ground, other;
+        for (std::size_t i = 0; i < w.labels.size(); ++i)
+            (w.labels[i] ? ground : other).insert((w.labels[i] ? ground : other).end(), &w.xyz[3 * i], &w.xyz[3 * i] + 3);
+        return gseg::terrainSamples(PointCloudView(ground.data(), ground.size() / 3), PointCloudView(other.data(), other.size() / 3),
+                                    traversability.resolution, traversability.maxRange, origin);
+    };
+    for (std::size_t j = 0; j < frames.size(); ++j) {
+        const Eigen::Isometry3d& pose = poses[index[j]];
+        model.add(samplesOf(segmentInWorld(seg, *frames[j], setup, pose), pose.translation()));
+    }
+    model.build();
+    out.anchors = model.anchors(), out.grown = model.grown();
+    for (std::size_t j = 0; j < frames.size(); ++j) {
+        WorldFrame w = segmentInWorld(seg, *frames[j], setup, poses[index[j]]);
+        out.relabelled += model.relabel(PointCloudView(w.xyz.data(), w.xyz.size() / 3), w.labels);
+        FrameRow row = alone[j];
+        row.score = scoreFrame(PointCloudView(w.sensorXyzi.data(), w.sensorXyzi.size() / 4, 4 * sizeof(float)), w.truth, w.labels);
+        out.alone.push_back(alone[j]);
+        out.withContext.push_back(row);
+    }
+    return out;
+}
+
+/// Mean precision, recall and F1 [%] over frames (with vegetation, the benchmark's protocol).
+std::string meanScores(const std::vector<FrameRow>& rows) {
+    double p = 0, r = 0, f = 0;
+    for (const FrameRow& row : rows)
+        p += row.score.withVegetation.precision(), r += row.score.withVegetation.recall(), f += row.score.withVegetation.f1();
+    const double n = double(std::max<std::size_t>(1, rows.size()));
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%6.2f %6.2f %6.2f", p / n, r / n, f / n);
+    return buf;
+}
+
+/// The drive-context table: each drive alone and with its context, and the mean over their frames.
+std::string driveContextText(const std::vector<DriveContext>& drives) {
+    std::string out = "\ndrive context (the terrain model of each drive's frames, #31; mean over frames, P / R / F1 %):\n";
+    out += "sequence  frames   alone: P      R      F1  | with the drive: P    R      F1  | points relabelled, model cells (anchors + grown)\n";
+    std::vector<FrameRow> allAlone, allWith;
+    char line[256];
+    for (const DriveContext& d : drives) {
+        if (!d.skipped.empty()) {
+            out += d.sequence + ": no drive context: " + d.skipped + "\n";
+            continue;
+        }
+        std::snprintf(line, sizeof line, "%-8s %7zu  %s  |   %s  | %zu, %zu + %zu\n", d.sequence.c_str(), d.alone.size(),
+                      meanScores(d.alone).c_str(), meanScores(d.withContext).c_str(), d.relabelled, d.anchors, d.grown);
+        out += line;
+        allAlone.insert(allAlone.end(), d.alone.begin(), d.alone.end());
+        allWith.insert(allWith.end(), d.withContext.begin(), d.withContext.end());
+    }
+    if (!allAlone.empty()) {
+        std::snprintf(line, sizeof line, "%-8s %7zu  %s  |   %s\n", "all", allAlone.size(), meanScores(allAlone).c_str(),
+                      meanScores(allWith).c_str());
+        out += line;
+    }
+    return out;
+}
+
 struct Cli {
     std::string root, scan, labels, config, report, predDir;
     std::vector<std::string> sequences;
@@ -241,6 +374,7 @@ struct Cli {
     bool breakdown = false;
     bool overwrite = false;  ///< -w
     int ringStep = 1, pointStep = 1;
+    bool driveContext = true;  ///< score drives (poses.txt + calib.txt) with their terrain model too
 };
 
 Setup makeSetup(const Cli& cli) {
@@ -252,6 +386,7 @@ Setup makeSetup(const Cli& cli) {
         throw std::runtime_error(e.what());
     }
     setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto, setup.sensorHeight = cfg.sensorHeight;
+    setup.traversability = cfg.traversability;
     tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
     setup.predDir = cli.predDir;
@@ -337,6 +472,20 @@ int run(const Cli& cli, tools::Ranks& ranks) {
     const std::string table = markdownTable(seqs);
     tools::say("%s\n%s", summaryText(seqs).c_str(), table.c_str());
     if (cli.breakdown) tools::say("\n%s", breakdownText(seqs).c_str());
+    if (cli.driveContext && cli.scan.empty()) {
+        std::vector<DriveContext> drives;
+        for (std::size_t i = 0; i < frames.size();) {  // frames are sorted by sequence
+            std::vector<const Frame*> seqFrames;
+            std::vector<FrameRow> alone;
+            const std::string& name = frames[i].sequence;
+            for (; i < frames.size() && frames[i].sequence == name; ++i)
+                if (results[i].skipped.empty()) seqFrames.push_back(&frames[i]), alone.push_back(results[i].row);
+            const fs::path seq = fs::path(cli.root) / "sequences" / name;
+            if (seqFrames.size() < 2 || !fs::exists(seq / "poses.txt")) continue;  // a drive: poses and two frames or more
+            drives.push_back(driveContext(seq, seqFrames, alone, setup, setup.traversability));
+        }
+        if (!drives.empty()) tools::say("%s", driveContextText(drives).c_str());
+    }
     if (!cli.report.empty()) {
         const fs::path dir = fs::path(cli.report).parent_path();
         if (!dir.empty()) fs::create_directories(dir);
@@ -406,13 +555,16 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
                                   "points' predictions)", false, 1, "N", cmd);
     TCLAP::ValueArg<int> pointStep("", "point-step", "... and only every Nth point along the rings (1-64: a coarser "
                                    "azimuth step)", false, 1, "N", cmd);
+    TCLAP::SwitchArg noContext("", "no-drive-context", "do not score drives (sequences with poses.txt and calib.txt) "
+                               "again with their terrain model (#31); by default each such sequence's frames are "
+                               "printed alone and with the model of the whole drive, side by side", cmd, false);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     ranks.setTimeout("gseg eval", line.mpiTimeout());
     if (!input.getValue().empty() && !root.getValue().empty())
         return line.usageError("give the root once: -i ROOT (or the old form, gseg eval ROOT)");
     cli = {input.getValue().empty() ? root.getValue() : input.getValue(), scan.getValue(), labels.getValue(),
            cfg.getValue(), report.getValue(), preds.getValue(), splitCommas(seqs.getValue()), threads.getValue(),
-           breakdown.getValue(), line.overwrite(), ringStep.getValue(), pointStep.getValue()};
+           breakdown.getValue(), line.overwrite(), ringStep.getValue(), pointStep.getValue(), !noContext.getValue()};
     if (cli.root.empty() == cli.scan.empty() || cli.threads < 1 || cli.threads > 256)
         return line.usageError("give either -i ROOT or --scan X.bin --labels X.label, and --threads 1..256");
     if (cli.ringStep < 1 || cli.ringStep > 64 || cli.pointStep < 1 || cli.pointStep > 64)

@@ -35,6 +35,23 @@ const OptionTable<TraversabilityOptions>& table() {
              "or below (porous vegetation and fences stay, what moved away is cleared), in (0, occupancyThreshold]"},
             {"minObstacleHeight", &O::minObstacleHeight, "m",
              "obstacle voxels lower than this above the cell's ground do not block it (the step rule judges them), >= 0"},
+            {"driveTerrain", &O::driveTerrain, "-",
+             "cells without ground points get the ground the drive's terrain model grows from confident ground (several scans) and "
+             "the scans' lowest returns (false: only the ground the scans found)"},
+            {"terrainTolerance", &O::terrainTolerance, "m",
+             "a cell's lowest returns within this of the ground predicted from the modelled cells around it join the model, > 0"},
+            {"terrainRadius", &O::terrainRadius, "m", "modelled cells within this predict a cell's ground, > 0 (used as at least one cell and at most 50)"},
+            {"terrainMinScans", &O::terrainMinScans, "scans", "scans that must agree on a cell before it anchors or joins the terrain model, >= 1"},
+            {"terrainPointTolerance", &O::terrainPointTolerance, "m",
+             "labels with the drive's context (rawlog-gseg, gseg eval on drives, Python): a non-ground point within this of its "
+             "cell's modelled ground becomes ground, > 0"},
+            {"terrainStandHeight", &O::terrainStandHeight, "m",
+             "... unless a return of any scan in its cell or the 8 around stands more than this above that ground (the foot of a "
+             "wall, fence, car or bush), > terrainPointTolerance"},
+            {"fillGaps", &O::fillGaps, "-",
+             "an unknown cell between traversable cells becomes traversable (layer source = 2) where the ground interpolates within "
+             "maxStep and maxSlope, rays passed over it and none below it"},
+            {"maxGapWidth", &O::maxGapWidth, "m", "widest gap filled (wider ones, ditches among them, stay unknown), > 0 (used as at most 50 cells)"},
         });
     return t;
 }
@@ -82,6 +99,19 @@ void TraversabilityOptions::validate() const {
     if (!(obstacleClearProbability > 0 && obstacleClearProbability <= occupancyThreshold))
         throw std::invalid_argument("TraversabilityOptions.obstacleClearProbability = " + std::to_string(obstacleClearProbability) +
                                     ": must lie in (0, occupancyThreshold]");
+    if (!(terrainTolerance > 0 && std::isfinite(terrainTolerance)))
+        throw std::invalid_argument("TraversabilityOptions.terrainTolerance = " + std::to_string(terrainTolerance) + ": must be > 0 m");
+    if (!(terrainRadius > 0 && std::isfinite(terrainRadius)))
+        throw std::invalid_argument("TraversabilityOptions.terrainRadius = " + std::to_string(terrainRadius) + ": must be > 0 m");
+    if (terrainMinScans < 1)
+        throw std::invalid_argument("TraversabilityOptions.terrainMinScans = " + std::to_string(terrainMinScans) + ": must be >= 1");
+    if (!(terrainPointTolerance > 0 && std::isfinite(terrainPointTolerance)))
+        throw std::invalid_argument("TraversabilityOptions.terrainPointTolerance = " + std::to_string(terrainPointTolerance) + ": must be > 0 m");
+    if (!(terrainStandHeight > terrainPointTolerance && std::isfinite(terrainStandHeight)))
+        throw std::invalid_argument("TraversabilityOptions.terrainStandHeight = " + std::to_string(terrainStandHeight) +
+                                    ": must exceed terrainPointTolerance");
+    if (!(maxGapWidth > 0 && std::isfinite(maxGapWidth)))
+        throw std::invalid_argument("TraversabilityOptions.maxGapWidth = " + std::to_string(maxGapWidth) + ": must be > 0 m");
     if (!(minObstacleHeight >= 0 && minObstacleHeight < clearance))
         throw std::invalid_argument("TraversabilityOptions.minObstacleHeight = " + std::to_string(minObstacleHeight) +
                                     ": must lie in [0, clearance) m");

@@ -4,6 +4,9 @@
 /// options struct with a key table (gseg/option_table.hpp), in the core so that every configuration
 /// loader can read and check it.
 
+#include <gseg/terrain_model.hpp>
+
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,6 +32,15 @@ struct TraversabilityOptions {
     double groundRiseRadius = 1.0;    ///< [m] radius of the neighbourhood of maxGroundRise, >= resolution
     double obstacleClearProbability = 0.12;  ///< [-] in the layers and costmap an obstacle voxel once hit stays an obstacle until its occupancy probability falls to this or below (porous vegetation and fences stay; what moved away is cleared), in (0, occupancyThreshold]
     double minObstacleHeight = 0.3;   ///< [m] obstacle voxels whose centre lies lower than this above the cell's ground do not block it (the step rules judge it), >= 0
+    // ---- the drive's terrain model (#31, gseg/terrain_model.hpp) and gap filling in the layers ----
+    bool driveTerrain = true;         ///< cells without ground points get the ground the drive's terrain model grows from confident ground and the scans' lowest returns
+    double terrainTolerance = 0.1;    ///< [m] a cell's lowest returns (or a point) within this of the ground predicted from the model around it join the model, > 0
+    double terrainRadius = 2.0;       ///< [m] modelled cells within this predict a cell's ground, > 0 (used as at least one cell and at most 50: terrainOptions())
+    int terrainMinScans = 2;          ///< [scans] scans that must agree on a cell before it anchors or joins the model, >= 1
+    double terrainPointTolerance = 0.05;  ///< [m] labels with the drive's context (rawlog-gseg, gseg eval on drives, Python): a non-ground point within this of its cell's modelled ground becomes ground, > 0
+    double terrainStandHeight = 0.3;  ///< [m] ... unless a return of any scan in its cell or the 8 around stands more than this above that ground (the foot of a wall, fence, car or bush), > terrainPointTolerance
+    bool fillGaps = true;             ///< an unknown cell between traversable cells (ring stripes) becomes traversable (layer `source` = 2) where the ground interpolates within maxStep and maxSlope, rays passed over it and none below it
+    double maxGapWidth = 1.5;         ///< [m] widest gap filled (wider ones, ditches among them, stay unknown), > 0 (used as at most 50 cells: gapWidth())
     /// Throws std::invalid_argument naming the first invalid field (also a ray longer than
     /// kMaxRayVoxels voxels: maxRange / resolution).
     void validate() const;
@@ -44,6 +56,17 @@ struct TraversabilityOptions {
     /// each side of the origin); points outside are skipped, a sensor outside is an error.
     double extent() const { return 32768.0 * resolution; }
     static constexpr double kMaxRayVoxels = 5000;  ///< longest ray, in voxels
+    /// [m] the widest gap filled: maxGapWidth, at most 50 cells (each unknown cell's search is bounded).
+    double gapWidth() const { return std::min(maxGapWidth, 50 * resolution); }
+    /// The terrain model's options at the map's resolution.
+    gseg::TerrainOptions terrainOptions() const {
+        gseg::TerrainOptions t;
+        t.cellSize = resolution, t.tolerance = terrainTolerance, t.minScans = terrainMinScans;
+        t.supportRadius = std::min(std::max(terrainRadius, resolution), 50 * resolution);  // the search window's cost is bounded
+        t.pointTolerance = terrainPointTolerance, t.standHeight = terrainStandHeight;
+        t.minAnchorPoints = minGroundPoints, t.maxSlope = maxSlope;
+        return t;
+    }
 };
 
 }  // namespace gseg::map

@@ -228,6 +228,21 @@ public:
         return out;
     }
 
+    std::vector<gseg::TerrainSample> terrainSamples() {
+        const std::uint64_t n = varint();
+        if (n > (s_.size() - pos_) / 33) throw std::runtime_error("scan update: list longer than the data");
+        std::vector<gseg::TerrainSample> out(n);
+        for (auto& t : out) {
+            const std::uint64_t cell = raw64();
+            t.ix = std::int32_t(std::uint32_t(cell >> 32)), t.iy = std::int32_t(std::uint32_t(cell));
+            const std::uint64_t count = varint();
+            if (count > 0xffffffffULL) throw std::runtime_error("scan update: count out of range");
+            t.groundCount = std::uint32_t(count);
+            t.groundSumZ = real64(), t.groundSumZ2 = real64(), t.lowZ = real32(), t.highZ = real32();
+        }
+        return out;
+    }
+
 private:
     const std::string& s_;
     std::size_t pos_;
@@ -237,7 +252,7 @@ private:
     }
 };
 
-const char kMagic[] = "GSU2", kMagicV1[] = "GSU1";
+const char kMagic[] = "GSU3", kMagicV2[] = "GSU2", kMagicV1[] = "GSU1";
 
 void putDouble(std::string& out, double v) {
     std::uint64_t bits = 0;
@@ -255,7 +270,7 @@ void putFloat(std::string& out, float v) {
 bool ScanUpdate::operator==(const ScanUpdate& o) const {
     return origin == o.origin && free == o.free && groundHits == o.groundHits && obstacleHits == o.obstacleHits &&
            groundPoints == o.groundPoints && obstaclePoints == o.obstaclePoints && rays == o.rays &&
-           pointsSkipped == o.pointsSkipped && groundCells == o.groundCells;
+           pointsSkipped == o.pointsSkipped && groundCells == o.groundCells && terrain == o.terrain;
 }
 
 ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacles, const Eigen::Vector3d& sensorOrigin,
@@ -278,6 +293,7 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
     u.groundHits = caster.groundHits().sortedCodes();
     u.obstacleHits = caster.obstacleHits().sortedCodes();
     u.groundCells = caster.groundCells(ground);
+    if (options.driveTerrain) u.terrain = gseg::terrainSamples(ground, obstacles, options.resolution, options.maxRange, sensorOrigin);
     return u;
 }
 
@@ -301,12 +317,18 @@ std::string serializeScanUpdate(const ScanUpdate& u) {
         putVarint(out, c.count);
         putDouble(out, c.sumZ), putDouble(out, c.sumZ2), putDouble(out, c.sumX), putDouble(out, c.sumY), putFloat(out, c.minZ), putFloat(out, c.maxZ);
     }
+    putVarint(out, u.terrain.size());
+    for (const gseg::TerrainSample& t : u.terrain) {
+        putRaw64(out, (std::uint64_t(std::uint32_t(t.ix)) << 32) | std::uint32_t(t.iy));
+        putVarint(out, t.groundCount);
+        putDouble(out, t.groundSumZ), putDouble(out, t.groundSumZ2), putFloat(out, t.lowZ), putFloat(out, t.highZ);
+    }
     return out;
 }
 
 ScanUpdate deserializeScanUpdate(const std::string& bytes) {
-    const bool v1 = bytes.compare(0, 4, kMagicV1) == 0;
-    if (!v1 && bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
+    const bool v1 = bytes.compare(0, 4, kMagicV1) == 0, v2 = bytes.compare(0, 4, kMagicV2) == 0;
+    if (!v1 && !v2 && bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
     ScanUpdate u;
     Reader in(bytes, 4);
     for (int a = 0; a < 3; ++a) {
@@ -318,6 +340,7 @@ ScanUpdate deserializeScanUpdate(const std::string& bytes) {
     u.groundHits = in.codes();
     u.obstacleHits = in.codes();
     if (!v1) u.groundCells = in.groundCells();
+    if (!v1 && !v2) u.terrain = in.terrainSamples();
     if (!in.atEnd()) throw std::runtime_error("scan update: trailing bytes");
     return u;
 }

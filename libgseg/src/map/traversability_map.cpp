@@ -120,6 +120,7 @@ TraversabilityMap::TraversabilityMap(const TraversabilityOptions& options)
     l.occupied = configured_->getOccupancyThresLog();
     voxels_ = std::make_unique<detail::BrickMap>(l);
     groundCells_ = std::make_unique<GroundCells>();
+    terrain_ = std::make_unique<gseg::TerrainModel>(options_.terrainOptions());
 }
 
 TraversabilityMap::~TraversabilityMap() = default;
@@ -148,6 +149,7 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
     // ground graze the road near their end and would erode it scan after scan).
     voxels_->applyScan(u.free, u.groundHits, u.obstacleHits);
     groundCells_->add(u.groundCells);
+    if (options_.driveTerrain) terrain_->add(u.terrain);
     groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
     if (!path_.empty()) stats_.pathLength += (u.origin - path_.back()).norm();
     path_.push_back(u.origin);
@@ -233,7 +235,24 @@ LayerGrid TraversabilityMap::layers() const {
         if (v > cleared || v >= occupied) add(code);
     });
     const Eigen::Vector3d first = path_.empty() ? Eigen::Vector3d::Zero() : path_.front();
-    return terrainLayers(*groundCells_, columns, options_, first.x(), first.y());
+    if (options_.driveTerrain) terrain_->build();
+    // Gap filling asks whether a ray crossed a column between two heights and left a voxel free.
+    const float occupiedLog = occupied;
+    auto rayFree = [&](std::uint32_t column, float zLow, float zHigh) {
+        octomap::OcTreeKey key;
+        key[0] = std::uint16_t(column >> 16), key[1] = std::uint16_t(column & 0xffffu);
+        octomap::OcTreeKey lowKey, highKey;
+        if (!configured_->coordToKeyChecked(0.0, 0.0, double(zLow), lowKey)) return false;
+        if (!configured_->coordToKeyChecked(0.0, 0.0, double(zHigh), highKey)) return false;
+        for (unsigned kz = lowKey[2]; kz <= highKey[2]; ++kz) {
+            key[2] = std::uint16_t(kz);
+            float v = 0;
+            if (voxels_->value(detail::kObstacles, detail::mortonCode(key), v) && v < occupiedLog) return true;
+        }
+        return false;
+    };
+    return terrainLayers(*groundCells_, columns, options_, first.x(), first.y(), options_.driveTerrain ? terrain_.get() : nullptr,
+                         rayFree);
 }
 
 std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefix) {

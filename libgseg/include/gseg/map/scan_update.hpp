@@ -9,6 +9,7 @@
 /// Voxels are OctoMap keys at the map resolution as Morton codes (see TraversabilityMap): sorted,
 /// so an update is one walk down the trees.
 
+#include <gseg/terrain_model.hpp>
 #include <gseg/traversability_options.hpp>
 #include <gseg/point_cloud.hpp>
 
@@ -48,6 +49,7 @@ struct ScanUpdate {
     std::uint64_t rays = 0;                   ///< rays cast (one per endpoint voxel)
     std::uint64_t pointsSkipped = 0;          ///< points not used: NaN/infinite or outside the map's extent
     std::vector<GroundCellSample> groundCells;  ///< ground points within maxRange per cell (sorted by cell)
+    std::vector<gseg::TerrainSample> terrain;   ///< the drive's terrain model's evidence, points within maxRange (driveTerrain; sorted by cell)
 
     bool operator==(const ScanUpdate& o) const;
 };
@@ -61,8 +63,9 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
                     const TraversabilityOptions& options);
 
 /// A compact byte string of the update (sorted codes delta-encoded as varints), for sending the
-/// per-scan result to another process. Little-endian, versioned: "GSU2" (with groundCells);
-/// deserializeScanUpdate() also reads "GSU1" (no ground cells).
+/// per-scan result to another process. Little-endian, versioned: "GSU3" (with groundCells and the
+/// terrain samples); deserializeScanUpdate() also reads "GSU2" (no terrain samples) and "GSU1" (no
+/// ground cells either).
 std::string serializeScanUpdate(const ScanUpdate& update);
 /// Inverse of serializeScanUpdate(). Throws std::runtime_error on a truncated or malformed string.
 ScanUpdate deserializeScanUpdate(const std::string& bytes);

@@ -15,20 +15,38 @@
 /// | `clearance` | m | free height above the elevation up to the bottom of the lowest obstacle voxel that lies at least minObstacleHeight above it; +inf where none |
 /// | `class` | - | 1 traversable, 2 not traversable, NaN unknown |
 /// | `cost` | - | 0-100 (nav_msgs/OccupancyGrid): traversable cells 0-99 (99 x the largest of slope / maxSlope, step / maxStep, roughness / maxRoughness), 100 not traversable, NaN unknown |
+/// | `source` | - | where a cell's ground comes from: 0 ground points of the scans, 1 the drive's terrain model (lowest returns several scans agree on, grown from confident ground: gseg/terrain_model.hpp), 2 interpolated across a gap (fillGaps); NaN no ground |
 ///
 /// A cell with an elevation is traversable when slope <= maxSlope, step <= maxStep, roughness <=
 /// maxRoughness and clearance >= clearance (TraversabilityOptions). A cell without ground points
 /// but with obstacle voxels is not traversable when one of them lies between minObstacleHeight and
 /// clearance above its reference ground (the median elevation of the cells within 1 m, or else the
 /// bottom of its lowest obstacle voxel); else it stays unknown.
+///
+/// With the drive's terrain model (driveTerrain, built from every scan's TerrainSample list), a cell
+/// without enough ground points whose ground the model grew takes the model's elevation (`source`
+/// 1; roughness 0, the step from that elevation) and is judged by the same rules; it is traversable
+/// only where a ray also crossed the voxels from minObstacleHeight to minObstacleHeight + two
+/// voxels above that ground and left them free (ground seen only through a low slot, under a car's
+/// body or a ledge whose top no ray reached, stays unknown). With fillGaps, an
+/// unknown cell that lies on a straight line (along x, y or a diagonal) between two traversable
+/// cells at most maxGapWidth apart (TraversabilityOptions::gapWidth()) becomes traversable (`source`
+/// 2, elevation interpolated, cost from the interpolated slope, clearance from its obstacle voxels)
+/// where the two ends differ by at most maxStep and maxSlope, no obstacle voxel stands between
+/// minObstacleHeight and clearance above that ground, a ray of the drive crossed the column between
+/// the interpolated ground and the clearance, and no ray crossed it more than maxStep below that
+/// ground (a ditch or a drop: rays went into it). The first known cell along a line ends the search
+/// (an obstacle between is never crossed).
 
 #include <gseg/io/ros_map.hpp>
 #include <gseg/map/column_class.hpp>
 #include <gseg/map/layer_grid.hpp>
 #include <gseg/map/scan_update.hpp>
+#include <gseg/terrain_model.hpp>
 #include <gseg/traversability_options.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -60,10 +78,17 @@ using ObstacleColumns = std::unordered_map<std::uint32_t, std::vector<float>>;
 /// The names of the layers, in the order of the table above (and of the GeoTIFF's bands).
 const std::vector<std::string>& terrainLayerNames();
 
-/// The layers of the table above, over the bounding box of every cell with ground points or
-/// obstacle voxels; without any, one unknown cell holding map position (emptyX, emptyY) [m].
+/// Whether a ray of the drive crossed column `column` (OctoMap column key, as GroundCellSample::cell)
+/// in a voxel whose centre lies in [zLow, zHigh] [m] and left it free.
+using RayFreeQuery = std::function<bool(std::uint32_t column, float zLow, float zHigh)>;
+
+/// The layers of the table above, over the bounding box of every cell with ground points, obstacle
+/// voxels or modelled ground; without any, one unknown cell holding map position (emptyX, emptyY)
+/// [m]. `terrain`: the drive's terrain model, built (TerrainModel::build()) at the map's resolution,
+/// or nullptr; `rayFree`: the rays' free space (gap filling needs it; without it no gap is filled).
 LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& options,
-                        double emptyX = 0, double emptyY = 0);
+                        double emptyX = 0, double emptyY = 0, const gseg::TerrainModel* terrain = nullptr,
+                        const RayFreeQuery& rayFree = RayFreeQuery());
 
 /// The costmap of a `class` layer in map_server's trinary form: traversable free, not traversable
 /// occupied, the rest unknown; the same cells, resolution and origin.

@@ -34,6 +34,11 @@ class BrickMap;    // the voxels while a drive is integrated (implementation det
 
 struct ScanUpdate;
 class GroundCells;
+}  // namespace gseg::map
+namespace gseg {
+class TerrainModel;
+}
+namespace gseg::map {
 
 /// Builds the maps scan by scan. Per scan, every voxel crossed by a ray (to a ground or an obstacle
 /// point) gets a miss in both trees, except voxels holding a hit of that scan; ground hits update
@@ -113,6 +118,7 @@ private:
     std::unique_ptr<detail::MapTree> configured_;  ///< an empty tree with the options: OctoMap's own log-odds
     std::unique_ptr<detail::BrickMap> voxels_;
     std::unique_ptr<GroundCells> groundCells_;  ///< the ground points of every scan, per cell
+    std::unique_ptr<gseg::TerrainModel> terrain_;  ///< the drive's terrain model (driveTerrain), built when the layers are
     mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
     mutable std::unique_ptr<TopDownGrid> topDown_;
     std::vector<Eigen::Vector3d> path_;

@@ -1,0 +1,293 @@
+#include <gseg/terrain_model.hpp>
+
+#include <algorithm>
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace gseg {
+
+namespace {
+
+constexpr std::int32_t kTileSize = 1 << TerrainModel::kTileBits;
+constexpr std::int32_t kTileMask = kTileSize - 1;
+
+std::uint64_t tileKey(std::int32_t tx, std::int32_t ty) {
+    return (std::uint64_t(std::uint32_t(tx)) << 32) | std::uint32_t(ty);
+}
+
+/// Cell index of a coordinate; false where it does not fit an int32 (far beyond any map).
+bool cellIndex(double v, double cellSize, std::int32_t& out) {
+    const double c = std::floor(v / cellSize);
+    if (!(c >= -2147483648.0 && c < 2147483647.0)) return false;
+    out = std::int32_t(c);
+    return true;
+}
+
+}  // namespace
+
+struct TerrainModel::Tile {
+    std::array<TerrainCell, std::size_t(kTileSize * kTileSize)> cells;
+    std::uint32_t used = 0;  ///< cells with evidence
+};
+
+void TerrainOptions::validate() const {
+    auto positive = [](double v, const char* name) {
+        if (!(std::isfinite(v) && v > 0)) throw std::invalid_argument(std::string("TerrainOptions.") + name + " = " + std::to_string(v) + ": must be > 0");
+    };
+    positive(cellSize, "cellSize [m]");
+    positive(tolerance, "tolerance [m]");
+    positive(supportRadius, "supportRadius [m]");
+    positive(pointTolerance, "pointTolerance [m]");
+    if (!(standHeight > pointTolerance && std::isfinite(standHeight)))
+        throw std::invalid_argument("TerrainOptions.standHeight = " + std::to_string(standHeight) + ": must exceed pointTolerance");
+    if (supportRadius / cellSize > 100)
+        throw std::invalid_argument("TerrainOptions.supportRadius = " + std::to_string(supportRadius) +
+                                    " m: at most 100 cells of cellSize (" + std::to_string(cellSize) + " m)");
+    if (minScans < 1) throw std::invalid_argument("TerrainOptions.minScans = " + std::to_string(minScans) + ": must be >= 1");
+    if (minAnchorPoints < 1)
+        throw std::invalid_argument("TerrainOptions.minAnchorPoints = " + std::to_string(minAnchorPoints) + ": must be >= 1");
+    if (!(maxSlope > 0 && maxSlope < 90)) throw std::invalid_argument("TerrainOptions.maxSlope = " + std::to_string(maxSlope) + ": must lie in (0, 90) deg");
+    if (minSupport < 1) throw std::invalid_argument("TerrainOptions.minSupport = " + std::to_string(minSupport) + ": must be >= 1");
+}
+
+std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const PointCloudView& nonGround, double cellSize,
+                                          double maxRange, const Eigen::Vector3d& origin) {
+    if (!(std::isfinite(cellSize) && cellSize > 0)) throw std::invalid_argument("terrainSamples: cell size must be positive");
+    // Each point adds to its cell's sample, in input order (ground first): an open-addressing
+    // table from the cell to its sample, sized by the points (memory follows the points).
+    std::vector<TerrainSample> out;
+    std::size_t slots = 64;
+    while (slots < 2 * (ground.size() + nonGround.size())) slots *= 2;
+    std::vector<std::uint32_t> table(slots, 0);  // 0: empty, else index into out + 1
+    auto add = [&](const PointCloudView& pts, bool isGround) {
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const float* p = pts.point(i);
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
+            const double dx = p[0] - origin.x(), dy = p[1] - origin.y(), dz = p[2] - origin.z();
+            if (!(dx * dx + dy * dy + dz * dz <= maxRange * maxRange)) continue;
+            std::int32_t ix = 0, iy = 0;
+            if (!cellIndex(p[0], cellSize, ix) || !cellIndex(p[1], cellSize, iy)) continue;
+            const std::uint64_t key = tileKey(ix, iy);
+            std::size_t h = std::size_t((key * 0x9E3779B97F4A7C15ULL) >> 20) & (slots - 1);
+            while (table[h] && !(out[table[h] - 1].ix == ix && out[table[h] - 1].iy == iy)) h = (h + 1) & (slots - 1);
+            if (!table[h]) {
+                TerrainSample n;
+                n.ix = ix, n.iy = iy, n.lowZ = n.highZ = p[2];
+                out.push_back(n);
+                table[h] = std::uint32_t(out.size());
+            }
+            TerrainSample& c = out[table[h] - 1];
+            c.lowZ = std::min(c.lowZ, p[2]), c.highZ = std::max(c.highZ, p[2]);
+            if (isGround) ++c.groundCount, c.groundSumZ += p[2], c.groundSumZ2 += double(p[2]) * p[2];
+        }
+    };
+    add(ground, true);
+    add(nonGround, false);
+    std::sort(out.begin(), out.end(), [](const TerrainSample& a, const TerrainSample& b) { return a.ix != b.ix ? a.ix < b.ix : a.iy < b.iy; });
+    return out;
+}
+
+TerrainModel::TerrainModel(const TerrainOptions& options) : options_(options) { options_.validate(); }
+TerrainModel::~TerrainModel() = default;
+TerrainModel::TerrainModel(TerrainModel&&) noexcept = default;
+TerrainModel& TerrainModel::operator=(TerrainModel&&) noexcept = default;
+
+TerrainCell* TerrainModel::get(std::int32_t ix, std::int32_t iy) {
+    auto& tile = tiles_[tileKey(ix >> kTileBits, iy >> kTileBits)];
+    if (!tile) tile = std::make_unique<Tile>();
+    return &tile->cells[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
+}
+
+TerrainCell* TerrainModel::findMutable(std::int32_t ix, std::int32_t iy) {
+    const auto it = tiles_.find(tileKey(ix >> kTileBits, iy >> kTileBits));
+    if (it == tiles_.end()) return nullptr;
+    TerrainCell* c = &it->second->cells[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
+    return c->lowScans == 0 ? nullptr : c;
+}
+
+const TerrainCell* TerrainModel::find(std::int32_t ix, std::int32_t iy) const {
+    return const_cast<TerrainModel*>(this)->findMutable(ix, iy);
+}
+
+std::size_t TerrainModel::bytes() const { return tiles_.size() * (sizeof(Tile) + 4 * sizeof(void*)); }
+
+void TerrainModel::add(const std::vector<TerrainSample>& samples) {
+    ++scans_;
+    for (const TerrainSample& s : samples) {
+        TerrainCell* c = get(s.ix, s.iy);
+        if (c->lowScans == 0) {
+            ++cells_;
+            ++tiles_[tileKey(s.ix >> kTileBits, s.iy >> kTileBits)]->used;
+        }
+        ++c->lowScans;
+        c->lowSum += s.lowZ;
+        c->lowMin = std::min(c->lowMin, s.lowZ), c->lowMax = std::max(c->lowMax, s.lowZ);
+        c->highMax = std::max(c->highMax, s.highZ);
+        if (s.groundCount > 0) {
+            ++c->groundScans;
+            c->groundCount += s.groundCount, c->groundSumZ += s.groundSumZ, c->groundSumZ2 += s.groundSumZ2;
+        }
+    }
+}
+
+void TerrainModel::build() {
+    // Every cell with evidence, in a fixed order (tile keys sorted, cells in tile order).
+    std::vector<std::pair<std::uint64_t, Tile*>> tiles;
+    tiles.reserve(tiles_.size());
+    for (auto& [key, tile] : tiles_) tiles.emplace_back(key, tile.get());
+    std::sort(tiles.begin(), tiles.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    struct Candidate {
+        std::int32_t ix, iy;
+        TerrainCell* cell;
+        float z;
+    };
+    std::vector<Candidate> candidates;
+    anchors_ = grown_ = 0;
+    const float spreadLimit = float(2 * options_.tolerance);
+    for (const auto& [key, tile] : tiles) {
+        const std::int32_t tx = std::int32_t(std::uint32_t(key >> 32)), ty = std::int32_t(std::uint32_t(key));
+        for (std::int32_t j = 0; j < kTileSize * kTileSize; ++j) {
+            TerrainCell& c = tile->cells[std::size_t(j)];
+            if (c.lowScans == 0) continue;
+            c.state = TerrainCell::None, c.elevation = std::numeric_limits<float>::quiet_NaN();
+            if (c.groundScans >= std::uint32_t(options_.minScans) && c.groundCount >= std::uint64_t(options_.minAnchorPoints)) {
+                c.state = TerrainCell::Anchor, c.elevation = float(c.groundSumZ / double(c.groundCount));
+                ++anchors_;
+            } else if (c.lowScans >= std::uint32_t(options_.minScans) && c.lowMax - c.lowMin <= spreadLimit) {
+                const std::int32_t ix = tx * kTileSize + (j & kTileMask), iy = ty * kTileSize + (j >> kTileBits);
+                candidates.push_back({ix, iy, &c, float(c.lowSum / double(c.lowScans))});
+            }
+        }
+    }
+    // Waves: each judged against the model at its start; only candidates near a new cell again.
+    const int r = int(std::ceil(options_.supportRadius / options_.cellSize - 1e-9));
+    const double r2 = (options_.supportRadius / options_.cellSize) * (options_.supportRadius / options_.cellSize) * (1 + 1e-9);
+    const double cs = options_.cellSize;
+    const double neighbourStep = options_.tolerance + cs * std::tan(options_.maxSlope * 3.14159265358979323846 / 180.0);
+    // Lookups near the last one: the tile is found once per tile, not once per cell.
+    struct Lookup {
+        const TerrainModel& model;
+        std::uint64_t key = ~std::uint64_t(0);
+        const Tile* tile = nullptr;
+        const TerrainCell* operator()(std::int32_t ix, std::int32_t iy) {
+            const std::uint64_t k = tileKey(ix >> kTileBits, iy >> kTileBits);
+            if (k != key) {
+                key = k;
+                const auto it = model.tiles_.find(k);
+                tile = it == model.tiles_.end() ? nullptr : it->second.get();
+            }
+            if (!tile) return nullptr;
+            const TerrainCell* c = &tile->cells[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
+            return c->lowScans == 0 ? nullptr : c;
+        }
+    } lookup{*this};
+    std::vector<std::size_t> pending(candidates.size());
+    for (std::size_t k = 0; k < pending.size(); ++k) pending[k] = k;
+    std::vector<std::size_t> joined;
+    std::vector<std::uint8_t> queued(candidates.size(), 0);
+    while (!pending.empty()) {
+        joined.clear();
+        for (const std::size_t k : pending) {
+            const Candidate& cand = candidates[k];
+            if (cand.cell->state != TerrainCell::None) continue;
+            // Least squares z = a + b dx + c dy over the modelled cells within the radius (centred sums).
+            double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
+            float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+            for (int dy = -r; dy <= r; ++dy)
+                for (int dx = -r; dx <= r; ++dx) {
+                    if (double(dx * dx + dy * dy) > r2 || (dx == 0 && dy == 0)) continue;
+                    const TerrainCell* c = lookup(cand.ix + dx, cand.iy + dy);
+                    if (!c || c->state == TerrainCell::None) continue;
+                    const double x = dx * cs, y = dy * cs, z = c->elevation;
+                    n += 1, sx += x, sy += y, sz += z, sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z;
+                    lo = std::min(lo, c->elevation), hi = std::max(hi, c->elevation);
+                }
+            if (n < options_.minSupport) continue;
+            double predicted = sz / n;  // the support's mean where its cells do not span a plane
+            const double cxx = sxx - sx * sx / n, cxy = sxy - sx * sy / n, cyy = syy - sy * sy / n;
+            const double det = cxx * cyy - cxy * cxy, tr = cxx + cyy;
+            const double minSpread = (tr - std::sqrt(std::max(0.0, tr * tr - 4 * det))) / (2 * n);  // [m^2] across the support
+            if (minSpread > 0.2 * cs * cs) {
+                const double cxz = sxz - sx * sz / n, cyz = syz - sy * sz / n;
+                const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
+                predicted = sz / n - b * sx / n - c * sy / n;  // the plane at the candidate (dx = dy = 0)
+            } else if (hi - lo > options_.tolerance) {
+                continue;  // a line of cells that is not level: no prediction across it
+            }
+            if (!(std::abs(double(cand.z) - predicted) <= options_.tolerance)) continue;
+            bool level = true;  // and no step to a modelled cell beside it
+            for (int dy = -1; dy <= 1 && level; ++dy)
+                for (int dx = -1; dx <= 1 && level; ++dx) {
+                    const TerrainCell* c = (dx || dy) ? lookup(cand.ix + dx, cand.iy + dy) : nullptr;
+                    if (c && c->state != TerrainCell::None)
+                        level = std::abs(double(cand.z) - double(c->elevation)) <= neighbourStep * std::hypot(double(dx), double(dy));
+                }
+            if (level) joined.push_back(k);
+        }
+        for (const std::size_t k : joined) {
+            candidates[k].cell->state = TerrainCell::Grown, candidates[k].cell->elevation = candidates[k].z;
+            ++grown_;
+        }
+        // The next wave: the candidates still out within the radius of a cell that joined.
+        pending.clear();
+        std::fill(queued.begin(), queued.end(), 0);
+        if (joined.empty()) break;
+        // Candidates by cell, for the neighbourhood search.
+        std::unordered_map<std::uint64_t, std::size_t> byCell;
+        byCell.reserve(candidates.size());
+        for (std::size_t k = 0; k < candidates.size(); ++k)
+            if (candidates[k].cell->state == TerrainCell::None) byCell.emplace(tileKey(candidates[k].ix, candidates[k].iy), k);
+        for (const std::size_t k : joined)
+            for (int dy = -r; dy <= r; ++dy)
+                for (int dx = -r; dx <= r; ++dx) {
+                    if (double(dx * dx + dy * dy) > r2) continue;
+                    const auto it = byCell.find(tileKey(candidates[k].ix + dx, candidates[k].iy + dy));
+                    if (it != byCell.end() && !queued[it->second]) queued[it->second] = 1, pending.push_back(it->second);
+                }
+        std::sort(pending.begin(), pending.end());
+    }
+}
+
+void TerrainModel::forEachModelled(const std::function<void(std::int32_t, std::int32_t, const TerrainCell&)>& f) const {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(tiles_.size());
+    for (const auto& kv : tiles_) keys.push_back(kv.first);
+    std::sort(keys.begin(), keys.end());
+    for (const std::uint64_t key : keys) {
+        const Tile& tile = *tiles_.at(key);
+        const std::int32_t tx = std::int32_t(std::uint32_t(key >> 32)), ty = std::int32_t(std::uint32_t(key));
+        for (std::int32_t j = 0; j < kTileSize * kTileSize; ++j) {
+            const TerrainCell& c = tile.cells[std::size_t(j)];
+            if (c.lowScans > 0 && c.state != TerrainCell::None) f(tx * kTileSize + (j & kTileMask), ty * kTileSize + (j >> kTileBits), c);
+        }
+    }
+}
+
+std::size_t TerrainModel::relabel(const PointCloudView& points, std::vector<std::uint8_t>& labels) const {
+    if (labels.size() != points.size())
+        throw std::invalid_argument("TerrainModel::relabel: " + std::to_string(labels.size()) + " labels for " +
+                                    std::to_string(points.size()) + " points");
+    std::size_t changed = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        if (labels[i]) continue;
+        const float* p = points.point(i);
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
+        std::int32_t ix = 0, iy = 0;
+        if (!cellIndex(p[0], options_.cellSize, ix) || !cellIndex(p[1], options_.cellSize, iy)) continue;
+        const TerrainCell* c = find(ix, iy);
+        if (!c || c->state == TerrainCell::None) continue;
+        if (!(std::abs(double(p[2]) - double(c->elevation)) <= options_.pointTolerance)) continue;
+        bool standing = false;
+        for (int dy = -1; dy <= 1 && !standing; ++dy)
+            for (int dx = -1; dx <= 1 && !standing; ++dx) {
+                const TerrainCell* n = find(ix + dx, iy + dy);
+                standing = n && double(n->highMax) > double(c->elevation) + options_.standHeight;
+            }
+        if (!standing) labels[i] = 1, ++changed;
+    }
+    return changed;
+}
+
+}  // namespace gseg

@@ -1,0 +1,552 @@
+// The drive's terrain model (#31): gseg::TerrainModel on hand-made samples with exact answers; the
+// map's layers with the model and gap filling on simulated drives (a "short-reach segmenter" that
+// calls ground only the road within 12 m of the sensor, so the model has ground to find: verges,
+// far ground, an embankment, rolling terrain under 16- and 32-ring sensors), what it must not
+// turn into ground (a wall with a ledge, a car roof, a ditch, a kerb), a parked car that leaves;
+// and on the shared labelled drives: map floors, 1 and 3 threads and 2 ranks byte for byte, and
+// gseg eval's drive context.
+#include <gseg/io/ros_map.hpp>
+#include <gseg/map/map_score.hpp>
+#include <gseg/map/terrain_layers.hpp>
+#include <gseg/map/traversability_map.hpp>
+#include <gseg/terrain_model.hpp>
+
+#include <support/child.hpp>
+#include <support/lidar_sim.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using gseg::TerrainCell;
+using gseg::TerrainModel;
+using gseg::TerrainOptions;
+using gseg::TerrainSample;
+using gseg::map::LayerGrid;
+using gseg::map::TraversabilityMap;
+using gseg::map::TraversabilityOptions;
+using gseg::test::Box;
+using gseg::test::Lidar;
+using gseg::test::Scene;
+using gseg::test::Truth;
+
+constexpr double kSensorHeight = 1.8;  ///< [m] above the ground under the sensor
+constexpr float kTraversable = 1;
+
+// ---------------------------------------------------------------------------------------------
+// TerrainModel on samples
+
+/// One scan's sample of cell (ix, iy): `ground` points at height z (0: none) and the lowest /
+/// highest return.
+TerrainSample sample(int ix, int iy, unsigned ground, double z, float low, float high) {
+    TerrainSample s;
+    s.ix = ix, s.iy = iy, s.groundCount = ground, s.groundSumZ = ground * z, s.groundSumZ2 = ground * z * z;
+    s.lowZ = low, s.highZ = high;
+    return s;
+}
+
+TEST(TerrainSamples, SumsLowestAndHighestPerCellSkippingNaNAndFarPoints) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    // cell size 0.5: (0.1, 0.1) and (0.4, 0.2) share cell (0, 0); (-0.1, 0.1) is cell (-1, 0).
+    const std::vector<float> ground{0.1f, 0.1f, 1.0f, 0.4f, 0.2f, 1.2f, -0.1f, 0.1f, 2.0f, nan, 0.f, 0.f, 30.f, 0.f, 0.f};
+    const std::vector<float> other{0.2f, 0.3f, 0.5f, 0.3f, 0.3f, 3.0f};
+    const auto s = gseg::terrainSamples(gseg::PointCloudView(ground.data(), ground.size() / 3),
+                                        gseg::PointCloudView(other.data(), other.size() / 3), 0.5, 10.0);
+    ASSERT_EQ(s.size(), 2u);  // the NaN and the point 30 m out are left out
+    EXPECT_EQ(s[0].ix, -1);
+    EXPECT_EQ(s[0].groundCount, 1u);
+    EXPECT_EQ(s[1].ix, 0);
+    EXPECT_EQ(s[1].iy, 0);
+    EXPECT_EQ(s[1].groundCount, 2u);
+    EXPECT_NEAR(s[1].groundSumZ, 2.2, 1e-6);
+    EXPECT_NEAR(s[1].groundSumZ2, 1.0 + 1.44, 1e-5);
+    EXPECT_FLOAT_EQ(s[1].lowZ, 0.5f);   // a non-ground point is the lowest return
+    EXPECT_FLOAT_EQ(s[1].highZ, 3.0f);
+    EXPECT_THROW(gseg::terrainSamples({}, {}, 0.0), std::invalid_argument);
+}
+
+/// A 20 x 20 cell flat ground patch (cells 0..19) seen as ground by `scans` scans at z = 0.
+TerrainModel flatPatch(int scans, const TerrainOptions& o = TerrainOptions()) {
+    TerrainModel m(o);
+    for (int k = 0; k < scans; ++k) {
+        std::vector<TerrainSample> s;
+        for (int ix = 0; ix < 20; ++ix)
+            for (int iy = 0; iy < 20; ++iy) s.push_back(sample(ix, iy, 5, 0.0, -0.02f, 0.02f));
+        m.add(s);
+    }
+    return m;
+}
+
+TEST(TerrainModel, AnchorsNeedSeveralScansThatFoundGround) {
+    TerrainModel once = flatPatch(1);
+    once.build();
+    EXPECT_EQ(once.anchors(), 0u);
+    EXPECT_TRUE(std::isnan(once.elevationAt(1.0, 1.0)));
+    TerrainModel twice = flatPatch(2);
+    twice.build();
+    EXPECT_EQ(twice.anchors(), 400u);
+    EXPECT_NEAR(twice.elevationAt(1.0, 1.0), 0.0, 1e-6);
+    EXPECT_EQ(twice.find(3, 3)->state, TerrainCell::Anchor);
+    EXPECT_EQ(twice.cells(), 400u);
+    EXPECT_GE(twice.tiles(), 1u);
+}
+
+TEST(TerrainModel, LevelCandidatesJoinAndGrowOnWhatStandsStaysOut) {
+    TerrainModel m = flatPatch(2);
+    // Two scans' lowest returns beside the patch: a level strip 8 cells wide (x 20..27) joins
+    // wave after wave; a car (0.5 m up) and a strip seen by one scan only stay out; a candidate
+    // whose scans disagree by more than 2 x tolerance stays out.
+    for (int k = 0; k < 2; ++k) {
+        std::vector<TerrainSample> s;
+        for (int ix = 20; ix < 28; ++ix)
+            for (int iy = 0; iy < 20; ++iy) s.push_back(sample(ix, iy, 0, 0, 0.04f, 0.3f));  // grass 4 cm up
+        for (int ix = 0; ix < 10; ++ix)
+            for (int iy = 20; iy < 30; ++iy) s.push_back(sample(ix, iy, 0, 0, 0.5f, 1.5f));  // a car
+        if (k == 0) s.push_back(sample(5, -1, 0, 0, 0.0f, 0.0f));                           // one scan only
+        s.push_back(sample(10, -1, 0, 0, k == 0 ? 0.0f : 0.3f, 0.3f));                    // scans disagree
+        m.add(s);
+    }
+    m.build();
+    for (int ix = 20; ix < 28; ++ix) {
+        const TerrainCell* c = m.find(ix, 5);
+        ASSERT_NE(c, nullptr);
+        EXPECT_EQ(c->state, TerrainCell::Grown) << ix;
+        EXPECT_NEAR(c->elevation, 0.04, 1e-6);
+    }
+    EXPECT_EQ(m.grown(), 160u);
+    EXPECT_EQ(m.find(3, 25)->state, TerrainCell::None);
+    EXPECT_EQ(m.find(5, -1)->state, TerrainCell::None);
+    EXPECT_EQ(m.find(10, -1)->state, TerrainCell::None);
+    // build() again gives the same model.
+    m.build();
+    EXPECT_EQ(m.grown(), 160u);
+    EXPECT_EQ(m.anchors(), 400u);
+}
+
+TEST(TerrainModel, ASlopeGrowsAlongItsPlaneAndAStepDoesNot) {
+    TerrainOptions o;
+    TerrainModel m(o);
+    const double tan10 = std::tan(10.0 * 3.14159265358979323846 / 180.0);
+    for (int k = 0; k < 2; ++k) {
+        std::vector<TerrainSample> s;
+        for (int ix = 0; ix < 40; ++ix)
+            for (int iy = 0; iy < 10; ++iy) {
+                const double z = ix * 0.2 * tan10;  // a 10 deg ramp along x
+                if (ix < 10) s.push_back(sample(ix, iy, 4, z, float(z), float(z)));
+                else s.push_back(sample(ix, iy, 0, 0, float(z), float(z)));
+            }
+        for (int ix = 0; ix < 10; ++ix)
+            for (int iy = 10; iy < 20; ++iy) s.push_back(sample(ix, iy, 0, 0, 0.25f + float(ix * 0.2 * tan10), 0.3f));  // a 25 cm step up
+        m.add(s);
+    }
+    m.build();
+    for (int ix = 10; ix < 40; ++ix) EXPECT_EQ(m.find(ix, 5)->state, TerrainCell::Grown) << ix;
+    for (int ix = 0; ix < 10; ++ix) EXPECT_EQ(m.find(ix, 15)->state, TerrainCell::None) << ix;
+}
+
+TEST(TerrainModel, RelabelTurnsPointsOnTheModelledGroundButNotBesideWhatStands) {
+    TerrainModel m = flatPatch(2);
+    std::vector<TerrainSample> wall;  // a third scan: a wall 2 m high in cells x = 10
+    for (int iy = 0; iy < 20; ++iy) wall.push_back(sample(10, iy, 0, 0, 0.0f, 2.0f));
+    m.add(wall);
+    m.build();
+    // Points (x, y, z): near the ground (0.03 up), too high (0.2 up), beside the wall (cell 9 and 11), already ground.
+    const std::vector<float> pts{1.0f, 1.0f, 0.03f, 1.0f, 1.0f, 0.2f, 1.9f, 1.0f, 0.02f, 2.3f, 1.0f, -0.01f, 1.5f, 1.5f, 0.0f, 50.f, 50.f, 0.f};
+    std::vector<std::uint8_t> labels{0, 0, 0, 0, 1, 0};
+    EXPECT_EQ(m.relabel(gseg::PointCloudView(pts.data(), pts.size() / 3), labels), 1u);
+    EXPECT_EQ(labels, (std::vector<std::uint8_t>{1, 0, 0, 0, 1, 0}));
+    std::vector<std::uint8_t> wrong(2);
+    EXPECT_THROW(m.relabel(gseg::PointCloudView(pts.data(), pts.size() / 3), wrong), std::invalid_argument);
+}
+
+TEST(TerrainModel, TheSameSamplesGiveTheSameModelWhateverTheOrderWithinAScan) {
+    TerrainModel a = flatPatch(2), b(TerrainOptions{});
+    for (int k = 0; k < 2; ++k) {
+        std::vector<TerrainSample> s;
+        for (int ix = 19; ix >= 0; --ix)
+            for (int iy = 19; iy >= 0; --iy) s.push_back(sample(ix, iy, 5, 0.0, -0.02f, 0.02f));
+        b.add(s);
+    }
+    for (TerrainModel* m : {&a, &b}) {
+        std::vector<TerrainSample> s;
+        for (int ix = 20; ix < 30; ++ix) s.push_back(sample(ix, 4, 0, 0, 0.05f, 0.1f));
+        m->add(s), m->add(s);
+        m->build();
+    }
+    EXPECT_EQ(a.grown(), b.grown());
+    for (int ix = 0; ix < 30; ++ix) EXPECT_EQ(a.elevationAt(ix * 0.2 + 0.1, 0.9), b.elevationAt(ix * 0.2 + 0.1, 0.9)) << ix;
+}
+
+TEST(TerrainModel, InvalidOptionsAreRefusedByName) {
+    auto refused = [](auto change, const char* name) {
+        TerrainOptions o;
+        change(o);
+        try {
+            TerrainModel m(o);
+            ADD_FAILURE() << name << " accepted";
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+    };
+    refused([](TerrainOptions& o) { o.cellSize = 0; }, "cellSize");
+    refused([](TerrainOptions& o) { o.tolerance = -1; }, "tolerance");
+    refused([](TerrainOptions& o) { o.supportRadius = 1e6; }, "supportRadius");
+    refused([](TerrainOptions& o) { o.minScans = 0; }, "minScans");
+    refused([](TerrainOptions& o) { o.standHeight = 0.01; }, "standHeight");
+    TraversabilityOptions t;
+    t.terrainRadius = -1;
+    EXPECT_THROW(t.validate(), std::invalid_argument);
+    t = TraversabilityOptions();
+    t.maxGapWidth = 0;
+    EXPECT_THROW(t.validate(), std::invalid_argument);
+    t.terrainStandHeight = 0.01;  // not above terrainPointTolerance
+    EXPECT_THROW(t.validate(), std::invalid_argument);
+    // Radii in metres stay valid at any resolution: used as one cell at least, 50 at most.
+    t = TraversabilityOptions();
+    t.resolution = 1, t.terrainRadius = 0.5;
+    EXPECT_NO_THROW(t.validate());
+    EXPECT_DOUBLE_EQ(t.terrainOptions().supportRadius, 1.0);
+    t.resolution = 0.01, t.maxGapWidth = 1000;
+    EXPECT_NO_THROW(t.validate());
+    EXPECT_DOUBLE_EQ(t.terrainOptions().supportRadius, 0.5);
+    EXPECT_DOUBLE_EQ(t.gapWidth(), 0.5);
+    t = TraversabilityOptions();
+    t.set("driveTerrain", "false");
+    EXPECT_FALSE(t.driveTerrain);
+    EXPECT_EQ(t.get("terrainRadius"), "2");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The map's layers on simulated drives
+
+/// A world: ground height z(x, y), what is ground by truth, obstacle boxes (some per scan).
+struct World {
+    std::function<double(double, double)> ground = [](double, double) { return 0.0; };
+    std::vector<Box> boxes;
+    std::function<std::vector<Box>(int scan)> boxesOfScan;
+};
+
+/// What the "short-reach segmenter" calls ground: truth ground on the road (|y| < 3.5) within
+/// 12 m of the sensor. Everything else (verges, far ground) is left non-ground, as a single scan
+/// leaves far rings and verges.
+bool shortReachGround(double dx, double dy, double worldY) { return std::abs(worldY) < 3.5 && dx * dx + dy * dy < 144; }
+
+/// Drives along x (10 m/s at 10 Hz: 1 m per scan from x0) and builds one map per options, from
+/// the same scans (a coarse azimuth step keeps the test short).
+/// `segmenter(dx, dy, worldY)`: what the scans call ground among the truth's ground points.
+std::vector<LayerGrid> drive(const World& w, int scans, const std::vector<TraversabilityOptions>& options,
+                             Lidar lidar = Lidar::hdl64(), double x0 = 0,
+                             const std::function<bool(double, double, double)>& segmenter = shortReachGround) {
+    std::vector<TraversabilityMap> maps;
+    for (const TraversabilityOptions& o : options) maps.emplace_back(o);
+    lidar.maxRange = 35;
+    lidar.azimuthStepDeg = std::max(lidar.azimuthStepDeg, 0.8);
+    for (int k = 0; k < scans; ++k) {
+        const double sx = x0 + k;
+        const Eigen::Vector3d s(sx, 0.0, w.ground(sx, 0.0) + kSensorHeight);
+        Scene scene;
+        scene.terrains.push_back({[g = w.ground, s](double x, double y) { return g(x + s.x(), y + s.y()) - s.z(); }, Truth::Ground});
+        std::vector<Box> boxes = w.boxes;
+        if (w.boxesOfScan)
+            for (const Box& b : w.boxesOfScan(k)) boxes.push_back(b);
+        for (Box b : boxes) {
+            for (int a = 0; a < 3; ++a) b.lo[a] -= s[a], b.hi[a] -= s[a];
+            scene.boxes.push_back(b);
+        }
+        lidar.seed = 11 + std::uint32_t(k);
+        const gseg::test::SimScan scan = gseg::test::simulate(scene, lidar);
+        std::vector<float> ground, obstacles;
+        for (std::size_t i = 0; i < scan.size(); ++i) {
+            const float* p = &scan.xyz[3 * i];
+            const bool g = scan.truth[i] == Truth::Ground && segmenter(p[0], p[1], p[1] + s.y());
+            auto& to = g ? ground : obstacles;
+            for (int a = 0; a < 3; ++a) to.push_back(p[a] + float(s[a]));
+        }
+        for (TraversabilityMap& m : maps)
+            m.insertScan(gseg::PointCloudView(ground.data(), ground.size() / 3), gseg::PointCloudView(obstacles.data(), obstacles.size() / 3), s);
+    }
+    std::vector<LayerGrid> out;
+    for (const TraversabilityMap& m : maps) out.push_back(m.layers());
+    return out;
+}
+
+float at(const LayerGrid& g, const std::string& layer, double x, double y) {
+    const long long cx = g.cellX(x), cy = g.cellY(y);
+    if (!g.inside(cx, cy)) return std::nanf("");
+    return g.layer(layer).values[g.index(int(cx), int(cy))];
+}
+
+/// Share of the cells of [x0, x1] x [y0, y1] (centres every 0.2 m) that are traversable with an
+/// elevation within 0.1 m of the true ground; `wrong` counts traversable cells off by more.
+double traversableShare(const LayerGrid& g, const World& w, double x0, double x1, double y0, double y1, int* wrong = nullptr) {
+    int n = 0, ok = 0;
+    for (double x = x0 + 0.1; x < x1; x += 0.2)
+        for (double y = y0 + 0.1; y < y1; y += 0.2) {
+            ++n;
+            if (at(g, "class", x, y) != kTraversable) continue;
+            if (std::abs(at(g, "elevation", x, y) - w.ground(x, y)) <= 0.1) ++ok;
+            else if (wrong) ++*wrong;
+        }
+    return n ? double(ok) / n : 0.0;
+}
+
+TraversabilityOptions without() {
+    TraversabilityOptions o;
+    o.driveTerrain = false, o.fillGaps = false;
+    return o;
+}
+
+/// A rural road: |y| < 3.5 at z = 0 with 4 cm roughness, grass verges 5-15 cm above it out to
+/// |y| = 12, then an embankment rising at 8 deg.
+double ruralRoad(double x, double y) {
+    const double rough = 0.02 * std::sin(7.1 * x + 3.3 * y) + 0.02 * std::sin(5.3 * y - 2.9 * x);
+    const double a = std::abs(y);
+    if (a < 3.5) return rough;
+    if (a < 12) return rough + 0.05 + 0.1 * (a - 3.5) / 8.5;
+    return rough + 0.15 + (a - 12) * std::tan(8.0 * 3.14159265358979323846 / 180.0);
+}
+
+TEST(DriveTerrain, RuralRoadsVergesAndEmbankmentBecomeTraversable) {
+    World w;
+    w.ground = ruralRoad;
+    const std::vector<LayerGrid> maps = drive(w, 10, {TraversabilityOptions(), without()});
+    const LayerGrid &with = maps[0], &alone = maps[1];
+    int wrong = 0;
+    const double verge = traversableShare(with, w, 2, 12, 4, 11.5, &wrong), vergeAlone = traversableShare(alone, w, 2, 12, 4, 11.5);
+    const double bank = traversableShare(with, w, 2, 12, -16, -12.5, &wrong);
+    EXPECT_GT(verge, 0.9) << "alone " << vergeAlone;
+    EXPECT_LT(vergeAlone, 0.1);
+    EXPECT_GT(bank, 0.6);
+    EXPECT_EQ(wrong, 0);
+    EXPECT_NEAR(traversableShare(with, w, 2, 12, -3, 3), 1.0, 0.02);  // the road itself
+    EXPECT_EQ(at(with, "source", 6.1, 8.1), 1.0f);
+    EXPECT_EQ(at(with, "source", 6.1, 0.1), 0.0f);
+}
+
+TEST(DriveTerrain, SixteenAndThirtyTwoRingsOverRollingTerrainLeaveNoRingStripesNearby) {
+    World w;
+    w.ground = [](double x, double y) { return 0.3 * std::sin(x / 8.0) + 0.2 * std::cos(y / 6.0); };
+    for (const Lidar& lidar : {Lidar::vlp16(), Lidar::hdl32()}) {
+        const std::string name = lidar.beams == 16 ? "16 rings" : "32 rings";
+        TraversabilityOptions gapsOff;
+        gapsOff.fillGaps = false;
+        const std::vector<LayerGrid> maps = drive(w, 8, {TraversabilityOptions(), gapsOff, without()}, lidar);
+        const LayerGrid &full = maps[0], &noGaps = maps[1], &alone = maps[2];
+        int wrong = 0;
+        // Beside the road, 4-10 m out: never ground for the short-reach segmenter.
+        const double a = traversableShare(alone, w, 0, 10, 4, 10), m = traversableShare(noGaps, w, 0, 10, 4, 10);
+        const double f = traversableShare(full, w, 0, 10, 4, 10, &wrong);
+        EXPECT_LT(a, 0.05) << name;
+        EXPECT_GT(m, a + 0.15) << name;
+        EXPECT_GE(f, m + 0.2) << name;
+        EXPECT_GT(f, 0.6) << name << ": model " << m << ", with gaps filled " << f;
+        std::printf("%s: alone %.3f, model %.3f, gaps filled %.3f\n", name.c_str(), a, m, f);
+        EXPECT_EQ(wrong, 0) << name;
+        int interpolated = 0;
+        for (float s : full.layer("source").values) interpolated += s == 2.0f;
+        EXPECT_GT(interpolated, 0) << name;
+    }
+}
+
+TEST(DriveTerrain, AWallWithALedgeAndACarRoofAreNeverGround) {
+    World w;
+    Box wall, ledge, car, cabin;
+    wall.lo[0] = 0, wall.hi[0] = 30, wall.lo[1] = 6.0, wall.hi[1] = 6.3, wall.lo[2] = 0, wall.hi[2] = 2.5;
+    ledge.lo[0] = 0, ledge.hi[0] = 30, ledge.lo[1] = 5.5, ledge.hi[1] = 6.0, ledge.lo[2] = 0.6, ledge.hi[2] = 0.7;
+    car.lo[0] = 12, car.hi[0] = 16.4, car.lo[1] = -6.0, car.hi[1] = -4.2, car.lo[2] = 0.3, car.hi[2] = 1.0;
+    cabin = car, cabin.lo[0] = 13, cabin.hi[0] = 15.4, cabin.lo[2] = 1.0, cabin.hi[2] = 1.5;
+    w.boxes = {wall, ledge, car, cabin};
+    const LayerGrid g = drive(w, 10, {TraversabilityOptions()})[0];
+    // What the map calls blocked beside a cell (a one-cell inflation, as a planner inflates).
+    auto blockedNear = [&](double x, double y) {
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                if (at(g, "class", x + 0.2 * dx, y + 0.2 * dy) == 2.0f) return true;
+        return false;
+    };
+    int carCells = 0, wallCells = 0;
+    for (double x = 0.1; x < 20; x += 0.2) {
+        for (double y = 5.5; y < 6.3; y += 0.2) {
+            ++wallCells;
+            EXPECT_TRUE(at(g, "class", x, y) != kTraversable || blockedNear(x, y)) << "ledge / wall at " << x << ", " << y;
+            EXPECT_FALSE(at(g, "elevation", x, y) > 0.3f) << "ledge called ground at " << x << ", " << y;
+        }
+        if (x > 12 && x < 16.4)
+            for (double y = -5.9; y < -4.2; y += 0.2) {
+                ++carCells;
+                // The ground under the body or the ledge is seen where no ray hit what is above a
+                // column: such a cell may be free, but never without a blocked cell beside it
+                // (what a planner's one-cell inflation covers; eval-map's "unsafe beyond 1 cell").
+                EXPECT_TRUE(at(g, "class", x, y) != kTraversable || blockedNear(x, y)) << "car at " << x << ", " << y;
+                EXPECT_FALSE(at(g, "elevation", x, y) > 0.3f) << "car roof called ground at " << x << ", " << y;
+            }
+    }
+    EXPECT_GT(carCells, 100);
+    EXPECT_GT(wallCells, 300);
+}
+
+TEST(DriveTerrain, GapFillingBridgesNeitherADitchNorAKerb) {
+    World w;
+    // A ditch 0.5 m deep and 2 m wide across everything at x = 20..22 (wider than maxGapWidth: a
+    // ditch narrower than that, seen from afar, is a gap like any other to the rays), and a 30 cm
+    // kerb up to a pavement at y > 4, under a 32-ring sensor.
+    w.ground = [](double x, double y) { return (x >= 20 && x < 22 ? -0.5 : 0.0) + (y > 4 ? 0.3 : 0.0); };
+    TraversabilityOptions off, scansOnly;
+    off.fillGaps = false;
+    scansOnly.driveTerrain = false;
+    // The scans call both levels ground within 12 m (so the kerb has ground on both sides) ...
+    auto bothLevels = [](double dx, double dy, double) { return dx * dx + dy * dy < 144; };
+    const std::vector<LayerGrid> maps = drive(w, 8, {TraversabilityOptions(), off, scansOnly}, Lidar::hdl32(), 0, bothLevels);
+    int filled = 0;
+    for (const LayerGrid* g : {&maps[0], &maps[2]})
+        for (int cy = 0; cy < g->height(); ++cy)
+            for (int cx = 0; cx < g->width(); ++cx) {
+                if (g->layer("source").values[g->index(cx, cy)] != 2.0f) continue;
+                ++filled;
+                const double x = g->centreX(cx), y = g->centreY(cy);
+                EXPECT_FALSE(x > 19.9 && x < 22.1) << "the ditch was bridged at " << x << ", " << y;
+                if (g == &maps[2]) {  // ... and gap filling alone never joins the two levels
+                    EXPECT_NEAR(g->layer("elevation").values[g->index(cx, cy)], w.ground(x, y), 0.1) << x << ", " << y;
+                }
+            }
+    EXPECT_GT(filled, 0);
+    for (double x = 20.1; x < 22; x += 0.2)
+        for (double y = -3.9; y < 3.9; y += 0.2) EXPECT_NE(at(maps[0], "class", x, y), kTraversable) << "ditch at " << x << ", " << y;
+    for (float s : maps[1].layer("source").values) EXPECT_NE(s, 2.0f);
+}
+
+TEST(DriveTerrain, AParkedCarThatLeavesClearsAndItsPlaceIsTraversable) {
+    World w;
+    w.boxesOfScan = [](int k) {
+        std::vector<Box> b;
+        if (k < 4) {
+            Box car;
+            car.lo[0] = 14, car.hi[0] = 18.4, car.lo[1] = 1.0, car.hi[1] = 2.8, car.lo[2] = 0.3, car.hi[2] = 1.5;
+            b.push_back(car);
+        }
+        return b;
+    };
+    const LayerGrid g = drive(w, 12, {TraversabilityOptions()})[0];
+    EXPECT_GT(traversableShare(g, w, 14.2, 18.2, 1.2, 2.6), 0.9);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The shared labelled drives
+
+struct MapFloor {
+    const char* drive;
+    double recall, precision, unsafe1;  ///< [%] floors (ceiling for unsafe1), measured minus 0.25
+};
+
+/// kitti2rawlog + rawlog-octomap with `args` (started by `launcher`, e.g. mpirun, if given);
+/// returns the costmap's YAML ("" on failure, reported).
+std::string mapDrive(const std::string& seq, const fs::path& dir, const std::string& name, const std::string& args,
+                     const std::string& launcher = "") {
+    const std::string rawlog = (dir / "d.rawlog").string();
+    if (!fs::exists(rawlog)) {
+        const auto k = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + seq + "' -o '" + rawlog + "'");
+        if (k.status != 0) {
+            ADD_FAILURE() << k.output;
+            return "";
+        }
+    }
+    const auto r = gseg::test::runCommand(launcher + " '" + gseg::test::tool("rawlog-octomap") + "' -q -w -i '" + rawlog + "' -o '" +
+                                          (dir / name).string() + "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' " + args);
+    if (r.status != 0) {
+        ADD_FAILURE() << r.output;
+        return "";
+    }
+    return (dir / (name + "_costmap.yaml")).string();
+}
+
+class DriveTerrainReal : public ::testing::TestWithParam<MapFloor> {};
+
+TEST_P(DriveTerrainReal, MapsOfTheSharedDrivesKeepTheirFloors) {
+    const MapFloor f = GetParam();
+    const std::string rel = std::string("semantickitti-drives/sequences/") + f.drive + "/poses.txt";
+    const std::string poses = gseg::test::sharedData(rel);
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
+    const std::string seq = fs::path(poses).parent_path().string();
+    const fs::path dir = gseg::test::freshDir("drive_terrain", f.drive);
+    const std::string yaml = mapDrive(seq, dir, "m", "--threads 2");
+    ASSERT_FALSE(yaml.empty());
+    const gseg::io::RosMap map = gseg::io::readRosMap(yaml);
+    const auto truth = gseg::map::computeTruth(gseg::map::readLabelledDrive(seq), gseg::map::gridOf(map));
+    const gseg::map::MapScore s = gseg::map::scoreMap(truth, map);
+    EXPECT_GE(s.travRecall, f.recall) << f.drive;
+    EXPECT_GE(s.travPrecision, f.precision) << f.drive;
+    EXPECT_LE(s.unsafeBeyondCell, f.unsafe1) << f.drive;
+}
+
+// Measured on 2026-12-04 (rawlog-octomap -c config/kitti_hdl64.yaml, gseg eval-map): recall 97.31 /
+// 95.75 / 97.27 / 96.44, precision 99.65 / 99.82 / 99.80 / 99.76, unsafe beyond one cell 0.071 /
+// 0.047 / 0.111 / 0.141 %; without the model (driveTerrain: false, fillGaps: false) recall 96.76 /
+// 94.99 / 96.54 / 89.87.
+INSTANTIATE_TEST_SUITE_P(Drives, DriveTerrainReal,
+                         ::testing::Values(MapFloor{"00", 97.0, 99.5, 0.2}, MapFloor{"05", 95.5, 99.5, 0.2},
+                                           MapFloor{"07", 97.0, 99.5, 0.2}, MapFloor{"09", 96.2, 99.5, 0.2}),
+                         [](const auto& info) { return std::string("seq") + info.param.drive; });
+
+TEST(DriveTerrainReal, OneThreeThreadsAndTwoRanksGiveTheSameLayersAndCostmap) {
+    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
+    const std::string poses = gseg::test::sharedData(rel);
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
+    const std::string seq = fs::path(poses).parent_path().string();
+    const fs::path dir = gseg::test::freshDir("drive_terrain", "threads");
+    ASSERT_FALSE(mapDrive(seq, dir, "t1", "--threads 1").empty());
+    ASSERT_FALSE(mapDrive(seq, dir, "t3", "--threads 3").empty());
+    std::vector<std::string> runs{"t3"};
+    std::string whyNot;
+    const std::string mpirun = gseg::test::mpirun(2, whyNot);
+    if (!mpirun.empty()) {
+        ASSERT_FALSE(mapDrive(seq, dir, "r2", "--threads 1", mpirun).empty());
+        runs.push_back("r2");
+    }
+    for (const std::string& run : runs)
+        for (const char* suffix : {"_layers.tif", "_costmap.pgm", "_layer_class.png", "_layer_source.png"})
+            EXPECT_EQ(gseg::test::readText((dir / ("t1" + std::string(suffix))).string()),
+                      gseg::test::readText((dir / (run + suffix)).string()))
+                << run << suffix;
+    if (mpirun.empty()) GTEST_SKIP() << "threads compared; ranks not: " << whyNot;
+}
+
+TEST(DriveTerrainReal, GsegEvalScoresEachDriveAloneAndWithItsContext) {
+    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
+    if (gseg::test::sharedData(rel).empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
+    const std::string root = std::string(GSEG_SHARED_DIR) + "/data/semantickitti-drives";
+    const auto r = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval '" + root + "' --threads 2");
+    ASSERT_EQ(r.status, 0) << r.output;
+    // "09  10  P R F1 | P R F1 | relabelled, anchors + grown": with the context, recall higher on
+    // every drive (measured 2026-12-04: 00 94.38 -> 95.14, 05 95.94 -> 96.38, 07 98.30 -> 98.42,
+    // 09 91.66 -> 92.91) and precision at most 0.5 lower (09: 98.86 -> 98.43).
+    int drives = 0;
+    std::istringstream in(r.output.substr(r.output.find("drive context")));
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream l(line);
+        std::string seq, bar;
+        int frames = 0;
+        double p0 = 0, r0 = 0, f0 = 0, p1 = 0, r1 = 0, f1 = 0;
+        if (!(l >> seq >> frames >> p0 >> r0 >> f0 >> bar >> p1 >> r1 >> f1) || seq == "all") continue;
+        ++drives;
+        EXPECT_EQ(frames, 10) << line;
+        EXPECT_GT(r1, r0) << line;
+        EXPECT_GT(p1, p0 - 0.5) << line;
+    }
+    EXPECT_EQ(drives, 4) << r.output;
+    const auto off = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval '" + root + "' --threads 2 --no-drive-context");
+    ASSERT_EQ(off.status, 0) << off.output;
+    EXPECT_EQ(off.output.find("drive context"), std::string::npos) << off.output;
+}
+
+}  // namespace
