@@ -1,6 +1,7 @@
 // Readers and writers of the core io/ layer on hostile input: PLY and KITTI from memory, atomic
 // outputs on a full disk, interrupted runs, and outputs that are inputs.
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/eval/kitti_rings.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
 #include <support/child.hpp>
@@ -144,27 +145,27 @@ TEST(KittiRings, SweepsAreRingsAndJitterAtTheWrapIsNot) {
         for (int k = 0; k < 1000; ++k)
             add(ring == 1 && (k == 1 || k == 3) ? M_PI - 0.0005 : -M_PI + 2 * M_PI * (k + 0.5) / 1000);
     const std::size_t n = xyzi.size() / 4;
-    const std::vector<std::uint32_t> rings = gseg::io::kittiRings(xyzi.data(), n);
+    const std::vector<std::uint32_t> rings = gseg::eval::kittiRings(xyzi.data(), n);
     for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(rings[i], i < 700 ? 0u : i < 1700 ? 1u : 2u) << "point " << i;
-    const auto everySecondRing = gseg::io::kittiThinned(xyzi.data(), n, 2, 1);
+    const auto everySecondRing = gseg::eval::kittiThinned(xyzi.data(), n, 2, 1);
     ASSERT_EQ(everySecondRing.size(), 1700u);
     EXPECT_EQ(everySecondRing[699], 699u);
     EXPECT_EQ(everySecondRing[700], 1700u);
-    const auto everyThirdPoint = gseg::io::kittiThinned(xyzi.data(), n, 1, 3);
+    const auto everyThirdPoint = gseg::eval::kittiThinned(xyzi.data(), n, 1, 3);
     ASSERT_EQ(everyThirdPoint.size(), 900u);
     EXPECT_EQ(everyThirdPoint[1], 3u);
-    EXPECT_EQ(gseg::io::kittiThinned(xyzi.data(), n, 1, 1).size(), n);
-    EXPECT_THROW(gseg::io::kittiThinned(xyzi.data(), n, 0, 1), std::invalid_argument);
+    EXPECT_EQ(gseg::eval::kittiThinned(xyzi.data(), n, 1, 1).size(), n);
+    EXPECT_THROW(gseg::eval::kittiThinned(xyzi.data(), n, 0, 1), std::invalid_argument);
     std::vector<std::uint32_t> labels(n);
     for (std::size_t i = 0; i < n; ++i) labels[i] = std::uint32_t(i);
     std::vector<float> scan = xyzi;
-    gseg::io::thinKittiScan(scan, labels, 2, 1);
+    gseg::eval::thinKittiScan(scan, labels, 2, 1);
     ASSERT_EQ(labels.size(), 1700u);
     ASSERT_EQ(scan.size(), 4 * labels.size());
     EXPECT_EQ(labels[700], 1700u);
     EXPECT_EQ(scan[4 * 700], xyzi[4 * 1700]);
     labels.pop_back();
-    EXPECT_THROW(gseg::io::thinKittiScan(scan, labels, 1, 1), std::invalid_argument);
+    EXPECT_THROW(gseg::eval::thinKittiScan(scan, labels, 1, 1), std::invalid_argument);
 }
 
 TEST(AtomicFile, CommittedOrNothingAndNoTemporary) {

@@ -4,10 +4,12 @@
 #include "eval_plot.hpp"
 #include "eval_report.hpp"
 
+#include <gseg/eval/kitti_rings.hpp>
+#include <gseg/eval/metrics.hpp>
+#include <gseg/eval/kitti_sequence.hpp>
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
-#include <gseg/metrics.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
@@ -53,20 +55,12 @@ struct FrameList {
     std::vector<std::string> problems;
 };
 
-/// The scans of one sequence folder; throws std::runtime_error naming the folder where it cannot
-/// be listed (a symbolic link loop, no permission).
+/// The scans of one sequence folder (gseg::eval::listKittiScans); throws std::runtime_error naming
+/// the folder where it cannot be listed (a symbolic link loop, no permission).
 std::vector<Frame> sequenceFrames(const fs::path& seq) {
-    const std::string name = seq.filename().string();
-    const fs::path velodyne = seq / "velodyne";
     std::vector<Frame> frames;
-    try {
-        for (const auto& bin : fs::directory_iterator(velodyne))
-            if (bin.path().extension() == ".bin")
-                frames.push_back({name, bin.path().stem().string(), bin.path().string(),
-                                  (seq / "labels" / (bin.path().stem().string() + ".label")).string()});
-    } catch (const fs::filesystem_error& e) {
-        throw std::runtime_error(velodyne.string() + ": cannot list the scans (" + e.code().message() + ")");
-    }
+    for (const eval::KittiScan& s : eval::listKittiScans(seq.string()))
+        frames.push_back({seq.filename().string(), s.name, s.scan, s.label});
     return frames;
 }
 
@@ -139,7 +133,7 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
     try {
         std::vector<float> pts = io::readKittiBin(f.scan);
         std::vector<std::uint32_t> labels = io::readKittiLabels(f.label, pts.size() / 4);
-        io::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);  // (1, 1: as read)
+        eval::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);  // (1, 1: as read)
         const PointCloudView cloud(pts.data(), pts.size() / 4, 4 * sizeof(float));
         std::string note;
         if (warmUp) seg.segment(cloud, note);
