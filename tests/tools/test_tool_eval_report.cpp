@@ -1,5 +1,5 @@
 // `gseg eval`'s aggregation and reports on hand-made scores, and its configuration handling end to end.
-// (The shared-data run, serial == parallel, the python cross-check and bad trees: test_gseg_eval_tool.)
+// (The shared-data run, serial == parallel, the python cross-check and bad trees: test_tool_eval.cpp.)
 #include "eval_report.hpp"
 
 #include <support/paths.hpp>
