@@ -46,6 +46,7 @@ struct Setup {
     std::string pictureDir;   ///< breakdown picture per frame here ("" = none)
     unsigned ringStep = 1;    ///< score every ringStep-th laser ring only (a sparser sensor)
     unsigned pointStep = 1;   ///< ... and every pointStep-th point along the rings
+    std::string heightSummary;  ///< the sensor height and where it came from (the summary's line)
 };
 
 /// The frames found, and one line per sequence that gave none although asked for (or could not be
@@ -239,15 +240,16 @@ struct Cli {
 
 Setup makeSetup(const Cli& cli) {
     Setup setup;
-    mrpt::LoadedConfig cfg;  // library defaults = config/kitti_hdl64.yaml
+    mrpt::LoadedConfig cfg;
     try {
-        if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
+        cfg = mrpt::loadConfigOrDefault(cli.config);  // the one default without -c: distToGround auto
     } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
         throw std::runtime_error(e.what());
     }
     setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto, setup.sensorHeight = cfg.sensorHeight;
-    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
+    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "the default" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
+    setup.heightSummary = mrpt::heightSummary(cfg, cli.config);
     setup.predDir = cli.predDir;
     setup.breakdown = cli.breakdown;
     setup.ringStep = unsigned(cli.ringStep), setup.pointStep = unsigned(cli.pointStep);
@@ -325,7 +327,7 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         tools::say(" (thinned: --ring-step %d, --point-step %d)", cli.ringStep, cli.pointStep);
     if (!sequenceProblems.empty()) tools::say(", %zu sequence(s) without frames (named above)", sequenceProblems.size());
     if (setup.autoHeight) tools::say(", %zu without a height estimate (fallback used)", fallbacks);
-    tools::say("\n");
+    tools::say("\n%s\n", setup.heightSummary.c_str());
     if (rows.empty()) throw std::runtime_error("no frame could be scored (see the skipped frames above)");
     const auto seqs = summarise(rows);
     const std::string table = markdownTable(seqs);
@@ -369,7 +371,8 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
         "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
         "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped; a sequence that gives no frame (none asked "
         "for, an empty or unreadable velodyne/ folder) is named and the others are evaluated (exit 3). Without "
-        "--config: the library defaults, which are exactly config/kitti_hdl64.yaml. The root may also be given "
+        "--config: the library defaults with distToGround: auto (the sensor height estimated per frame); "
+        "-c config/kitti_hdl64.yaml fixes KITTI's 1.723 m. The root may also be given "
         "without -i (old form: gseg eval ROOT). Under mpirun or srun the frames are split over the processes by their "
         "points (--threads workers in each) and rank 0 writes the reports.",
         true, ranks.root());

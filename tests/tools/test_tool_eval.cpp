@@ -276,7 +276,7 @@ TEST(EvalTool, TwoMpiRanksWriteTheReportsOfASerialRun) {
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
     const fs::path dir = kDir / "mpi";
     fs::remove_all(dir);
-    const std::string args = " eval '" + root + "' --threads 1 --breakdown --report '";
+    const std::string args = " eval '" + root + "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' --threads 1 --breakdown --report '";
     auto serial = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "'" + args + (dir / "serial/k").string() + "'");
     ASSERT_EQ(serial.status, 0) << serial.output;
     auto ranks = gseg::test::runCommand(mpirun + "'" + gseg::test::tool("gseg") + "'" + args + (dir / "mpi/k").string() + "'");
