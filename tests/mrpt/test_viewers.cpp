@@ -295,14 +295,17 @@ TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The README's figures come from runs: parsed from README.md, compared with what the tools print
-// and write.
+// The README's figures come from runs: parsed from README.md and the pages it links that hold them
+// (docs/mrpt.md, docs/maps.md), compared with what the tools print and write.
 
 namespace {
 
-/// README.md with every run of whitespace as one space (its sentences wrap anywhere).
+/// README.md and its pages with figures, with every run of whitespace as one space (their
+/// sentences wrap anywhere).
 std::string readmeFlat() {
-    const std::string text = gseg::test::readText(std::string(GSEG_SOURCE_DIR) + "/README.md");
+    std::string text;
+    for (const char* page : {"/README.md", "/docs/mrpt.md", "/docs/maps.md"})
+        text += gseg::test::readText(std::string(GSEG_SOURCE_DIR) + page) + "\n";
     std::string flat;
     for (const char c : text)
         if (!std::isspace(static_cast<unsigned char>(c))) flat += c;
