@@ -6,7 +6,7 @@
 #include <gseg/io/ply.hpp>
 #include <gseg/map/map_builder.hpp>
 #include <gseg/map/scan_stream.hpp>
-#include <gseg/metrics.hpp>
+#include <gseg/eval/metrics.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/observation_points.hpp>

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Regenerates tests/label_hashes.txt, the golden label hashes of tests/test_label_lock.cpp (#21):
+# Regenerates tests/label_hashes.txt, the golden label hashes of tests/core/test_label_lock.cpp (#21):
 #
 #   tests/label_hashes.sh BUILD_DIR
 #
@@ -15,7 +15,7 @@ tmp=$(mktemp /tmp/label_hashes.XXXXXX)
 trap 'rm -f "$tmp" "$tmp.body"' EXIT
 GSEG_LABEL_HASHES_OUT="$tmp.body" "$bin" >/dev/null
 {
-    echo "# Golden labels of the segmenter (tests/test_label_lock.cpp): case, points, FNV-1a 64 of the label"
+    echo "# Golden labels of the segmenter (tests/core/test_label_lock.cpp): case, points, FNV-1a 64 of the label"
     echo "# bytes (one per point, 1 ground, 0 non-ground). kitti/ROOT/SEQ/FRAME: ../shared/data/ROOT's labelled"
     echo "# scans with config/kitti_hdl64.yaml (fixed) and config/auto_height.yaml (auto); vlp16/: mrpt-common's"
     echo "# test_velodyne_VLP16.rawlog with config/kitti_hdl64.yaml and config/vlp16.yaml; scene/NAME: the"

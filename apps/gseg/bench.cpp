@@ -61,11 +61,11 @@ struct Input {
 /// `skipped`.
 std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config, int threadsPerScan,
                               std::vector<std::string>& skipped) {
-    ::gseg::mrpt::LoadedConfig cfg;
-    if (!config.empty()) cfg = ::gseg::mrpt::loadConfig(config);
+    ::gseg::mrpt::LoadedConfig cfg = ::gseg::mrpt::loadConfigOrDefault(config);  // the one default without -c
     if (threadsPerScan > 0) cfg.params.threads = threadsPerScan;
-    tools::detail("parameters (%s):\n%s", config.empty() ? "library defaults" : config.c_str(),
+    tools::detail("parameters (%s):\n%s", config.empty() ? "the default" : config.c_str(),
                   ::gseg::mrpt::toYaml(cfg).c_str());
+    tools::say("%s\n", ::gseg::mrpt::heightSummary(cfg, config).c_str());
     std::vector<Input> inputs;
     for (const auto& path : paths) {
         Input in{std::filesystem::path(path).filename().string(), ::gseg::mrpt::loadScan(path), cfg.params};
@@ -209,7 +209,7 @@ int runBench(int argc, char** argv) {
     tools::CommandLine line("gseg bench",
                             "Time GSeg3D on scans: one warm-up pass, then median / p90 / min of the segment() call per "
                             "scan over N repeats, per phase and step, points per second, peak memory. Without "
-                            "--config: the library defaults. The scans may also be given without -i (old form: gseg "
+                            "--config: the library defaults with distToGround: auto (the one default). The scans may also be given without -i (old form: gseg "
                             "bench SCAN...). Writes no file. Exit code: 0 done, 1 bad input, 2 bad usage, 3 done but "
                             "some scans could not be timed (named).",
                             false);

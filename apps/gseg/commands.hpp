@@ -8,7 +8,7 @@
 namespace gseg::app {
 int runSegment(int argc, char** argv);
 int runBench(int argc, char** argv);
-/// Scores a 2D map against a labelled KITTI drive (gseg/map/map_score.hpp).
+/// Scores a 2D map against a labelled KITTI drive (gseg/eval/map_score.hpp).
 int runEvalMap(int argc, char** argv);
 /// Under an MPI launcher the frames are split over `ranks`; rank 0 writes the reports.
 int runEval(int argc, char** argv, tools::Ranks& ranks);

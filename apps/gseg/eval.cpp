@@ -4,10 +4,12 @@
 #include "eval_plot.hpp"
 #include "eval_report.hpp"
 
+#include <gseg/eval/kitti_rings.hpp>
+#include <gseg/eval/metrics.hpp>
+#include <gseg/eval/kitti_sequence.hpp>
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
-#include <gseg/metrics.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
@@ -47,6 +49,7 @@ struct Setup {
     unsigned ringStep = 1;    ///< score every ringStep-th laser ring only (a sparser sensor)
     unsigned pointStep = 1;   ///< ... and every pointStep-th point along the rings
     map::TraversabilityOptions traversability;  ///< the drive context's terrain model options (traversability:)
+    std::string heightSummary;  ///< the sensor height and where it came from (the summary's line)
 };
 
 /// The frames found, and one line per sequence that gave none although asked for (or could not be
@@ -56,20 +59,12 @@ struct FrameList {
     std::vector<std::string> problems;
 };
 
-/// The scans of one sequence folder; throws std::runtime_error naming the folder where it cannot
-/// be listed (a symbolic link loop, no permission).
+/// The scans of one sequence folder (gseg::eval::listKittiScans); throws std::runtime_error naming
+/// the folder where it cannot be listed (a symbolic link loop, no permission).
 std::vector<Frame> sequenceFrames(const fs::path& seq) {
-    const std::string name = seq.filename().string();
-    const fs::path velodyne = seq / "velodyne";
     std::vector<Frame> frames;
-    try {
-        for (const auto& bin : fs::directory_iterator(velodyne))
-            if (bin.path().extension() == ".bin")
-                frames.push_back({name, bin.path().stem().string(), bin.path().string(),
-                                  (seq / "labels" / (bin.path().stem().string() + ".label")).string()});
-    } catch (const fs::filesystem_error& e) {
-        throw std::runtime_error(velodyne.string() + ": cannot list the scans (" + e.code().message() + ")");
-    }
+    for (const eval::KittiScan& s : eval::listKittiScans(seq.string()))
+        frames.push_back({seq.filename().string(), s.name, s.scan, s.label});
     return frames;
 }
 
@@ -142,7 +137,7 @@ FrameResult evaluate(FrameSegmenter& seg, const Frame& f, const Setup& setup, bo
     try {
         std::vector<float> pts = io::readKittiBin(f.scan);
         std::vector<std::uint32_t> labels = io::readKittiLabels(f.label, pts.size() / 4);
-        io::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);  // (1, 1: as read)
+        eval::thinKittiScan(pts, labels, setup.ringStep, setup.pointStep);  // (1, 1: as read)
         const PointCloudView cloud(pts.data(), pts.size() / 4, 4 * sizeof(float));
         std::string note;
         if (warmUp) seg.segment(cloud, note);
@@ -268,7 +263,7 @@ WorldFrame segmentInWorld(FrameSegmenter& seg, const Frame& f, const Setup& setu
     WorldFrame w;
     w.sensorXyzi = io::readKittiBin(f.scan);
     w.truth = io::readKittiLabels(f.label, w.sensorXyzi.size() / 4);
-    io::thinKittiScan(w.sensorXyzi, w.truth, setup.ringStep, setup.pointStep);
+    eval::thinKittiScan(w.sensorXyzi, w.truth, setup.ringStep, setup.pointStep);
     const PointCloudView cloud(w.sensorXyzi.data(), w.sensorXyzi.size() / 4, 4 * sizeof(float));
     std::string note;
     w.labels = seg.segment(cloud, note).labels;
@@ -379,16 +374,17 @@ struct Cli {
 
 Setup makeSetup(const Cli& cli) {
     Setup setup;
-    mrpt::LoadedConfig cfg;  // library defaults = config/kitti_hdl64.yaml
+    mrpt::LoadedConfig cfg;
     try {
-        if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
+        cfg = mrpt::loadConfigOrDefault(cli.config);  // the one default without -c: distToGround auto
     } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
         throw std::runtime_error(e.what());
     }
     setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto, setup.sensorHeight = cfg.sensorHeight;
     setup.traversability = cfg.traversability;
-    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
+    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "the default" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
+    setup.heightSummary = mrpt::heightSummary(cfg, cli.config);
     setup.predDir = cli.predDir;
     setup.breakdown = cli.breakdown;
     setup.ringStep = unsigned(cli.ringStep), setup.pointStep = unsigned(cli.pointStep);
@@ -466,7 +462,7 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         tools::say(" (thinned: --ring-step %d, --point-step %d)", cli.ringStep, cli.pointStep);
     if (!sequenceProblems.empty()) tools::say(", %zu sequence(s) without frames (named above)", sequenceProblems.size());
     if (setup.autoHeight) tools::say(", %zu without a height estimate (fallback used)", fallbacks);
-    tools::say("\n");
+    tools::say("\n%s\n", setup.heightSummary.c_str());
     if (rows.empty()) throw std::runtime_error("no frame could be scored (see the skipped frames above)");
     const auto seqs = summarise(rows);
     const std::string table = markdownTable(seqs);
@@ -524,7 +520,8 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
         "Score GSeg3D on SemanticKITTI (ROOT/sequences/NN/velodyne/*.bin + labels/*.label) under the Ground "
         "Segmentation Benchmark protocol; frames without a usable label file are reported and skipped; a sequence that gives no frame (none asked "
         "for, an empty or unreadable velodyne/ folder) is named and the others are evaluated (exit 3). Without "
-        "--config: the library defaults, which are exactly config/kitti_hdl64.yaml. The root may also be given "
+        "--config: the library defaults with distToGround: auto (the sensor height estimated per frame); "
+        "-c config/kitti_hdl64.yaml fixes KITTI's 1.723 m. The root may also be given "
         "without -i (old form: gseg eval ROOT). Under mpirun or srun the frames are split over the processes by their "
         "points (--threads workers in each) and rank 0 writes the reports.",
         true, ranks.root());

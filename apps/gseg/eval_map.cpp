@@ -7,7 +7,7 @@
 #include <gseg/io/output_checks.hpp>
 #include <gseg/io/ros_map.hpp>
 #include <gseg/map/layer_file.hpp>
-#include <gseg/map/map_score.hpp>
+#include <gseg/eval/map_score.hpp>
 #include <gseg/mrpt/picture.hpp>
 #include <gseg/progress.hpp>
 

@@ -4,7 +4,7 @@
 
 #include "eval_report.hpp"
 
-#include <gseg/breakdown.hpp>
+#include <gseg/eval/breakdown.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <string>

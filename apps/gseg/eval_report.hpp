@@ -5,8 +5,8 @@
 
 #include "common/bytes.hpp"
 
-#include <gseg/breakdown.hpp>
-#include <gseg/metrics.hpp>
+#include <gseg/eval/breakdown.hpp>
+#include <gseg/eval/metrics.hpp>
 
 #include <array>
 #include <cstddef>

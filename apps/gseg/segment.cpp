@@ -33,15 +33,15 @@ void printPhase(const char* name, const PhaseReport& r) {
 
 int run(const Cli& cli) {
     using tools::say;
-    mrpt::LoadedConfig cfg;
-    if (!cli.config.empty()) cfg = mrpt::loadConfig(cli.config);
-    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "library defaults" : cli.config.c_str(),
+    const mrpt::LoadedConfig cfg = mrpt::loadConfigOrDefault(cli.config);  // the one default without -c
+    tools::detail("parameters (%s):\n%s", cli.config.empty() ? "the default" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
     const mrpt::Scan scan = mrpt::loadScan(cli.scan, cli.index);
     const PointCloudView cloud(scan.xyzi.data(), scan.size(), 4 * sizeof(float));
     mrpt::ScanSegmenter segmenter(cfg);
     const mrpt::ScanSegmentation s = segmenter.segment(cloud, false);
     const Result& r = s.result;
+    say("%s\n", mrpt::heightSummary(cfg, cli.config).c_str());
     if (cfg.distToGroundAuto) say("distToGround auto: %s\n", s.height.describe().c_str());
     if (!s.heightWarning.empty()) tools::note("gseg segment: %s: %s\n", cli.scan.c_str(), s.heightWarning.c_str());
 
@@ -97,8 +97,8 @@ int runSegment(int argc, char** argv) {
     TCLAP::ValueArg<std::string> input("i", "input", "the scan: KITTI .bin (float32 x,y,z,intensity), PLY, or MRPT "
                                        "rawlog", false, "", "SCAN", cmd);
     TCLAP::UnlabeledValueArg<std::string> scan("scan", "the scan, old form (same as -i)", false, "", "SCAN", cmd);
-    TCLAP::ValueArg<std::string> config("c", "config", "YAML or INI parameter file (default: library defaults, "
-                                        "identical to config/kitti_hdl64.yaml)", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> config("c", "config", "YAML or INI parameter file (default: the library "
+                                        "defaults with distToGround: auto, the sensor height estimated)", false, "", "FILE", cmd);
     TCLAP::ValueArg<std::string> labels("", "labels-out", "write one byte per input point, in input order: "
                                         "1 ground, 0 non-ground", false, "", "FILE", cmd);
     TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud as binary PLY: x, y, z, intensity, colour "

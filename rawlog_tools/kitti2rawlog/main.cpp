@@ -24,6 +24,7 @@
 
 #include "common/cli.hpp"
 
+#include <gseg/eval/kitti_sequence.hpp>
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/mrpt/gzip_stream.hpp>
@@ -157,12 +158,11 @@ std::vector<std::pair<long, std::string>> listScans(const Cli& c) {
     const fs::path dir = fs::path(c.sequence) / "velodyne";
     if (!fs::is_directory(dir)) throw std::runtime_error(dir.string() + ": no such folder (a KITTI sequence has velodyne/*.bin)");
     std::vector<std::pair<long, std::string>> out;
-    for (const auto& e : fs::directory_iterator(dir)) {
-        if (e.path().extension() != ".bin") continue;
-        const std::string stem = e.path().stem().string();
-        if (stem.empty() || stem.find_first_not_of("0123456789") != std::string::npos) continue;
-        const long k = std::stol(stem);
-        if (k >= c.first && (c.last < 0 || k <= c.last)) out.emplace_back(k, e.path().string());
+    for (const gseg::eval::KittiScan& s : gseg::eval::listKittiScans(c.sequence)) {
+        const std::optional<std::size_t> number = gseg::eval::kittiFrameNumber(s.name);  // other names: skipped
+        if (!number) continue;
+        const long k = long(*number);
+        if (k >= c.first && (c.last < 0 || k <= c.last)) out.emplace_back(k, s.scan);
     }
     std::sort(out.begin(), out.end());
     if (out.empty()) throw std::runtime_error(dir.string() + ": no scan NNNNNN.bin in the requested frame range");

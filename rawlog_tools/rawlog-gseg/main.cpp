@@ -18,6 +18,7 @@
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/errors.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/rawlog_segmenter.hpp>
 #include <gseg/progress.hpp>
@@ -177,7 +178,7 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
                   t.entries, t.scans, t.points, 100.0 * double(t.ground) / double(std::max<std::size_t>(1, t.points)),
                   t.scans ? t.ms / double(t.scans) : 0.0);
     result.message = text;
-    if (reporter.scans()) result.message += ", " + reporter.heights(config.distToGroundAuto);
+    if (reporter.scans()) result.message += ", " + reporter.heights(config.distToGroundAuto) + " " + gseg::mrpt::configOrigin(cli.config);
     if (t.nonFinite) result.message += ", " + std::to_string(t.nonFinite) + " non-finite points labelled non-ground";
     if (t.alreadySplit) result.message += ", " + std::to_string(t.alreadySplit) + " already split (passed through)";
     if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";

@@ -18,6 +18,7 @@
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
+#include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/progress.hpp>
 
 #include <chrono>
@@ -152,6 +153,7 @@ void printReport(const RunReport& r, double resolution) {
                 "skipped), poses from %s, sensor path %.2f m; points: %zu ground, %zu obstacle, %zu not used; %zu rays\n",
                 s.scans + r.skipped.size(), r.presegmented, r.rawWithPair, r.skipped.size(), r.poseSource.c_str(),
                 s.pathLength, s.groundPoints, s.obstaclePoints, s.pointsSkipped, s.rays);
+    gseg::tools::say("%s\n", r.height.c_str());
     if (r.reflections) gseg::tools::say("%zu points more than belowGroundMargin below the ground left out (reflections)\n", r.reflections);
     if (!r.heightFallbacks.empty())
         gseg::tools::say("distToGround: auto found no estimate in %zu scan(s), first: %s\n", r.heightFallbacks.size(),
@@ -295,6 +297,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     report.times = tally.times;
     report.presegmented = tally.presegmented, report.reflections = tally.reflections;
     report.heightFallbacks = tally.heightFallbacks, report.skipped = tally.skipped;
+    report.height = gseg::mrpt::heightSummary(cfg, cli.config);
     report.scansByProcess = tally.scansByRank;
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();

@@ -43,6 +43,7 @@ struct RunReport {
     std::size_t rawWithPair = 0;   ///< raw scans not segmented again because their pair was there
     std::size_t reflections = 0;   ///< points left out of both maps: far below the ground
     std::vector<std::string> heightFallbacks;  ///< distToGround: auto found no estimate: "scan k (...): what was used"
+    std::string height;  ///< the sensor height and where it came from (gseg::mrpt::heightSummary)
     std::vector<std::string> skipped;  ///< "scan k (...): reason"
     std::vector<std::string> written;
     std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)

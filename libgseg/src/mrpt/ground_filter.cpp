@@ -25,7 +25,7 @@ namespace gseg_filters {
 using gseg::PointCloudView;
 namespace gm = gseg::mrpt;
 
-GroundFilter::GroundFilter() : GroundFilter(gm::LoadedConfig()) {}
+GroundFilter::GroundFilter() : GroundFilter(gm::defaultConfig()) {}  // the one default: distToGround auto
 
 GroundFilter::GroundFilter(const gm::LoadedConfig& config, OutputFrame frame)
     : outputFrame(frame), segmenter_(config) {}

@@ -1,5 +1,6 @@
 #include <gseg/mrpt/segment_scan.hpp>
 
+#include <cstdio>
 #include <utility>
 
 namespace gseg::mrpt {
@@ -30,6 +31,19 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
     }
     out.nonFinitePoints = out.result.numNonFinite;
     return out;
+}
+
+std::string heightSummary(const LoadedConfig& config, const std::string& configPath) {
+    char height[120];
+    if (config.distToGroundAuto)
+        std::snprintf(height, sizeof height, "distToGround: auto, estimated per scan (fallback %.3f m)", config.params.distToGround);
+    else
+        std::snprintf(height, sizeof height, "distToGround: %.3f m, fixed", config.params.distToGround);
+    return std::string(height) + " " + configOrigin(configPath);
+}
+
+std::string configOrigin(const std::string& configPath) {
+    return "[" + (configPath.empty() ? std::string("the default: no configuration file") : configPath) + "]";
 }
 
 }  // namespace gseg::mrpt

@@ -27,24 +27,6 @@ std::vector<std::uint32_t> readKittiLabels(const std::string& path, std::size_t 
 std::vector<std::uint32_t> parseKittiLabels(const std::uint8_t* data, std::size_t size, const std::string& name,
                                             std::size_t expectedPoints = SIZE_MAX);
 
-/// The laser ring of each point of a KITTI velodyne scan, numbered from 0 in file order, found from
-/// the order the points are stored in: ring by ring, each ring sweeping once round in azimuth
-/// (counter-clockwise, atan2(y, x) rising). A new ring begins where the azimuth falls back by more
-/// than half a turn, if the ring before holds more than `minRingPoints` points (the few points right
-/// behind the sensor jitter across the wrap; an HDL-64E ring holds 1,000-2,200 points). A point
-/// with a non-finite x or y, and the point after it, never begin a ring. `xyzi`: 4 floats per point (x, y, z, intensity).
-std::vector<std::uint32_t> kittiRings(const float* xyzi, std::size_t points, std::size_t minRingPoints = 600);
-
-/// The points of a sparser sensor's scan taken out of a KITTI scan: the indices, in file order, of
-/// the points of every `ringStep`-th ring (rings 0, ringStep, 2 ringStep, ... of kittiRings()) whose
-/// index in the file is a multiple of `pointStep` (every pointStep-th point along the rings).
-/// 1 and 1 keep every point. Throws std::invalid_argument if a step is 0.
-std::vector<std::size_t> kittiThinned(const float* xyzi, std::size_t points, unsigned ringStep, unsigned pointStep);
-
-/// Thins a scan and its labels in place to the points kittiThinned() keeps (their order kept).
-/// Throws std::invalid_argument if a step is 0 or there is not one label per point.
-void thinKittiScan(std::vector<float>& xyzi, std::vector<std::uint32_t>& labels, unsigned ringStep, unsigned pointStep);
-
 /// Reads a whole regular file as bytes (memory: the file's size); throws std::runtime_error naming
 /// the file if it is missing, not a regular file (a folder, a pipe, a device) or unreadable.
 std::vector<std::uint8_t> readFileBytes(const std::string& path);

@@ -54,6 +54,7 @@ public:
         gseg::Result result;      ///< labels (one per input point), counters and timing of the segmentation
     };
 
+    /// With gseg::mrpt::defaultConfig(), the one default of every route (`distToGround: auto`).
     GroundFilter();
     explicit GroundFilter(const gseg::mrpt::LoadedConfig& config, OutputFrame frame = OutputFrame::Sensor);
 

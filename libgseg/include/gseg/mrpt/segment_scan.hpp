@@ -61,6 +61,15 @@ void forEachSplitPoint(const PointCloudView& cloud, const gseg::Result& result, 
     }
 }
 
+/// The sensor height of a tool's configuration and where it came from, one line for the tool's
+/// summary. `configPath`: the file given (-c), "" for none: then the configuration is
+/// defaultConfig(), the one default of every route (`distToGround: auto`). E.g.
+/// "distToGround: auto, estimated per scan (fallback 1.723 m) [the default: no configuration file]",
+/// "distToGround: 1.723 m, fixed [config/kitti_hdl64.yaml]".
+std::string heightSummary(const LoadedConfig& config, const std::string& configPath);
+/// The bracketed part of heightSummary(): "[FILE]", or "[the default: no configuration file]".
+std::string configOrigin(const std::string& configPath);
+
 /// When a fixed distToGround is checked against the scan (costs about one segmentation).
 enum class HeightCheck {
     FirstScan,  ///< the first scan with points this segmenter sees (a stream read in order)

@@ -169,6 +169,23 @@ TEST(SegmentTool, AutomaticSensorHeightOnTheRealVlp16Scan) {
     EXPECT_LT(h, 2.4);
 }
 
+// Without -c: the one default of every route (gseg::mrpt::defaultConfig(), distToGround auto), said
+// in the summary with where it came from; with a file, the file.
+TEST(SegmentTool, WithoutAConfigurationTheHeightIsEstimatedAndTheSummarySaysSo) {
+    if (!exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const ToolRun r = segmentTool("'" + kVlp16 + "'");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("distToGround: auto, estimated per scan (fallback 1.723 m) [the default: no configuration file]"),
+              std::string::npos) << r.output;
+    const auto at = r.output.find("distToGround auto: ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    EXPECT_GT(std::stod(r.output.substr(at + 19)), 1.9) << r.output;
+    const std::string kitti = std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml";
+    const ToolRun k = segmentTool("'" + kVlp16 + "' -c '" + kitti + "'");
+    ASSERT_EQ(k.status, 0) << k.output;
+    EXPECT_NE(k.output.find("distToGround: 1.723 m, fixed [" + kitti + "]"), std::string::npos) << k.output;
+}
+
 // --- Hostile runs (issue #9 items 6 to 9) --------------------------------------------------------------
 
 namespace {

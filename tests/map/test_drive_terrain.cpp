@@ -6,7 +6,7 @@
 // and on the shared labelled drives: map floors, 1 and 3 threads and 2 ranks byte for byte, and
 // gseg eval's drive context.
 #include <gseg/io/ros_map.hpp>
-#include <gseg/map/map_score.hpp>
+#include <gseg/eval/map_score.hpp>
 #include <gseg/map/terrain_layers.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/terrain_model.hpp>

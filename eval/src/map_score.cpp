@@ -1,16 +1,17 @@
 // Scoring a 2D map against a labelled KITTI drive: the rules of ../shared/tools/score_map.py
-// (gseg/map/map_score.hpp), and the picture of the scored cells.
+// (gseg/eval/map_score.hpp), and the picture of the scored cells.
+#include <gseg/eval/kitti_sequence.hpp>
 #include <gseg/io/kitti.hpp>
-#include <gseg/map/map_score.hpp>
+#include <gseg/eval/map_score.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/map/map_colours.hpp>  // backgroundColour(): the page around every map picture
 #include <gseg/mrpt/picture.hpp>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace fs = std::filesystem;
@@ -31,25 +32,18 @@ double upperMedian(std::vector<double>& v) {
 
 double percent(std::size_t n, std::size_t of) { return of ? 100.0 * double(n) / double(of) : kNaN; }
 
-/// The scans of `velodyne/`, sorted by name, each with its frame number.
+/// The scans of `velodyne/` (gseg::eval::listKittiScans), sorted by name, each with its frame number.
 std::vector<std::pair<std::string, std::size_t>> driveFrames(const fs::path& seq) {
     const fs::path velodyne = seq / "velodyne";
     std::error_code ec;
     if (!fs::is_directory(velodyne, ec)) throw std::runtime_error(velodyne.string() + ": no such folder (the drive's scans)");
     std::vector<std::pair<std::string, std::size_t>> frames;
-    try {
-        for (const auto& e : fs::directory_iterator(velodyne)) {
-            if (e.path().extension() != ".bin") continue;
-            const std::string stem = e.path().stem().string();
-            if (stem.empty() || stem.size() > 9 || !std::all_of(stem.begin(), stem.end(), [](char c) { return std::isdigit((unsigned char)c); }))
-                throw std::runtime_error(e.path().string() + ": the scan's name is not a frame number (NNNNNN.bin)");
-            frames.emplace_back(stem, std::size_t(std::stoul(stem)));
-        }
-    } catch (const fs::filesystem_error& e) {
-        throw std::runtime_error(velodyne.string() + ": cannot list the scans (" + e.code().message() + ")");
+    for (const eval::KittiScan& s : eval::listKittiScans(seq.string())) {
+        const std::optional<std::size_t> number = eval::kittiFrameNumber(s.name, 9);
+        if (!number) throw std::runtime_error(s.scan + ": the scan's name is not a frame number (NNNNNN.bin)");
+        frames.emplace_back(s.name, *number);
     }
     if (frames.empty()) throw std::runtime_error(velodyne.string() + ": no scans (*.bin)");
-    std::sort(frames.begin(), frames.end());
     return frames;
 }
 
@@ -66,8 +60,7 @@ LabelledDrive readLabelledDrive(const std::string& sequenceDir, const std::funct
     const auto frames = driveFrames(seq);
     const Eigen::Isometry3d tr = readKittiCalibTr((seq / "calib.txt").string());
     const std::string posesPath = (seq / "poses.txt").string();
-    const std::vector<Eigen::Isometry3d> poses = readKittiPoses(posesPath);
-    const Eigen::Isometry3d trInv = tr.inverse();
+    const std::vector<Eigen::Isometry3d> poses = kittiToVelodyneFrame(readKittiPoses(posesPath), tr);
     LabelledDrive drive;
     for (const auto& [name, number] : frames) {
         if (number >= poses.size())
@@ -76,7 +69,7 @@ LabelledDrive readLabelledDrive(const std::string& sequenceDir, const std::funct
         const std::string scanPath = (seq / "velodyne" / (name + ".bin")).string();
         const std::vector<float> pts = io::readKittiBin(scanPath);
         const std::vector<std::uint32_t> labels = io::readKittiLabels((seq / "labels" / (name + ".label")).string(), pts.size() / 4);
-        const Eigen::Matrix4d t = ((trInv * poses[number]) * tr).matrix();
+        const Eigen::Matrix4d t = poses[number].matrix();
         for (std::size_t n = 0; n < labels.size(); ++n) {
             const double x = pts[4 * n], y = pts[4 * n + 1], z = pts[4 * n + 2];
             if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))

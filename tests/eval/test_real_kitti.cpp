@@ -2,7 +2,8 @@
 // protocol itself against hand-computed counts and the independent scorer.
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/io/kitti.hpp>
-#include <gseg/metrics.hpp>
+#include <gseg/eval/kitti_rings.hpp>
+#include <gseg/eval/metrics.hpp>
 #include <gseg/sensor_height.hpp>
 #include <support/paths.hpp>
 
@@ -93,7 +94,7 @@ struct Scored {
     double p, r, f1;
 };
 
-/// A sparser sensor's scan taken out of each frame (gseg::io::kittiThinned): every `ring`-th ring,
+/// A sparser sensor's scan taken out of each frame (gseg::eval::kittiThinned): every `ring`-th ring,
 /// every `point`-th point along the rings (`gseg eval --ring-step --point-step`).
 struct Thinning {
     unsigned ring = 1, point = 1;
@@ -114,7 +115,7 @@ bool scoreAll(Segment&& segment, std::vector<Scored>& out, std::string& missing,
         }
         auto pts = gseg::io::readKittiBin(scan);
         auto labels = gseg::io::readKittiLabels(label, pts.size() / 4);
-        gseg::io::thinKittiScan(pts, labels, thin.ring, thin.point);
+        gseg::eval::thinKittiScan(pts, labels, thin.ring, thin.point);
         const gseg::PointCloudView cloud(pts.data(), pts.size() / 4, 16);
         const gseg::Result r = segment(cloud);
         EXPECT_EQ(r.labels.size(), cloud.size()) << "every point labelled";

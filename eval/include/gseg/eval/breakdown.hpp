@@ -4,7 +4,7 @@
 /// SemanticKITTI class, by height above the local (labelled) ground and by range. The point
 /// categories follow the scoring protocol of metrics.hpp (with vegetation).
 
-#include <gseg/metrics.hpp>
+#include <gseg/eval/metrics.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <array>

@@ -1,4 +1,5 @@
 // `gseg eval` end to end: report files, parallel == serial, the independent scorer, bad trees.
+#include <gseg/eval/kitti_rings.hpp>
 #include <gseg/io/kitti.hpp>
 #include <support/paths.hpp>
 
@@ -118,13 +119,13 @@ TEST(EvalTool, SingleScanMode) {
 }
 
 // --ring-step / --point-step: the frame scored (and its predictions) is the thinned scan of
-// gseg::io::kittiThinned, and absurd steps are usage errors.
+// gseg::eval::kittiThinned, and absurd steps are usage errors.
 TEST(EvalTool, ThinnedScansScoreTheKeptPointsOnly) {
     const std::string scan = gseg::test::sharedData("semantickitti/sequences/08/velodyne/000000.bin");
     const std::string label = gseg::test::sharedData("semantickitti/sequences/08/labels/000000.label");
     if (scan.empty() || label.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/08");
     const std::vector<float> pts = gseg::io::readKittiBin(scan);
-    const std::size_t kept = gseg::io::kittiThinned(pts.data(), pts.size() / 4, 2, 3).size();
+    const std::size_t kept = gseg::eval::kittiThinned(pts.data(), pts.size() / 4, 2, 3).size();
     ASSERT_GT(kept, pts.size() / 4 / 8);
     ASSERT_LT(kept, pts.size() / 4 / 5);
     const fs::path dir = kDir / "thinned";
@@ -275,7 +276,7 @@ TEST(EvalTool, TwoMpiRanksWriteTheReportsOfASerialRun) {
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
     const fs::path dir = kDir / "mpi";
     fs::remove_all(dir);
-    const std::string args = " eval '" + root + "' --threads 1 --breakdown --report '";
+    const std::string args = " eval '" + root + "' -c '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' --threads 1 --breakdown --report '";
     auto serial = gseg::test::runCommand("'" + gseg::test::tool("gseg") + "'" + args + (dir / "serial/k").string() + "'");
     ASSERT_EQ(serial.status, 0) << serial.output;
     auto ranks = gseg::test::runCommand(mpirun + "'" + gseg::test::tool("gseg") + "'" + args + (dir / "mpi/k").string() + "'");

@@ -1,5 +1,5 @@
 // `gseg eval`'s aggregation and reports on hand-made scores, and its configuration handling end to end.
-// (The shared-data run, serial == parallel, the python cross-check and bad trees: test_gseg_eval_tool.)
+// (The shared-data run, serial == parallel, the python cross-check and bad trees: test_tool_eval.cpp.)
 #include "eval_report.hpp"
 
 #include <support/paths.hpp>
@@ -174,8 +174,9 @@ const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "tool_eval";
 
 }  // namespace
 
-// --help says: without --config, eval uses exactly config/kitti_hdl64.yaml.
-TEST(EvalConfig, DefaultEqualsKittiHdl64YamlAndAutoHeightRuns) {
+// --help says: without --config, eval uses the one default (gseg::mrpt::defaultConfig(): the library
+// defaults with distToGround: auto), exactly config/auto_height.yaml; config/kitti_hdl64.yaml fixes 1.723 m.
+TEST(EvalConfig, DefaultEqualsAutoHeightYamlAndKittiHdl64Runs) {
     const std::string root = gseg::test::sharedData("semantickitti");
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
     const fs::path dir = kDir / "config";
@@ -184,7 +185,10 @@ TEST(EvalConfig, DefaultEqualsKittiHdl64YamlAndAutoHeightRuns) {
     int status = -1;
     std::string out = runGseg("eval", "'" + root + "' --threads 2 --report '" + (dir / "default").string() + "'", status);
     ASSERT_EQ(status, 0) << out;
-    out = runGseg("eval", "'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml' --report '" +
+    EXPECT_NE(out.find("4 frames evaluated, 3 skipped, 0 without a height estimate"), std::string::npos) << out;
+    EXPECT_NE(out.find("distToGround: auto, estimated per scan (fallback 1.723 m) [the default: no configuration file]"),
+              std::string::npos) << out;
+    out = runGseg("eval", "'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/auto_height.yaml' --report '" +
                       (dir / "yaml").string() + "'",
                   status);
     ASSERT_EQ(status, 0) << out;
@@ -192,10 +196,11 @@ TEST(EvalConfig, DefaultEqualsKittiHdl64YamlAndAutoHeightRuns) {
     EXPECT_EQ(std::count(def.begin(), def.end(), '\n'), 5);
     EXPECT_EQ(def, withoutLastColumn(slurp(dir / "yaml_frames.csv")));
 
-    // distToGround: auto is estimated per frame (the KITTI sensor is ~1.73 m up: similar scores).
-    out = runGseg("eval", "'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/auto_height.yaml'", status);
+    // A fixed height (the KITTI sensor is ~1.73 m up: similar scores), said in the summary.
+    out = runGseg("eval", "'" + root + "' --threads 2 --config '" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml'", status);
     ASSERT_EQ(status, 0) << out;
-    EXPECT_NE(out.find("4 frames evaluated, 3 skipped, 0 without a height estimate"), std::string::npos) << out;
+    EXPECT_NE(out.find("4 frames evaluated, 3 skipped\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("distToGround: 1.723 m, fixed [" GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml]"), std::string::npos) << out;
     EXPECT_NE(out.find("| **mean** | 2 seq. |"), std::string::npos) << out;
 
     // A bad config: one line naming the file, nothing written.

@@ -147,8 +147,12 @@ TEST(GroundFilter, KittiScanAsPointCloudMatchesTheCore) {
     for (std::size_t i = 0; i < view.size(); ++i) pc->insertPoint(view.x(i), view.y(i), view.z(i));
     mrpt::obs::CObservationPointCloud obs;
     obs.pointcloud = pc;
-    const auto out = gseg::GroundFilter().filter(obs);
+    const auto out = gseg::GroundFilter(gseg::mrpt::LoadedConfig{}).filter(obs);  // the core's own (fixed) parameters
     EXPECT_EQ(out.result.labels, core.labels);
+    // Without a configuration the filter takes the one default of every route: distToGround auto.
+    const auto byDefault = gseg::GroundFilter().filter(obs);
+    EXPECT_TRUE(byDefault.distToGroundEstimated);
+    EXPECT_EQ(byDefault.result.labels, gseg::mrpt::ScanSegmenter(gseg::mrpt::defaultConfig()).segment(view).result.labels);
 }
 
 TEST(GroundFilter, TwoDimensionalScansAreRejectedWithAReason) {

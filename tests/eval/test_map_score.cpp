@@ -1,8 +1,8 @@
-// The map scorer (gseg/map/map_score.hpp) and `gseg eval-map`: hand-placed drives with known
+// The map scorer (gseg/eval/map_score.hpp) and `gseg eval-map`: hand-placed drives with known
 // answers, bad input, and the same figures as ../shared/tools/score_map.py on the shared drives.
 #include <gseg/io/ros_map.hpp>
 #include <gseg/map/layer_file.hpp>
-#include <gseg/map/map_score.hpp>
+#include <gseg/eval/map_score.hpp>
 
 #include <support/child.hpp>
 #include <support/paths.hpp>

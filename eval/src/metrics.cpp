@@ -1,4 +1,4 @@
-#include <gseg/metrics.hpp>
+#include <gseg/eval/metrics.hpp>
 
 #include <cmath>
 #include <limits>

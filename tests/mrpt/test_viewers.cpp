@@ -295,14 +295,17 @@ TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The README's figures come from runs: parsed from README.md, compared with what the tools print
-// and write.
+// The README's figures come from runs: parsed from README.md and the pages it links that hold them
+// (docs/mrpt.md, docs/maps.md), compared with what the tools print and write.
 
 namespace {
 
-/// README.md with every run of whitespace as one space (its sentences wrap anywhere).
+/// README.md and its pages with figures, with every run of whitespace as one space (their
+/// sentences wrap anywhere).
 std::string readmeFlat() {
-    const std::string text = gseg::test::readText(std::string(GSEG_SOURCE_DIR) + "/README.md");
+    std::string text;
+    for (const char* page : {"/README.md", "/docs/mrpt.md", "/docs/maps.md"})
+        text += gseg::test::readText(std::string(GSEG_SOURCE_DIR) + page) + "\n";
     std::string flat;
     for (const char c : text)
         if (!std::isspace(static_cast<unsigned char>(c))) flat += c;
@@ -321,8 +324,14 @@ std::size_t pointsOf(const std::string& rawlog, const std::string& label) {
     return n;
 }
 
-/// "17.1 % ground, 35.00 ms per scan, distToGround auto: estimated 2.27 m" without the time.
-std::string withoutTime(const std::string& line) { return std::regex_replace(line, std::regex("[0-9.]+ ms per scan"), "ms"); }
+/// "17.1 % ground, 35.00 ms per scan, distToGround auto: estimated 2.27 m" without the time (and
+/// the configuration file named relative to the source folder, as the README runs it).
+std::string withoutTime(const std::string& line) {
+    const std::string shorter = std::regex_replace(line, std::regex("[0-9.]+ ms per scan"), "ms");
+    const std::string src = std::string(GSEG_SOURCE_DIR) + "/";
+    const std::size_t at = shorter.find("[" + src);
+    return at == std::string::npos ? shorter : shorter.substr(0, at + 1) + shorter.substr(at + 1 + src.size());
+}
 
 /// The summary line of a rawlog-gseg run ("rawlog-gseg: 1 entries, ..."), "" if none.
 std::string summaryLine(const std::string& output) {

@@ -1,4 +1,4 @@
-#include <gseg/breakdown.hpp>
+#include <gseg/eval/breakdown.hpp>
 #include <gseg/grid.hpp>
 
 #include <cmath>

@@ -1,5 +1,5 @@
-// Failure breakdown (gseg/breakdown.hpp): where false and missed ground come from, by hand.
-#include <gseg/breakdown.hpp>
+// Failure breakdown (gseg/eval/breakdown.hpp): where false and missed ground come from, by hand.
+#include <gseg/eval/breakdown.hpp>
 
 #include <gtest/gtest.h>
 
