@@ -455,6 +455,9 @@ py::dict statsDict(const gseg::map::MapStats& s) {
     d["free_voxels"] = s.freeVoxels;
     d["cells_traversable"] = s.cellsTraversable;
     d["cells_obstacle"] = s.cellsObstacle;
+    d["costmap_free"] = s.costmapFree;  // the costmap PGM's cells: what a planner loads
+    d["costmap_occupied"] = s.costmapOccupied;
+    d["costmap_unknown"] = s.costmapUnknown;
     d["path_length"] = s.pathLength;
     return d;
 }
@@ -633,7 +636,7 @@ Writes the files of `rawlog-octomap -o PREFIX`, all or none: PREFIX_ground.bt, P
 PREFIX_traversability.ot/.png/.ply/.3Dscene, the planner's costmap PREFIX_costmap.pgm + .yaml (ROS
 map_server), the 2.5D layers PREFIX_layers.tif (GeoTIFF) and a picture per layer; returns their paths. Existing files raise
 ValueError unless overwrite=True.)doc")
-        .def("stats", &PyMapBuilder::stats, "Counters of the map: scans, points, rays, voxels, cells, path length [m].")
+        .def("stats", &PyMapBuilder::stats, "Counters of the map: scans, points, rays, voxels, cells, path length [m], and the costmap's free / occupied / unknown cells (costmap_free, costmap_occupied, costmap_unknown: the PGM a planner loads).")
         .def("skipped", &PyMapBuilder::skipped, "Why scans were not used, one line each.");
 
     m.def("_view_of", [](const py::handle& points) {

@@ -76,7 +76,8 @@ public:
     std::unique_ptr<octomap::ColorOcTree> colouredTree() const;
     /// The top-down grid of every occupied voxel column.
     TopDownGrid topDown() const;
-    /// Counters and voxel counts (walks both trees).
+    /// Counters and voxel counts (walks both trees), and the costmap's cells (the layers are
+    /// computed for them unless write() has already counted them for this many scans).
     MapStats stats() const;
     /// The 2.5D layers (elevation, slope, step, roughness, clearance, class, cost) from the ground
     /// points of every scan and the occupied obstacle voxels (gseg/map/terrain_layers.hpp).
@@ -115,6 +116,10 @@ private:
     std::unique_ptr<GroundCells> groundCells_;  ///< the ground points of every scan, per cell
     mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
     mutable std::unique_ptr<TopDownGrid> topDown_;
+    /// The costmap's free, occupied and unknown cells, as of `costmapScans_` scans (write()
+    /// counts them as it writes the PGM; stats() when asked before).
+    mutable std::size_t costmapCells_[3] = {0, 0, 0};
+    mutable std::size_t costmapScans_ = 0;
     std::vector<Eigen::Vector3d> path_;
     MapStats stats_;
 };
