@@ -92,7 +92,8 @@ public:
     /// - `<prefix>_traversability.ot`: ground and obstacle voxels in one ColorOcTree;
     /// - `<prefix>_traversability.png`: the top-down picture (writeTopDownPng());
     /// - `<prefix>_traversability.ply`: the centres of the occupied voxels, coloured, with a
-    ///   `label` property (1 ground, 0 obstacle) for CloudCompare and other point-cloud viewers;
+    ///   class scalar field `scalar_class` (1 ground, 2 obstacle; CloudCompare's "class") and a
+    ///   `label` property (1 ground, 0 obstacle) for other programs (gseg/io/ply.hpp);
     /// - `<prefix>_traversability.3Dscene`: an MRPT scene for SceneViewer3D: the same voxels as
     ///   coloured boxes (COctoMapVoxels), the driven path as a blue line with a blue box at each
     ///   sensor position, axes at its start;
