@@ -22,6 +22,8 @@
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -84,11 +86,13 @@ Points viewPoints(const py::handle& obj) {
         throw py::value_error("points must have shape (N, 3) or (N, 4) (x, y, z[, intensity]), got " +
                               std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))));
     if (a.shape(0) == 0) throw py::value_error("points is empty (0 rows)");
-    const auto kind = a.dtype().kind();
-    if (kind != 'f' && kind != 'i' && kind != 'u')
-        throw py::type_error("points must hold numbers (float32 or float64), got dtype " + std::string(py::str(a.dtype())));
-    Points p;
+    // float32 (read in place) or float64 (one float32 copy); anything else is refused, naming the
+    // fix: an int or float16 array is more likely a mistake than points.
     const bool f32 = a.dtype().is(py::dtype::of<float>());
+    if (a.dtype().kind() != 'f' || (a.dtype().itemsize() != 4 && a.dtype().itemsize() != 8))
+        throw py::type_error("points must be float32 or float64, got dtype " + std::string(py::str(a.dtype())) +
+                             " (convert with points.astype(numpy.float32))");
+    Points p;
     if (f32 && a.strides(1) == py::ssize_t(sizeof(float)) && a.strides(0) >= py::ssize_t(3 * sizeof(float)) &&
         a.strides(0) % py::ssize_t(sizeof(float)) == 0) {
         p.view = gseg::PointCloudView(static_cast<const float*>(a.data()), std::size_t(a.shape(0)), std::size_t(a.strides(0)));
@@ -140,9 +144,32 @@ std::string configText(const py::handle& v, const std::string& key) {
                           " as its value");
 }
 
+/// Refuses a key that is not one of `known`, with the nearest one: "unknown parameter
+/// 'distToGrund' (did you mean 'distToGround'?); gseg.Params.keys() lists them".
+void checkKey(const std::string& key, const std::vector<std::string>& known, const std::string& what, const std::string& list) {
+    if (std::find(known.begin(), known.end(), key) != known.end()) return;
+    const py::list near = py::module_::import("difflib").attr("get_close_matches")(key, py::cast(known), 1, 0.6);
+    throw py::value_error("unknown " + what + " '" + key + "'" +
+                          (near.empty() ? std::string() : " (did you mean '" + std::string(py::str(near[0])) + "'?)") + "; " + list +
+                          " lists them");
+}
+
 /// Keyword arguments or a dict -> YAML text -> the one configuration loader (same keys, checks
 /// and messages as the files). Nested dicts: `sensorHeight`, `traversability`.
 gseg::mrpt::LoadedConfig configFromDict(const py::dict& d) {
+    std::vector<std::string> top = gseg::Params::keys();
+    top.insert(top.end(), {"distToGround", "sensorHeight", "traversability"});
+    for (const auto& item : d) {
+        const std::string key = py::str(item.first);
+        checkKey(key, top, "parameter", "gseg.Params.keys()");
+        if (key == "sensorHeight" && py::isinstance<py::dict>(item.second))
+            for (const auto& sub : item.second.cast<py::dict>())
+                checkKey(py::str(sub.first), gseg::SensorHeightOptions::keys(), "sensorHeight option", "Params().sensorHeight");
+        if (key == "traversability" && py::isinstance<py::dict>(item.second))
+            for (const auto& sub : item.second.cast<py::dict>())
+                checkKey(py::str(sub.first), gseg::map::TraversabilityOptions::keys(), "traversability option",
+                         "Params().traversability");
+    }
     std::string text;
     std::string nested;
     for (const auto& item : d) {
@@ -162,7 +189,17 @@ gseg::mrpt::LoadedConfig configFromDict(const py::dict& d) {
     try {
         return gseg::mrpt::loadConfigFromText(text + nested, gseg::mrpt::ConfigFormat::Yaml, "parameters");
     } catch (const std::exception& e) {
-        throw py::value_error(gseg::mrpt::errorReason(e));
+        // "parameters:2: ..." names a line of the text made above, not of any file: left out.
+        std::string m = gseg::mrpt::errorReason(e);
+        if (m.rfind("parameters", 0) == 0) {
+            std::size_t at = 10;
+            if (at < m.size() && m[at] == ':') ++at;
+            while (at < m.size() && std::isdigit(static_cast<unsigned char>(m[at]))) ++at;
+            if (at < m.size() && m[at] == ':') ++at;
+            while (at < m.size() && m[at] == ' ') ++at;
+            m.erase(0, at);
+        }
+        throw py::value_error(m);
     }
 }
 
@@ -455,6 +492,9 @@ py::dict statsDict(const gseg::map::MapStats& s) {
     d["free_voxels"] = s.freeVoxels;
     d["cells_traversable"] = s.cellsTraversable;
     d["cells_obstacle"] = s.cellsObstacle;
+    d["costmap_free"] = s.costmapFree;  // the costmap PGM's cells: what a planner loads
+    d["costmap_occupied"] = s.costmapOccupied;
+    d["costmap_unknown"] = s.costmapUnknown;
     d["path_length"] = s.pathLength;
     return d;
 }
@@ -537,10 +577,23 @@ Params({"distToGround": "auto"}) a dict
 Params("config/vlp16.yaml")     a YAML or INI file (as the tools read them), optionally with
                                 keyword arguments that override its values
 distToGround is "auto" wherever it is not given (as in the files); give a number to fix it.
-Unknown keys and invalid values raise ValueError naming the key. Params are immutable: make new
-ones with Params(old, key=value).)doc")
+Unknown keys raise ValueError naming the key and the nearest valid one ("did you mean"); invalid
+values raise ValueError naming the key. Read a value as p.heightGate or p["heightGate"].
+Params are immutable (a GroundSegmenter keeps the ones it was made with): p.heightGate = 0.2
+raises AttributeError; make a changed copy with p.with_(heightGate=0.2), the same as
+Params(p, heightGate=0.2).)doc")
         .def(py::init([](const py::object& source, const py::kwargs& kwargs) { return paramsFrom(source, kwargs); }),
              py::arg("source") = py::none())
+        .def("with_", [](const py::object& self, const py::kwargs& kwargs) { return paramsFrom(self, kwargs); },
+             "A copy with the keys given changed: p.with_(heightGate=0.2) (Params(p, heightGate=0.2)). Raises "
+             "ValueError as Params().")
+        .def("__setattr__", [](const PyParams&, const std::string& key, const py::object&) {
+            throw py::attribute_error("Params is immutable: '" + key + "' cannot be set; make a changed copy with p.with_(" + key +
+                                      "=...) (the same as gseg.Params(p, " + key + "=...))");
+        })
+        .def("__delattr__", [](const PyParams&, const std::string& key) {
+            throw py::attribute_error("Params is immutable: '" + key + "' cannot be deleted; p.with_(...) makes a changed copy");
+        })
         .def("to_dict", [](const PyParams& p) { return configDict(p.config); }, "Every key and its value (a dict).")
         .def("to_yaml", [](const PyParams& p) { return gseg::mrpt::toYaml(p.config); },
              "The configuration as a YAML file the tools read (-c).")
@@ -599,7 +652,7 @@ points: numpy array (N, 3) or (N, 4) (x, y, z[, intensity]) in metres, sensor fr
 check_height: with a fixed distToGround, compare it with this scan's own estimate and put a
         warning in result.height['warning'] where they disagree (costs about one segmentation).
 Returns a Result. Raises ValueError on an empty array, a wrong shape or no finite point, TypeError
-on a non-numeric dtype. Points with NaN/inf coordinates are labelled non-ground.)doc")
+on a dtype other than float32 or float64 (convert with points.astype(numpy.float32)). Points with NaN/inf coordinates are labelled non-ground.)doc")
         .def_property_readonly("params", &PySegmenter::params);
 
     py::class_<PyRawlogScans>(m, "RawlogScans", R"doc(
@@ -633,7 +686,7 @@ Writes the files of `rawlog-octomap -o PREFIX`, all or none: PREFIX_ground.bt, P
 PREFIX_traversability.ot/.png/.ply/.3Dscene, the planner's costmap PREFIX_costmap.pgm + .yaml (ROS
 map_server), the 2.5D layers PREFIX_layers.tif (GeoTIFF) and a picture per layer; returns their paths. Existing files raise
 ValueError unless overwrite=True.)doc")
-        .def("stats", &PyMapBuilder::stats, "Counters of the map: scans, points, rays, voxels, cells, path length [m].")
+        .def("stats", &PyMapBuilder::stats, "Counters of the map: scans, points, rays, voxels, cells, path length [m], and the costmap's free / occupied / unknown cells (costmap_free, costmap_occupied, costmap_unknown: the PGM a planner loads).")
         .def("skipped", &PyMapBuilder::skipped, "Why scans were not used, one line each.");
 
     m.def("_view_of", [](const py::handle& points) {
@@ -698,8 +751,19 @@ description): points a float32 array (N, 4).)doc");
         for (auto v : l)
             if (v > 1) throw py::value_error("labels must be 0 (non-ground) or 1 (ground)");
         checkNewOutput(path.string(), overwrite);
-        asValueError([&] { gseg::io::writeLabelledPly(path.string(), p.view, l); });
+        gseg::io::PlyOptions options;
+        // (N, 4): the intensity too, as `gseg segment --ply-out` keeps it (x, y, z, intensity as float32, C order).
+        py::array a = py::reinterpret_borrow<py::array>(points);
+        py::array_t<float, py::array::c_style | py::array::forcecast> xyzi;
+        if (a.shape(1) == 4) {
+            xyzi = py::array_t<float, py::array::c_style | py::array::forcecast>(a);
+            p.view = gseg::PointCloudView(xyzi.data(), std::size_t(xyzi.shape(0)), 4 * sizeof(float));
+            options.intensity = true;
+        }
+        asValueError([&] { gseg::io::writeLabelledPly(path.string(), p.view, l, gseg::io::PlyColours(), options); });
     }, py::arg("path"), py::arg("points"), py::arg("labels"), py::arg("overwrite") = false, R"doc(
-Writes a segmented scan as a binary PLY (x, y, z, colour and the class, as `gseg segment
---ply-out`), completely or not at all. An existing file raises ValueError unless overwrite=True.)doc");
+Writes a segmented scan as a binary PLY as `gseg segment --ply-out` does: x, y, z, the class
+(scalar_class: 1 ground, 2 non-ground), the intensity when points has 4 columns, colour (green
+ground, red non-ground) and label (1 ground, 0 non-ground); completely or not at all. An
+existing file raises ValueError unless overwrite=True.)doc");
 }

@@ -3,7 +3,10 @@
 /// What every gseg tool's command line has, in one place (#11 item 4): MRPT's TCLAP; `--help` and
 /// `--version` with gseg's version (exit 0); `-q/--quiet` (errors only) and `-v/--verbose` (more
 /// detail); `-w/--overwrite` for the tools that write files; a usage error as one line naming the
-/// tool (exit 2). MRPT's TCLAP never exits from inside the parser: every MPI rank parses the same
+/// tool (exit 2), in the same words in every tool: "unknown option '--ply_out' (did you mean
+/// '--ply-out'?)", "missing required option -o/--output", "option --ply-out needs a value (FILE)",
+/// "option -o/--output given twice", "unexpected argument 'x'". `--name=value` is read as
+/// `--name value`. MRPT's TCLAP never exits from inside the parser: every MPI rank parses the same
 /// arguments and returns the same code, only rank 0 prints.
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -11,6 +14,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace gseg::tools {
 
@@ -44,6 +48,10 @@ unsigned usableCores();
 /// unit K, M, G or T (powers of 1000, "2G", "1.5GB"). Throws std::invalid_argument naming `flag`.
 double parseMemorySize(const std::string& flag, const std::string& value);
 
+/// The candidate nearest to `typed` (edit distance, ignoring case; or the one candidate it begins
+/// with), "" when none is near enough to be what was meant: the "did you mean" of every tool.
+std::string nearestName(const std::string& typed, const std::vector<std::string>& candidates);
+
 /// Where gseg::Progress writes: stderr, or nowhere (null) with --quiet.
 std::FILE* progressOut();
 
@@ -61,7 +69,9 @@ public:
     TCLAP::CmdLine& cmd() { return cmd_; }
 
     /// Parses; sets the verbosity. Returns -1 to go on, kDone after --help or --version (printed),
-    /// kBadUsage after a usage error (one line printed on stderr).
+    /// kBadUsage after a usage error (one line printed on stderr). Unknown, repeated and
+    /// value-less options and missing required ones are found before TCLAP reads the line (TCLAP
+    /// would take an unknown option for a positional input, or say "Couldn't find match").
     int parse(int argc, char** argv);
 
     /// -w / --overwrite was given (false for a tool that writes no file).
@@ -79,6 +89,9 @@ public:
 
 private:
     class Output;
+    /// The usage mistakes found in `args` (argv without argv[0]; `--name=value` split in place),
+    /// "" when none; `helpOrVersion` set to the --help / -h / --version given, if any.
+    std::string checkArguments(std::vector<std::string>& args, std::string& helpOrVersion);
     std::string name_;
     bool printing_;
     TCLAP::CmdLine cmd_;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -59,6 +60,13 @@ int runCommand(int argc, char** argv, gseg::tools::Ranks& ranks) {
                          c.name);
             return 2;
         }
+    std::vector<std::string> names;
+    for (const Command& c : kCommands) names.push_back(c.name);
+    const std::string near = gseg::tools::nearestName(cmd, names);
+    if (!near.empty()) {  // one line, as the commands' own usage errors
+        std::fprintf(stderr, "gseg: unknown command '%s' (did you mean '%s'?); see gseg --help\n", cmd.c_str(), near.c_str());
+        return 2;
+    }
     std::fprintf(stderr, "gseg: unknown command '%s'\n", cmd.c_str());
     usage(stderr);
     return 2;

@@ -101,9 +101,10 @@ int runSegment(int argc, char** argv) {
                                         "defaults with distToGround: auto, the sensor height estimated)", false, "", "FILE", cmd);
     TCLAP::ValueArg<std::string> labels("", "labels-out", "write one byte per input point, in input order: "
                                         "1 ground, 0 non-ground", false, "", "FILE", cmd);
-    TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud as binary PLY: x, y, z, intensity, colour "
-                                     "(green ground, red non-ground) and label (1 ground, 0 non-ground; "
-                                     "CloudCompare filters by it)", false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> ply("", "ply-out", "write the cloud as binary PLY: x, y, z, the class (scalar_class: "
+                                     "1 ground, 2 non-ground; CloudCompare loads it as the scalar field 'class' and "
+                                     "filters by it), intensity, colour (green ground, red non-ground) and label "
+                                     "(1 ground, 0 non-ground, as --labels-out)", false, "", "FILE", cmd);
     TCLAP::ValueArg<std::string> png("", "png-out", "write a top-down picture of ground and obstacles", false, "",
                                      "FILE", cmd);
     TCLAP::ValueArg<std::string> scene("", "scene-out", "write an MRPT 3D scene (.3Dscene, for SceneViewer3D of "

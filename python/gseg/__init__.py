@@ -8,8 +8,11 @@ same scores as `gseg eval`.
     result = gseg.segment(points, config="config/kitti_hdl64.yaml")
     result.labels                                          # uint8 (N,): 1 ground, 0 non-ground
 
-Classes: Params (the configuration), GroundSegmenter (one per thread; releases the GIL), Result.
+Classes: Params (the configuration; immutable, p.with_(key=value) makes a changed copy),
+GroundSegmenter (one per thread; releases the GIL), Result, MapBuilder (traversability maps from
+posed scans, as rawlog-octomap), RawlogScans (the posed scans of a rawlog, for MapBuilder).
 Functions: segment, evaluate, read_kitti_bin, read_kitti_labels, read_ply, read_scan, write_ply.
+Points are float32 (read in place) or float64 (copied) arrays; other dtypes raise TypeError.
 Units are metres and degrees; points are in the sensor frame (x forward, y left, z up).
 """
 
@@ -24,7 +27,8 @@ def segment(points, config=None, **params):
     """Segments one scan in one call: GroundSegmenter(Params(config, **params)).segment(points).
 
     points: numpy array (N, 3) or (N, 4) (x, y, z[, intensity]) [m], sensor frame, float32 or
-            float64 (float32 with x, y, z consecutive is read without a copy).
+            float64 (float32 with x, y, z consecutive is read without a copy; other dtypes,
+            e.g. int32, raise TypeError: convert with points.astype(numpy.float32)).
     config: None (the defaults: KITTI HDL-64E parameters, the sensor height estimated per scan,
             distToGround "auto"), a YAML/INI file path as the tools take with -c, a dict, or a
             Params.

@@ -63,17 +63,20 @@ unsigned parseCount(const std::string& flag, const std::string& v, unsigned max)
 /// Parses the command line into `c` (TCLAP, the same on every MPI rank; only `printing` prints).
 /// Returns -1 to go on, else the exit code (0 after --help / --version, 2 on bad usage).
 int parseCli(int argc, char** argv, bool printing, Cli& c) {
+    const std::vector<std::string> files = gseg::map::TraversabilityMap::outputPaths("PREFIX");
+    std::string fileList;
+    for (std::size_t k = 0; k < files.size(); ++k) fileList += (k ? ", " : "") + files[k];
     gseg::tools::CommandLine line(
         "rawlog-octomap",
-        "Traversability OctoMaps (ground / obstacles) from a rawlog of 3D LiDAR scans: writes PREFIX_ground.bt, "
-        "PREFIX_obstacles.bt, PREFIX_traversability.ot and PREFIX_traversability.png (refused if one exists, unless "
-        "-w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
+        "Traversability OctoMaps (ground / obstacles), the costmap a planner loads (PREFIX_costmap.pgm + .yaml, "
+        "map_server format) and the 2.5D layers from a rawlog of 3D LiDAR scans. Writes " + std::to_string(files.size()) +
+        " files: " + fileList + " (refused if one exists, unless -w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
         "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
         "usage, 3 maps written but scans skipped (named).",
         true, printing);
     TCLAP::CmdLine& cmd = line.cmd();
     TCLAP::ValueArg<std::string> input("i", "input", "input rawlog (plain or gzip)", true, "", "IN.rawlog", cmd);
-    TCLAP::ValueArg<std::string> prefix("o", "output", "prefix of the four map files", true, "", "PREFIX", cmd);
+    TCLAP::ValueArg<std::string> prefix("o", "output", "prefix of the " + std::to_string(files.size()) + " map files (listed above)", true, "", "PREFIX", cmd);
     TCLAP::ValueArg<std::string> poses("", "poses", "TUM trajectory (t x y z qx qy qz qw, vehicle pose, matched by time "
                                        "stamp) or KITTI poses (3x4 per scan, with calib.txt beside it or --calib); "
                                        "default: poses in the rawlog", false, "", "FILE", cmd);
@@ -166,9 +169,15 @@ void printReport(const RunReport& r, double resolution) {
                 resolution, s.groundVoxels, s.obstacleVoxels, s.freeVoxels, s.clearedObstacleVoxels, s.groundUnderObstacle);
     gseg::tools::say("map memory: %.1f MB (%zu bricks of 8x8x8 voxels, %zu words of 4x4x4 with a value per voxel)\n",
                 double(s.mapBytes) / 1e6, s.bricks, s.brickValueBlocks);
-    gseg::tools::say("top-down grid: %zu traversable (%.1f m^2), %zu obstacle (%.1f m^2), %zu unknown cells\n",
-                s.cellsTraversable, double(s.cellsTraversable) * cellArea, s.cellsObstacle,
-                double(s.cellsObstacle) * cellArea, s.cellsUnknown);
+    // The map a planner loads first; the voxel picture's own grid after it, said to be that.
+    std::string pgm = "the costmap", yaml;
+    for (const auto& p : r.written)
+        if (p.size() > 12 && p.compare(p.size() - 12, 12, "_costmap.pgm") == 0) pgm = p, yaml = p.substr(0, p.size() - 3) + "yaml";
+    gseg::tools::say("costmap %s%s%s: %zu free (%.1f m^2), %zu occupied (%.1f m^2), %zu unknown cells\n", pgm.c_str(),
+                yaml.empty() ? "" : " + ", yaml.c_str(), s.costmapFree, double(s.costmapFree) * cellArea, s.costmapOccupied,
+                double(s.costmapOccupied) * cellArea, s.costmapUnknown);
+    gseg::tools::say("voxel columns (_traversability.png, not the costmap): %zu traversable, %zu obstacle, %zu unknown cells\n",
+                s.cellsTraversable, s.cellsObstacle, s.cellsUnknown);
     const PhaseTimes& t = r.times;
     const std::size_t processes = r.scansByProcess.size();
     std::string where = r.workers ? "summed over " + std::to_string(r.workers) + " worker thread(s)" : "one thread";
@@ -304,6 +313,9 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     report.poseSource = stream.poseSource();
     report.peakMbBeforeWriting = peakResidentMb();
     const auto t0 = std::chrono::steady_clock::now();
+    if (!quiet && gseg::tools::progressOut())  // the writing takes seconds on a drive: say it is going on
+        std::fprintf(gseg::tools::progressOut(), "rawlog-octomap: writing %zu map files (%s_*) ...\n",
+                     gseg::map::TraversabilityMap::outputPaths(cli.prefix).size(), cli.prefix.c_str());
     report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix); });
     report.times.writing = secondsSince(t0);
     report.stats = map.stats();

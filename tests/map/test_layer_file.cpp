@@ -149,6 +149,50 @@ TEST(LayerFile, FirstRowIsTheLargestYAndCellsSitWhereTheGridSays) {
     EXPECT_EQ(back.layer("elevation").values[back.index(3, 1)], 301.0f);
 }
 
+TEST(LayerFile, NoLimitIsAFiniteCapThatComesBackAsInfinity) {
+    // #33: the clearance band held +inf where no obstacle is above the ground, and GDAL's
+    // statistics (gdalinfo -stats, QGIS's stretch) came out NaN.
+    LayerGrid g = syntheticGrid(9, 6, 0.2, -4.3, -2.1, 12);
+    ASSERT_EQ(g.layers()[4].name, "clearance");
+    auto& clearance = g.find("clearance")->values;
+    for (std::size_t k = 0; k < clearance.size(); k += 3) clearance[k] = std::numeric_limits<float>::infinity();
+    const std::string path = fileIn("no_limit", "layers.tif");
+    gseg::map::writeLayersGeoTiff(path, g);
+    expectSameGrid(g, gseg::map::readLayersGeoTiff(path));  // +inf back as +inf, the other bands as they were
+    // What GDAL reads: the cap, said in the band's metadata; no NO_LIMIT on a band without +-inf.
+    GDALAllRegister();
+    GDALDatasetH ds = GDALOpen(path.c_str(), GA_ReadOnly);
+    ASSERT_NE(ds, nullptr);
+    std::vector<float> row(9);
+    ASSERT_EQ(GDALRasterIO(GDALGetRasterBand(ds, 5), GF_Read, 0, 5, 9, 1, row.data(), 9, 1, GDT_Float32, 0, 0), CE_None);
+    EXPECT_EQ(row[0], gseg::map::kNoLimit) << "cell (0, 0), +inf, is the image's last row";
+    const char* item = GDALGetMetadataItem(GDALGetRasterBand(ds, 5), "NO_LIMIT", nullptr);
+    ASSERT_NE(item, nullptr);
+    EXPECT_STREQ(item, "1000");
+    EXPECT_EQ(GDALGetMetadataItem(GDALGetRasterBand(ds, 1), "NO_LIMIT", nullptr), nullptr);
+    double stats[4] = {0, 0, 0, 0};
+    ASSERT_EQ(GDALComputeRasterStatistics(GDALGetRasterBand(ds, 5), FALSE, &stats[0], &stats[1], &stats[2], &stats[3], nullptr, nullptr),
+              CE_None);
+    for (double v : stats) EXPECT_TRUE(std::isfinite(v)) << "min, max, mean, stddev: " << stats[0] << ", " << stats[1] << ", " << stats[2] << ", " << stats[3];
+    EXPECT_EQ(stats[1], 1000.0);
+    GDALClose(ds);
+    std::string why;
+    if (!haveGdalTools(why)) GTEST_SKIP() << why;
+    const auto info = gseg::test::runCommand("gdalinfo -stats '" + path + "'");
+    ASSERT_EQ(info.status, 0) << info.output;
+    std::size_t statistics = 0;
+    for (std::size_t at = 0; (at = info.output.find("STATISTICS_", at)) != std::string::npos; ++at) {
+        const std::string line = info.output.substr(at, info.output.find('\n', at) - at);
+        if (line.rfind("STATISTICS_VALID_PERCENT", 0) == 0) continue;
+        ++statistics;
+        EXPECT_EQ(line.find("nan"), std::string::npos) << line;
+        EXPECT_EQ(line.find("inf"), std::string::npos) << line;
+    }
+    EXPECT_GE(statistics, 7u * 4) << "min, max, mean, stddev of each band:\n" << info.output;
+    EXPECT_NE(info.output.find("STATISTICS_MAXIMUM=1000"), std::string::npos) << info.output;
+    EXPECT_NE(info.output.find("NO_LIMIT=1000"), std::string::npos) << info.output;
+}
+
 TEST(LayerFile, GdalinfoListsEveryBandAndGdalTranslateReadsEveryValue) {
     std::string why;
     if (!haveGdalTools(why)) GTEST_SKIP() << why;

@@ -159,6 +159,79 @@ TEST(LayerPicture, ColoursAtKnownCellsWithXUpAndYLeft) {
     EXPECT_TRUE(sameColour(at(simg, s.mapLeft - 2, s.mapTop + 2), gseg::map::backgroundColour()));
 }
 
+/// Whether a text of the layout contains `part`.
+::testing::AssertionResult hasText(const LayerPictureLayout& l, const std::string& part) {
+    std::string all;
+    for (const auto& t : l.texts) {
+        if (t.text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+        all += "\n  " + t.text;
+    }
+    return ::testing::AssertionFailure() << "'" << part << "' in none of:" << all;
+}
+
+TEST(LayerPicture, TheColourRangeIsThe2ndTo98thPercentileWithTheClippedEndsSaid) {
+    // #33: a slope up to 63.6 deg at a few walls left the rest of the map one dark colour.
+    LayerGrid g(50, 20, 0.2, 0, 0);
+    auto& slope = g.add("slope", "deg", "ground inclination against the horizontal");
+    for (int cy = 0; cy < 20; ++cy)
+        for (int cx = 0; cx < 50; ++cx) slope.values[g.index(cx, cy)] = float(cx) * 0.2f;  // 0 to 9.8 deg
+    for (int cy = 0; cy < 5; ++cy) slope.values[g.index(49, cy)] = 63.6f;               // 0.5 %: walls
+    slope.values[g.index(0, 0)] = -5.0f;                                                 // one below
+    const LayerPictureLayout l = gseg::map::layerPictureLayout(g, "slope");
+    EXPECT_DOUBLE_EQ(l.low, 0.0);
+    EXPECT_NEAR(l.high, 9.8, 1e-5) << "the walls beyond the 98th percentile";
+    EXPECT_TRUE(l.clippedLow);
+    EXPECT_TRUE(l.clippedHigh);
+    EXPECT_TRUE(hasText(l, ">= 9.80 deg")) << "the bar's high end says values beyond take its colour";
+    EXPECT_TRUE(hasText(l, "<= 0.00 deg"));
+    EXPECT_TRUE(hasText(l, "(2nd-98th percentile; beyond: end colours)"));
+    EXPECT_TRUE(hasText(l, "values -5.0 deg to 63.6 deg")) << "the title keeps the whole range";
+    expectTextsFit(l);
+    const mrpt::img::CImage img = decode(gseg::map::encodeLayerPng(g, "slope"), "percentile");
+    const int c = l.pixelsPerCell / 2;
+    int col = 0, row = 0;
+    ASSERT_TRUE(l.toPixel(25, 10, col, row));  // 5 deg: the middle of the bar, not its dark end
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::viridis((25 * 0.2f - l.low) / (l.high - l.low))));
+    ASSERT_TRUE(l.toPixel(49, 0, col, row));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::viridis(1)));
+    // Nothing clipped: plain end labels, no note.
+    LayerGrid ramp(30, 4, 0.2, 0, 0);
+    auto& r = ramp.add("step", "m", "");
+    for (int cy = 0; cy < 4; ++cy)
+        for (int cx = 0; cx < 30; ++cx) r.values[ramp.index(cx, cy)] = float(cx);
+    const LayerPictureLayout plain = gseg::map::layerPictureLayout(ramp, "step");
+    EXPECT_FALSE(plain.clippedLow || plain.clippedHigh);
+    EXPECT_FALSE(hasText(plain, ">="));
+    EXPECT_FALSE(hasText(plain, "percentile"));
+}
+
+TEST(LayerPicture, InfinityIsShownAndNamedNotPaintedAsTheMaximum) {
+    // #33: the clearance's +inf (no obstacle above) was painted as its largest value, unnamed.
+    LayerGrid g(20, 10, 0.2, 0, 0);
+    auto& clearance = g.add("clearance", "m", "free height above the ground up to the lowest obstacle (inf: none)");
+    for (int cy = 0; cy < 10; ++cy)
+        for (int cx = 0; cx < 20; ++cx)
+            clearance.values[g.index(cx, cy)] = cx < 10 ? std::numeric_limits<float>::infinity() : cy == 0 ? NAN : 0.2f * float(cx);
+    const LayerPictureLayout l = gseg::map::layerPictureLayout(g, "clearance");
+    EXPECT_EQ(l.positiveInfinite, 100u);
+    EXPECT_EQ(l.negativeInfinite, 0u);
+    EXPECT_TRUE(hasText(l, "+inf: no obstacle above the ground (no limit)"));
+    EXPECT_TRUE(hasText(l, "unknown (NaN): no data for clearance"));
+    EXPECT_TRUE(hasText(l, "190 known; values 2.00 m to 3.80 m, 100 +inf")) << "100 +inf, 90 finite, 10 NaN";
+    expectTextsFit(l);
+    const mrpt::img::CImage img = decode(gseg::map::encodeLayerPng(g, "clearance"), "infinity");
+    const int c = l.pixelsPerCell / 2;
+    int col = 0, row = 0;
+    ASSERT_TRUE(l.toPixel(3, 5, col, row));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::positiveInfinityColour()));
+    ASSERT_TRUE(l.toPixel(19, 5, col, row));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::viridis(1)));
+    ASSERT_TRUE(l.toPixel(15, 0, col, row));
+    EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Unknown)));
+    const Colour white = gseg::map::positiveInfinityColour(), top = gseg::map::viridis(1);
+    EXPECT_FALSE(white.r == top.r && white.g == top.g && white.b == top.b);
+}
+
 TEST(LayerPicture, ViridisRunsFromDarkBlueToYellowAndIsMonotoneInLightness) {
     EXPECT_TRUE(sameColour(gseg::map::viridis(0), Colour{68, 1, 84}));
     EXPECT_TRUE(sameColour(gseg::map::viridis(1), Colour{253, 231, 37}));

@@ -71,8 +71,8 @@ std::string writeSmallMap(const fs::path& dir) {
     return prefix;
 }
 
-/// The PLY's class field, label and colours agree point by point: scalar 1 exactly where label 0,
-/// RGB the palette's colour of the label.
+/// The PLY's class field, label and colours agree point by point: class 1 exactly where label 1
+/// (ground), 2 where label 0; RGB the palette's colour of the label.
 void expectClassFieldAgrees(const std::string& ply, const std::string& scalar) {
     const std::vector<double> label = gseg::io::readPlyProperty(ply, "label"), cls = gseg::io::readPlyProperty(ply, scalar);
     const std::vector<double> r = gseg::io::readPlyProperty(ply, "red"), g = gseg::io::readPlyProperty(ply, "green"),
@@ -81,7 +81,7 @@ void expectClassFieldAgrees(const std::string& ply, const std::string& scalar) {
     std::size_t ones = 0;
     for (std::size_t i = 0; i < label.size(); ++i) {
         ASSERT_TRUE(label[i] == 0 || label[i] == 1) << ply << " vertex " << i;
-        ASSERT_EQ(cls[i], 1 - label[i]) << ply << " vertex " << i;
+        ASSERT_EQ(cls[i], label[i] == 1 ? 1 : 2) << ply << " vertex " << i;
         const std::uint8_t* want = label[i] == 1 ? gseg::palette::kGround : gseg::palette::kNonGround;
         ASSERT_EQ(r[i], want[0]) << i;
         ASSERT_EQ(g[i], want[1]) << i;
@@ -115,15 +115,20 @@ TEST(ViewerPly, ScanPlyCarriesTheClassFirstAsAScalarFieldAndReadsBack) {
     const std::string ply = (dir / "scan.ply").string();
     gseg::io::writeLabelledPly(ply, gseg::PointCloudView(s.xyzi.data(), s.labels.size(), 16), s.labels, gseg::io::PlyColours(),
                                options);
-    EXPECT_EQ(gseg::io::classScalarProperty(options), "scalar_non_ground");
+    EXPECT_EQ(gseg::io::classScalarProperty(options), "scalar_class");
     // CloudCompare shows the first scalar field: the class, before the intensity.
     const std::vector<std::string> props = plyProperties(ply);
-    const std::vector<std::string> want = {"x", "y", "z", "scalar_non_ground", "intensity", "red", "green", "blue", "label"};
+    const std::vector<std::string> want = {"x", "y", "z", "scalar_class", "intensity", "red", "green", "blue", "label"};
     EXPECT_EQ(props, want);
     EXPECT_EQ(gseg::io::readPly(ply), s.xyzi);  // x, y, z, intensity exactly
     const std::vector<double> label = gseg::io::readPlyProperty(ply, "label");
     for (std::size_t i = 0; i < label.size(); ++i) ASSERT_EQ(label[i], s.labels[i]) << i;
-    expectClassFieldAgrees(ply, "scalar_non_ground");
+    expectClassFieldAgrees(ply, "scalar_class");
+    // #33: the header says one convention, 1 the ground in every field (was scalar_non_ground 1
+    // non-ground beside label 1 ground).
+    const std::string text = gseg::test::readText(ply).substr(0, 1024);
+    EXPECT_NE(text.find("comment scalar_class: 1 ground, 2 non-ground"), std::string::npos) << text;
+    EXPECT_NE(text.find("comment label: 1 ground, 0 non-ground"), std::string::npos) << text;
 }
 
 TEST(ViewerPly, MapPlyCarriesTheObstacleClassAsAScalarFieldInThePalette) {
@@ -131,8 +136,8 @@ TEST(ViewerPly, MapPlyCarriesTheObstacleClassAsAScalarFieldInThePalette) {
     const std::string ply = writeSmallMap(dir) + "_traversability.ply";
     const std::vector<std::string> props = plyProperties(ply);
     ASSERT_GE(props.size(), 4u);
-    EXPECT_EQ(props[3], "scalar_obstacle");
-    expectClassFieldAgrees(ply, "scalar_obstacle");
+    EXPECT_EQ(props[3], "scalar_class");  // the scan's field, the same values
+    expectClassFieldAgrees(ply, "scalar_class");
     // The palette is the map's colours too.
     const auto t = gseg::map::colourOf(gseg::map::ColumnClass::Traversable), o = gseg::map::colourOf(gseg::map::ColumnClass::Obstacle);
     EXPECT_EQ(std::vector<int>({t.r, t.g, t.b}), std::vector<int>(gseg::palette::kGround, gseg::palette::kGround + 3));
@@ -192,7 +197,7 @@ TEST(ViewerPly, CloudCompareSilentLoadsTheClassFieldOfScanAndMapPlys) {
     const std::string map = writeSmallMap(dir / "map") + "_traversability.ply";
     const struct {
         std::string ply, field;
-    } cases[] = {{scan, "non ground"}, {map, "obstacle"}};
+    } cases[] = {{scan, "class"}, {map, "class"}};
     for (const auto& c : cases) {
         SCOPED_TRACE(c.ply);
         std::string error;
@@ -207,7 +212,7 @@ TEST(ViewerPly, CloudCompareSilentLoadsTheClassFieldOfScanAndMapPlys) {
         const auto g = std::find(asc.columns.begin(), asc.columns.end(), "G");
         ASSERT_NE(g, asc.columns.end());
         for (std::size_t i = 0; i < label.size(); ++i) {
-            ASSERT_EQ(asc.rows[i].at(k), 1 - label[i]) << "point " << i;
+            ASSERT_EQ(asc.rows[i].at(k), label[i] == 1 ? 1 : 2) << "point " << i;
             ASSERT_EQ(asc.rows[i].at(std::size_t(g - asc.columns.begin())),
                       label[i] == 1 ? gseg::palette::kGround[1] : gseg::palette::kNonGround[1]) << "point " << i;
         }

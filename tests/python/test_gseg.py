@@ -282,3 +282,82 @@ def test_paths_may_be_pathlib_paths_and_file_objects_are_refused(kitti_scan, tmp
         gseg.read_kitti_bin(f)  # a (closed) file object is not a path
     with pytest.raises(TypeError):
         gseg.write_ply(None, np.zeros((3, 3), np.float32), np.zeros(3, np.uint8))
+
+
+# --- errors that explain themselves (#33) -------------------------------------------------------
+
+def test_params_say_they_are_immutable_and_how_to_change_a_value():
+    p = gseg.Params(heightGate=0.1)
+    with pytest.raises(AttributeError, match=r"Params is immutable: 'distToGround' cannot be set; "
+                                             r"make a changed copy with p\.with_\(distToGround=\.\.\.\)"):
+        p.distToGround = 2  # was: "object has no attribute 'distToGround'" although it reads fine
+    with pytest.raises(AttributeError, match="Params is immutable"):
+        del p.heightGate
+    q = p.with_(heightGate=0.2, distToGround=1.8)
+    assert (q.heightGate, q.distToGround) == (0.2, 1.8)
+    assert p.heightGate == 0.1 and p == gseg.Params(heightGate=0.1)
+    assert q == gseg.Params(p, heightGate=0.2, distToGround=1.8)
+    assert "with_" in gseg.Params.__doc__
+
+
+@pytest.mark.parametrize("bad, message", [
+    (dict(distToGrund=2), r"^unknown parameter 'distToGrund' \(did you mean 'distToGround'\?\); gseg\.Params\.keys\(\) lists them$"),
+    (dict(heightgate=0.1), r"did you mean 'heightGate'\?"),
+    (dict(traversability={"resolutoin": 0.1}), r"^unknown traversability option 'resolutoin' \(did you mean 'resolution'\?\)"),
+    (dict(sensorHeight={"maxRang": 20}), r"^unknown sensorHeight option 'maxRang' \(did you mean 'maxRange'\?\)"),
+    (dict(bogus=1), r"^unknown parameter 'bogus'; gseg\.Params\.keys\(\) lists them$"),
+    (dict(heightGate=-1), r"^parameter 'heightGate' = -1 is invalid"),  # was prefixed "parameters:", as if from a file
+])
+def test_a_bad_key_is_named_with_the_nearest_valid_one(bad, message):
+    with pytest.raises(ValueError, match=message):
+        gseg.Params(**bad)
+    with pytest.raises(ValueError, match=message):
+        gseg.Params().with_(**bad)
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64, np.uint8, np.float16])
+def test_points_of_another_dtype_are_refused_naming_the_fix(dtype, tmp_path):
+    points = np.zeros((100, 4), dtype)  # an int32 array was accepted silently
+    with pytest.raises(TypeError, match=r"points must be float32 or float64, got dtype " + np.dtype(dtype).name +
+                       r" \(convert with points\.astype\(numpy\.float32\)\)"):
+        gseg.segment(points)
+    with pytest.raises(TypeError, match="float32 or float64"):
+        gseg.write_ply(tmp_path / "never.ply", points, np.zeros(100, np.uint8))
+    assert not (tmp_path / "never.ply").exists()
+
+
+def test_write_ply_keeps_the_intensity_as_ply_out(tmp_path):
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-10, 10, (500, 4)).astype(np.float32)
+    points[:, 3] = rng.uniform(0, 1, 500)
+    labels = (points[:, 2] < 0).astype(np.uint8)
+    gseg.write_ply(tmp_path / "four.ply", points, labels)
+    header = (tmp_path / "four.ply").read_bytes()[:1200].split(b"end_header")[0].decode()
+    assert "property float intensity" in header  # was dropped although the doc said "as --ply-out"
+    assert "property uchar scalar_class" in header and "comment scalar_class: 1 ground, 2 non-ground" in header
+    back = gseg.read_ply(tmp_path / "four.ply")
+    assert np.array_equal(back, points)
+    gseg.write_ply(tmp_path / "f64.ply", points.astype(np.float64), labels)  # converted, the same file
+    assert (tmp_path / "f64.ply").read_bytes() == (tmp_path / "four.ply").read_bytes()
+    gseg.write_ply(tmp_path / "three.ply", points[:, :3], labels)
+    assert b"intensity" not in (tmp_path / "three.ply").read_bytes()[:1200]
+    # The same bytes as the tool's, but for the header's first comment (the tool names the scan).
+    points.tofile(tmp_path / "scan.bin")
+    subprocess.run([str(BIN / "gseg"), "segment", "-i", str(tmp_path / "scan.bin"), "--ply-out", str(tmp_path / "tool.ply"),
+                    "--labels-out", str(tmp_path / "tool.labels"), "-q"], check=True, capture_output=True)
+    tool_labels = np.fromfile(tmp_path / "tool.labels", np.uint8)
+    gseg.write_ply(tmp_path / "py.ply", points, tool_labels)
+    ours, tool = (tmp_path / "py.ply").read_bytes(), (tmp_path / "tool.ply").read_bytes()
+    assert ours.split(b"\n", 3)[3] == tool.split(b"\n", 3)[3]
+
+
+def test_help_lists_every_class():
+    import inspect
+    import pydoc
+    classes = [name for name in gseg.__all__ if inspect.isclass(getattr(gseg, name))]
+    assert {"MapBuilder", "RawlogScans", "Params", "GroundSegmenter", "Result"} <= set(classes)
+    text = pydoc.render_doc(gseg, renderer=pydoc.plaintext)
+    first = gseg.__doc__.split("Functions:")[0]
+    for name in classes:
+        assert name in first, f"{name} missing from the package docstring's Classes"
+        assert f"class {name}" in text, f"{name} missing from help(gseg)"

@@ -307,6 +307,83 @@ TEST(EveryTool, VersionAndHelpSayTheVersion) {
     EXPECT_EQ(octomap.output, std::string("rawlog-octomap (gseg) ") + GSEG_VERSION + "\n");
 }
 
+/// One usage mistake of one tool and the one line it must answer (exit 2, before any work).
+struct UsageCase {
+    std::string tool;      ///< as it names itself ("gseg segment")
+    std::string command;   ///< what runs it
+    std::string args;
+    std::string message;   ///< after "<tool>: ", before "; see <tool> --help"
+};
+
+std::vector<UsageCase> usageCases() {
+    const std::string gseg = gseg::test::tool("gseg");
+    std::vector<UsageCase> cases;
+    struct Tool {
+        std::string name, command, misspelt, meant, missingArgs, missing, lastOption = "-c", lastMessage = "-c/--config needs a value (FILE)";
+    };
+    const std::vector<Tool> tools = {
+        // tool, command, a misspelt option (+ value), what it meant, a line missing what is needed, its message
+        {"gseg segment", gseg + " segment", "--ply_out x.ply", "--ply-out", "--ply-out x.ply",
+         "give the scan once: -i SCAN (or the old form, gseg segment SCAN)"},
+        {"gseg eval", gseg + " eval", "--thraeds 2", "--threads", "--threads 2",
+         "give either -i ROOT or --scan X.bin --labels X.label, and --threads 1..256"},
+        {"gseg eval-map", gseg + " eval-map", "--mpa m.yaml", "--map", "--map m.yaml",
+         "give the drive and the map once each: gseg eval-map DRIVE MAP.yaml (or -i DRIVE --map MAP.yaml)", "--map",
+         "--map needs a value (MAP.yaml)"},
+        {"gseg bench", gseg + " bench", "--repeet 2", "--repeat", "--repeat 2", "no scan to time: give -i SCAN (repeatable)"},
+        {"rawlog-gseg", gseg::test::tool("rawlog-gseg"), "--sensr S", "--sensor", "-i in.rawlog",
+         "missing required option -o/--output"},
+        {"rawlog-octomap", gseg::test::tool("rawlog-octomap"), "--pose_tolerance 1", "--pose-tolerance", "-o out",
+         "missing required option -i/--input"},
+        {"kitti2rawlog", gseg::test::tool("kitti2rawlog"), "-input seq", "--input", "-i seq",
+         "missing required option -o/--output", "--poses", "--poses needs a value (FILE)"},
+    };
+    for (const Tool& t : tools) {
+        const std::string misspelt = t.misspelt.substr(0, t.misspelt.find(' '));
+        cases.push_back({t.name, t.command, "-i x --bogus", "unknown option '--bogus'"});
+        cases.push_back({t.name, t.command, "-i x " + t.misspelt, "unknown option '" + misspelt + "' (did you mean '" + t.meant + "'?)"});
+        cases.push_back({t.name, t.command, t.missingArgs, t.missing});
+        cases.push_back({t.name, t.command, "-i x --quiet --quiet", "option -q/--quiet given twice"});
+        cases.push_back({t.name, t.command, "-i x " + t.lastOption, "option " + t.lastMessage});
+    }
+    cases.push_back({"gseg", gseg, "segmnet", "unknown command 'segmnet' (did you mean 'segment'?)"});
+    cases.push_back({"rawlog-gseg", gseg::test::tool("rawlog-gseg"), "-i x -o y z", "unexpected argument 'z' (this tool takes its inputs with options)"});
+    cases.push_back({"rawlog-octomap", gseg::test::tool("rawlog-octomap"), "-i x -o y --quiet=yes", "option -q/--quiet takes no value"});
+    return cases;
+}
+
+TEST(EveryTool, AUsageMistakeIsOneLineNamingTheOptionInTheSameWordsEverywhere) {
+    // Was: "--bogus: no sequences/ folder" (gseg eval), "give the scan once" (gseg segment --bogus),
+    // "Couldn't find match for argument (Argument: x.ply)" (--ply_out x.ply), "One or more required
+    // arguments missing! ( )" (rawlog-gseg, rawlog-octomap, kitti2rawlog, even for kitti2rawlog --bogus).
+    for (const UsageCase& c : usageCases()) {
+        const auto r = runCommand(c.command + " " + c.args + " 2>&1");
+        EXPECT_EQ(r.status, 2) << c.tool << " " << c.args << ": " << r.output;
+        EXPECT_EQ(r.output, c.tool + ": " + c.message + "; see " + c.tool + " --help\n") << c.tool << " " << c.args;
+    }
+}
+
+TEST(EveryTool, OptionsAreReadAsTheyAreMeant) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("tool_common", "spelling");
+    const std::string gseg = gseg::test::tool("gseg"), bin = fixture().bin.string();
+    // --name=value is --name value; switches go together (-qw); a value may start with '-'.
+    auto r = runCommand(gseg + " segment --input=" + bin + " --labels-out=" + (dir / "a.labels").string() + " -qw 2>&1");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(r.output, "");
+    EXPECT_TRUE(fs::exists(dir / "a.labels"));
+    r = runCommand(gseg + " segment -i " + kVlp16 + " --index -1 2>&1");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("--index needs N >= 0"), std::string::npos) << "-1 read as the value of --index: " << r.output;
+    // --help wins over a mistake on the same line; a wrong value's type names the option.
+    r = runCommand(gseg + " segment --bogus --help 2>&1");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("--ply-out"), std::string::npos) << r.output;
+    r = runCommand(gseg + " segment -i " + bin + " --index abc 2>&1");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(r.output, "gseg segment: option --index: cannot read 'abc' as its value; see gseg segment --help\n");
+}
+
 TEST(EveryTool, QuietPrintsNothingOnSuccessAndVerboseMore) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
     const fs::path dir = gseg::test::freshDir("tool_common", "quiet");

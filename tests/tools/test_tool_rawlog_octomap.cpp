@@ -1,7 +1,9 @@
 // rawlog-octomap end to end: a simulated drive with a mounted sensor (poses in the rawlog or a TUM
 // file, raw scans or rawlog-gseg's pairs), the real SemanticKITTI sequence 00 through kitti2rawlog
 // (and rawlog-gseg), threads, progress, skipped scans, failing early, and bad input.
+#include <gseg/io/ros_map.hpp>
 #include <gseg/map/poses.hpp>
+#include <gseg/map/traversability_map.hpp>
 #include <support/child.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/sim_drive.hpp>
@@ -69,14 +71,15 @@ void expectSameMaps(const std::string& one, const std::string& two) {
     }
 }
 
-/// stderr lines that are not progress.
+/// stderr lines that are not progress (nor the line saying the maps are being written).
 std::vector<std::string> messageLines(const std::string& err) {
     std::vector<std::string> out;
     std::size_t from = 0;
     while (from < err.size()) {
         const std::size_t to = std::min(err.find('\n', from), err.size());
         const std::string line = err.substr(from, to - from);
-        if (!line.empty() && line.find("scans/s") == std::string::npos) out.push_back(line);
+        if (!line.empty() && line.find("scans/s") == std::string::npos && line.rfind("rawlog-octomap: writing ", 0) != 0)
+            out.push_back(line);
         from = to + 1;
     }
     return out;
@@ -107,7 +110,44 @@ TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
     for (const char* phase : {"read ", "segmentation ", "transform ", "ray casting ", "map update ", "writing "})
         EXPECT_NE(r.out.find(phase), std::string::npos) << "time of " << phase << " in: " << r.out;
     expectDriveMap(dir + "/m");
+    // One map truth (#33): the summary's costmap counts are the PGM's pixels, and it names the files.
+    const gseg::io::RosMap costmap = gseg::io::readRosMap(dir + "/m_costmap.yaml");
+    std::size_t free = 0, occupiedCells = 0, unknown = 0;
+    for (int cy = 0; cy < costmap.height; ++cy)
+        for (int cx = 0; cx < costmap.width; ++cx) {
+            const gseg::io::RosCell c = costmap.at(cx, cy);
+            ++(c == gseg::io::RosCell::Free ? free : c == gseg::io::RosCell::Occupied ? occupiedCells : unknown);
+        }
+    EXPECT_GT(free, 0u);
+    EXPECT_GT(occupiedCells, 0u);
+    const std::string counts = "costmap " + dir + "/m_costmap.pgm + " + dir + "/m_costmap.yaml: " + std::to_string(free) + " free (";
+    EXPECT_NE(r.out.find(counts), std::string::npos) << "wanted '" << counts << "' in: " << r.out;
+    EXPECT_NE(r.out.find(std::to_string(occupiedCells) + " occupied ("), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(std::to_string(unknown) + " unknown cells\n"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("voxel columns (_traversability.png, not the costmap): "), std::string::npos) << r.out;
+    // Every file is written, named in "wrote" lines; the writing has a line of its own while it lasts.
+    const auto files = gseg::map::TraversabilityMap::outputPaths(dir + "/m");
+    EXPECT_EQ(files.size(), 16u);
+    for (const std::string& f : files) {
+        EXPECT_TRUE(fs::exists(f)) << f;
+        EXPECT_NE(r.out.find("wrote " + f + "\n"), std::string::npos) << f << " in: " << r.out;
+    }
+    EXPECT_NE(r.err.find("rawlog-octomap: writing 16 map files (" + dir + "/m_*) ...\n"), std::string::npos) << r.err;
     fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, HelpNamesEveryFileWritten) {
+    const gseg::test::CommandResult r = gseg::test::runToolCommand("rawlog-octomap", "--help");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::string help = r.output;  // TCLAP wraps the text: join its lines
+    for (std::size_t at; (at = help.find("\n")) != std::string::npos;) {
+        std::size_t end = at + 1;
+        while (end < help.size() && help[end] == ' ') ++end;
+        help.replace(at, end - at, " ");
+    }
+    for (const std::string& f : gseg::map::TraversabilityMap::outputPaths("PREFIX"))
+        EXPECT_NE(help.find(f), std::string::npos) << f << " not named in: " << r.output;
+    EXPECT_EQ(help.find("four"), std::string::npos) << r.output;
 }
 
 TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {

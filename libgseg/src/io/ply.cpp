@@ -213,12 +213,7 @@ std::vector<float> readPly(const std::string& path) {
     return parsePly(bytes.data(), bytes.size(), path);
 }
 
-std::string classScalarProperty(const PlyOptions& options) {
-    std::string name = "scalar_";
-    for (const char c : options.nonGroundName)
-        name += (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ? c : '_';
-    return name;
-}
+std::string classScalarProperty(const PlyOptions&) { return "scalar_class"; }
 
 std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                              const PlyColours& colours, const PlyOptions& options) {
@@ -228,13 +223,16 @@ std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std:
     if (options.intensity && cloud.strideBytes() < 4 * sizeof(float))
         throw std::invalid_argument("writeLabelledPly: intensity asked for, but the points are " +
                                     std::to_string(cloud.strideBytes()) + " bytes apart (x, y, z, intensity need 16)");
+    // One convention in the file: 1 is the ground in every field (class, label); the class
+    // field's other value is 2, as in the map's `class` layer.
     const std::string scalar = classScalarProperty(options);
     std::string out = "ply\nformat binary_little_endian 1.0\ncomment " + options.comment + "\ncomment " + scalar + ": 1 " +
-                      options.nonGroundName + ", 0 " + options.groundName +
-                      " (CloudCompare's first scalar field: on its default ramp " + options.nonGroundName +
-                      " red, " + options.groundName + " blue)\ncomment label: 1 " + options.groundName + " (" +
-                      colours.groundName + "), 0 " + options.nonGroundName + " (" + colours.nonGroundName +
-                      ")\nelement vertex " + std::to_string(cloud.size()) +
+                      options.groundName + ", 2 " + options.nonGroundName +
+                      " (the map's class values; CloudCompare's first scalar field 'class', on its default ramp " +
+                      options.groundName + " blue, " + options.nonGroundName + " red; its Colors: RGB shows the colours)" +
+                      "\ncomment label: 1 " + options.groundName + ", 0 " + options.nonGroundName + " (as gseg's labels files)" +
+                      "\ncomment red, green, blue: " + options.groundName + " " + colours.groundName + ", " +
+                      options.nonGroundName + " " + colours.nonGroundName + "\nelement vertex " + std::to_string(cloud.size()) +
                       "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar " + scalar + "\n" +
                       (options.intensity ? "property float intensity\n" : "") +
                       "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar label\nend_header\n";
@@ -244,7 +242,7 @@ std::string labelledPlyBytes(const PointCloudView& cloud, const std::vector<std:
     for (std::size_t i = 0; i < cloud.size(); ++i, p += record) {
         const float* point = cloud.point(i);
         std::memcpy(p, point, 12);
-        p[12] = char(labels[i] ? 0 : 1);
+        p[12] = char(labels[i] ? 1 : 2);
         if (options.intensity) std::memcpy(p + 13, point + 3, 4);
         char* rest = p + record - 4;
         std::memcpy(rest, labels[i] ? colours.ground : colours.nonGround, 3);

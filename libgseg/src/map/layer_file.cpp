@@ -7,9 +7,12 @@
 #include <cpl_vsi.h>
 #include <gdal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -111,8 +114,20 @@ GDALDatasetH memoryDataset(const LayerGrid& grid) {
         GDALSetMetadataItem(band, "UNIT", layer.unit.c_str(), nullptr);
         GDALSetMetadataItem(band, "MEANING", layer.meaning.c_str(), nullptr);
         GDALSetRasterNoDataValue(band, std::numeric_limits<double>::quiet_NaN());
+        // +-inf as +-kNoLimit, said in the band's metadata: GDAL's statistics stay finite.
+        const bool infinite = std::any_of(layer.values.begin(), layer.values.end(), [](float v) { return std::isinf(v); });
+        if (infinite) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%g", double(kNoLimit));
+            GDALSetMetadataItem(band, "NO_LIMIT", text, nullptr);
+        }
+        std::vector<float> capped(infinite ? std::size_t(w) : 0);
         for (int row = 0; row < h; ++row) {  // image row 0 = the grid's last row (largest y)
             const float* src = layer.values.data() + grid.index(0, h - 1 - row);
+            if (infinite) {
+                for (int cx = 0; cx < w; ++cx) capped[std::size_t(cx)] = std::isinf(src[cx]) ? (src[cx] > 0 ? kNoLimit : -kNoLimit) : src[cx];
+                src = capped.data();
+            }
             if (GDALRasterIO(band, GF_Write, 0, row, w, 1, const_cast<float*>(src), w, 1, GDT_Float32, 0, 0) != CE_None) {
                 GDALClose(ds);
                 return nullptr;
@@ -200,6 +215,8 @@ LayerGrid readLayersGeoTiff(const std::string& path) {
         if (unit.empty())
             if (const char* u = GDALGetMetadataItem(band, "UNIT", nullptr)) unit = u;
         const char* meaning = GDALGetMetadataItem(band, "MEANING", nullptr);
+        const char* noLimitText = GDALGetMetadataItem(band, "NO_LIMIT", nullptr);
+        const float noLimit = noLimitText ? std::strtof(noLimitText, nullptr) : 0.0f;
         if (GDALRasterIO(band, GF_Read, 0, 0, w, h, buffer.data(), w, h, GDT_Float32, 0, 0) != CE_None || errors.failed())
             refuse(path, "truncated or damaged: band " + std::to_string(b) + " cannot be read (" + errors.text("no message") + ")");
         int hasNodata = 0;
@@ -209,8 +226,10 @@ LayerGrid readLayersGeoTiff(const std::string& path) {
             const int cy = northUp ? h - 1 - row : row;
             const float* src = buffer.data() + std::size_t(row) * std::size_t(w);
             float* dst = layer.values.data() + grid.index(0, cy);
-            for (int cx = 0; cx < w; ++cx)
+            for (int cx = 0; cx < w; ++cx) {
                 dst[cx] = hasNodata && !std::isnan(nodata) && src[cx] == float(nodata) ? std::numeric_limits<float>::quiet_NaN() : src[cx];
+                if (noLimit > 0 && std::fabs(dst[cx]) == noLimit) dst[cx] = std::copysign(std::numeric_limits<float>::infinity(), dst[cx]);
+            }
         }
     }
     return grid;

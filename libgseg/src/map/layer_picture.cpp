@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 namespace gseg::map {
 namespace {
@@ -22,6 +24,8 @@ constexpr int kBarWidth = 20, kBarHeight = 256;  // [px] the colour bar
 constexpr int kAxesBlock = 240;               // [px] right of the legend band: axes and scale bar
 constexpr int kAxesBandHeight = 140;          // [px] height they need
 const Colour kOtherClass{255, 255, 255};      // a class value other than 1 and 2
+const Colour kPlusInfinity{255, 255, 255}, kMinusInfinity{0, 0, 0};
+constexpr double kLowPercentile = 2, kHighPercentile = 98;  // [%] the colour bar's range when not given
 
 /// matplotlib's viridis at t = 0, 1/8, ..., 1.
 constexpr unsigned char kViridis[9][3] = {{68, 1, 84},   {71, 45, 123},  {59, 82, 139},  {44, 114, 142}, {33, 145, 140},
@@ -64,6 +68,30 @@ const LayerGrid::Layer& checkedLayer(const LayerGrid& grid, const std::string& n
     return layer;
 }
 
+/// The `p` percentile (0 to 100) of `sorted` values: the value at rank p / 100 * (n - 1),
+/// rounded down for the low end of a range (`down`), up for the high end.
+double percentile(const std::vector<float>& sorted, double p, bool down) {
+    const double rank = p / 100.0 * double(sorted.size() - 1);
+    return sorted[std::size_t(down ? std::floor(rank) : std::ceil(rank))];
+}
+
+/// The colour bar's range of the finite values `v` (sorted here): the 2nd to 98th percentile; if
+/// those are equal (a layer almost all one value, e.g. step 0), the 0.5th to 99.5th; if those
+/// too, the whole range (the rare other values must still show).
+std::pair<double, double> robustRange(std::vector<float>& v) {
+    std::sort(v.begin(), v.end());
+    for (const double tail : {kLowPercentile, 0.5}) {
+        const double lo = percentile(v, tail, true), hi = percentile(v, 100 - tail, false);
+        if (hi > lo) return {lo, hi};
+    }
+    return {v.front(), v.back()};
+}
+
+/// The legend line of +inf cells: what no limit means in this layer.
+std::string plusInfinityText(const LayerGrid::Layer& layer) {
+    return layer.name == "clearance" ? "+inf: no obstacle above the ground (no limit)" : "+inf: no limit";
+}
+
 /// The legend lines under the map.
 std::vector<LegendEntry> legendEntries(const LayerPictureLayout& l, const LayerGrid::Layer& layer, bool otherClasses) {
     std::vector<LegendEntry> e;
@@ -74,6 +102,8 @@ std::vector<LegendEntry> legendEntries(const LayerPictureLayout& l, const LayerG
     } else if (l.barHeight > 0) {
         e.push_back({{}, "colour map: viridis (low dark blue, high yellow)", false});
     }
+    if (!l.classes && l.positiveInfinite) e.push_back({kPlusInfinity, plusInfinityText(layer)});
+    if (!l.classes && l.negativeInfinite) e.push_back({kMinusInfinity, "-inf: no limit below"});
     e.push_back({colourOf(ColumnClass::Unknown), "unknown (NaN): no data for " + layer.name});
     e.push_back({{}, "the darker page around the map: outside the grid", false});
     e.push_back({{}, "top view: x up, y (left) to the left", false});
@@ -97,6 +127,7 @@ std::vector<float> blockValues(const LayerGrid& grid, const LayerGrid::Layer& la
 
 Colour colourFor(float v, const LayerPictureLayout& l) {
     if (std::isnan(v)) return colourOf(ColumnClass::Unknown);
+    if (std::isinf(v) && !l.classes) return v > 0 ? kPlusInfinity : kMinusInfinity;
     if (l.classes) {
         const long c = std::lround(v);
         return c == long(ColumnClass::Traversable) ? colourOf(ColumnClass::Traversable)
@@ -106,6 +137,9 @@ Colour colourFor(float v, const LayerPictureLayout& l) {
 }
 
 }  // namespace
+
+Colour positiveInfinityColour() { return kPlusInfinity; }
+Colour negativeInfinityColour() { return kMinusInfinity; }
 
 Colour viridis(double t) {
     if (!(t > 0)) t = 0;
@@ -130,15 +164,21 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
     LayerPictureLayout l;
     l.gridWidth = grid.width(), l.gridHeight = grid.height();
     l.classes = name == "class";
-    // The range: the options', else the layer's finite values.
+    // The range: the options', else the 2nd to 98th percentile of the layer's finite values.
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    std::size_t known = 0;
-    for (float v : layer.values)
-        if (std::isfinite(v)) lo = std::min(lo, double(v)), hi = std::max(hi, double(v)), ++known;
+    std::vector<float> finite;
+    for (float v : layer.values) {
+        if (std::isfinite(v)) lo = std::min(lo, double(v)), hi = std::max(hi, double(v)), finite.push_back(v);
+        else if (std::isinf(v)) ++(v > 0 ? l.positiveInfinite : l.negativeInfinite);
+    }
+    const std::size_t known = finite.size();
     if (!known) lo = hi = 0;
-    l.low = std::isnan(o.min) ? lo : o.min;
-    l.high = std::isnan(o.max) ? hi : o.max;
+    double robustLow = lo, robustHigh = hi;
+    if (known && !l.classes && (std::isnan(o.min) || std::isnan(o.max))) std::tie(robustLow, robustHigh) = robustRange(finite);
+    l.low = std::isnan(o.min) ? robustLow : o.min;
+    l.high = std::isnan(o.max) ? robustHigh : o.max;
     if (l.high < l.low) std::swap(l.low, l.high);  // one of them given, beyond the other end of the data
+    l.clippedLow = known && lo < l.low, l.clippedHigh = known && hi > l.high;
     const bool bar = !l.classes && (known || !std::isnan(o.min) || !std::isnan(o.max));  // no bar for a layer without data
     if (bar) l.barHeight = kBarHeight;  // placed below
     // The map area: x up (grid.width() cells down), y to the left (grid.height() cells across).
@@ -152,9 +192,12 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
     const double span = l.high - l.low;
     std::vector<std::string> barLabels;
     if (bar) {
-        barLabels = {name + unitSuffix(layer.unit.empty() ? "" : "[" + layer.unit + "]"), valueLabel(l.high, span, layer.unit),
-                     valueLabel(0.5 * (l.low + l.high), span, layer.unit), valueLabel(l.low, span, layer.unit)};
-        if (!std::isnan(o.min) || !std::isnan(o.max)) barLabels.push_back("(values beyond: end colours)");
+        barLabels = {name + unitSuffix(layer.unit.empty() ? "" : "[" + layer.unit + "]"),
+                     (l.clippedHigh ? ">= " : "") + valueLabel(l.high, span, layer.unit),
+                     valueLabel(0.5 * (l.low + l.high), span, layer.unit), (l.clippedLow ? "<= " : "") + valueLabel(l.low, span, layer.unit)};
+        const bool given = !std::isnan(o.min) || !std::isnan(o.max);
+        if (given) barLabels.push_back("(values beyond: end colours)");
+        else if (l.clippedLow || l.clippedHigh) barLabels.push_back("(2nd-98th percentile; beyond: end colours)");
     }
     std::size_t barChars = 0;
     for (const auto& t : barLabels) barChars = std::max(barChars, t.size());
@@ -176,9 +219,12 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
     if (!layer.meaning.empty())
         for (auto& t : wrap(layer.meaning, chars)) titleLines.push_back(t);
     char figures[256];
-    std::snprintf(figures, sizeof figures, "%.2f m cells, %d x %d (x by y), %zu known", grid.resolution(), grid.width(), grid.height(), known);
-    std::string values = !known ? "; no known cell"
+    std::snprintf(figures, sizeof figures, "%.2f m cells, %d x %d (x by y), %zu known", grid.resolution(), grid.width(), grid.height(),
+                  known + l.positiveInfinite + l.negativeInfinite);
+    std::string values = !known ? (l.positiveInfinite + l.negativeInfinite ? "; no finite value" : "; no known cell")
                                 : l.classes ? "" : "; values " + valueLabel(lo, hi - lo, layer.unit) + " to " + valueLabel(hi, hi - lo, layer.unit);
+    if (!l.classes && l.positiveInfinite) values += ", " + std::to_string(l.positiveInfinite) + " +inf";
+    if (!l.classes && l.negativeInfinite) values += ", " + std::to_string(l.negativeInfinite) + " -inf";
     if (l.classes && known) {
         std::size_t counts[3] = {0, 0, 0};
         for (float v : layer.values)

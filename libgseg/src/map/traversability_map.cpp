@@ -98,6 +98,16 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
     return gseg::io::labelledPlyBytes(PointCloudView(v.xyz.data(), v.labels.size()), v.labels, colours, options);
 }
 
+/// The free, occupied and unknown cells of a costmap, as a planner reads its PGM.
+void countCostmapCells(const gseg::io::RosMap& map, std::size_t (&cells)[3]) {
+    cells[0] = cells[1] = cells[2] = 0;
+    for (int cy = 0; cy < map.height; ++cy)
+        for (int cx = 0; cx < map.width; ++cx) {
+            const gseg::io::RosCell c = map.at(cx, cy);
+            ++cells[c == gseg::io::RosCell::Free ? 0 : c == gseg::io::RosCell::Occupied ? 1 : 2];
+        }
+}
+
 /// The costmap's PGM and YAML (files 6 and 7; the YAML names the PGM by its file name).
 void writeCostmap(gseg::io::AtomicFileSet& files, const gseg::io::RosMap& map) {
     const std::string pgm = gseg::io::encodePgm(map);
@@ -218,6 +228,11 @@ MapStats TraversabilityMap::stats() const {
     s.cellsObstacle = g.count(ColumnClass::Obstacle);
     const PictureLayout layout = pictureLayout(g, path_);
     s.cellsUnknown = std::size_t(layout.cellsWide * layout.cellsHigh) - s.cellsTraversable - s.cellsObstacle;
+    if (costmapScans_ != stats_.scans && !empty()) {
+        countCostmapCells(costmapOf(layers()), costmapCells_);
+        costmapScans_ = stats_.scans;
+    }
+    s.costmapFree = costmapCells_[0], s.costmapOccupied = costmapCells_[1], s.costmapUnknown = costmapCells_[2];
     return s;
 }
 
@@ -290,7 +305,10 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     files[4].write(ply.data(), ply.size());
     const LayerGrid grid = layers();
     detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid);
-    writeCostmap(files, costmapOf(grid));
+    const gseg::io::RosMap costmap = costmapOf(grid);
+    writeCostmap(files, costmap);
+    countCostmapCells(costmap, costmapCells_);
+    costmapScans_ = stats_.scans;
     const std::string tif = encodeLayersGeoTiff(grid);
     files[8].write(tif.data(), tif.size());
     LayerPictureOptions picture;

@@ -44,26 +44,28 @@ struct PlyOptions {
     /// (needs a stride of at least 16 bytes, as a KITTI buffer viewed in place).
     bool intensity = false;
     std::string comment = "gseg ground segmentation";  ///< first comment line of the header
-    /// What labels 1 and 0 mean; nonGroundName also names the class scalar field
-    /// (`scalar_` + the name, non-alphanumerics as `_`: `scalar_non_ground`, `scalar_obstacle`).
+    /// What labels 1 and 0 mean, in the header's comments ("ground" / "non-ground"; a map's
+    /// PLY: "ground" / "obstacle").
     std::string groundName = "ground", nonGroundName = "non-ground";
 };
 
-/// The name of the class scalar-field property for `options` ("scalar_non_ground").
+/// The name of the class scalar-field property: "scalar_class" (whatever `options`; one name in
+/// every gseg PLY).
 std::string classScalarProperty(const PlyOptions& options = PlyOptions());
 
 /// Writes `cloud` as binary little-endian PLY with x, y, z (float), the class scalar field
-/// classScalarProperty() (uchar: 1 non-ground, 0 ground), optionally intensity (float), red, green,
-/// blue (uchar, by label) and label (uchar: 1 ground, 0 non-ground, as the labels file),
-/// atomically (temporary file, then rename).
+/// `scalar_class` (uchar: 1 ground, 2 non-ground, the values of the map's `class` layer),
+/// optionally intensity (float), red, green, blue (uchar, by label: palette green ground, red
+/// non-ground) and label (uchar: 1 ground, 0 non-ground, as the labels file), atomically
+/// (temporary file, then rename). One convention in the file: 1 is the ground in every field.
 ///
 /// For CloudCompare (2.11, Debian): a vertex property named `scalar_*` is a scalar field it loads
 /// by default, in its PLY dialog and with `-SILENT` (which drops other unknown properties such as
-/// `label`), named without the prefix ("non ground"); it shows the first scalar field of the
-/// header, over the RGB colours, on its default Blue>Green>Yellow>Red ramp from the minimum to
-/// the maximum. The class field therefore comes first, with 1 for the class drawn red in the RGB
-/// colours: CloudCompare's first view shows non-ground red (as the RGB), ground blue, and choosing
-/// Colors: RGB in its properties shows the palette. Throws std::invalid_argument if the label
+/// `label`), named without the prefix ("class"); it shows the first scalar field of the header,
+/// over the RGB colours, on its default Blue>Green>Yellow>Red ramp from the minimum to the
+/// maximum: its first view shows non-ground red (as the RGB) and ground blue (the ramp's low end;
+/// no value of a two-valued field lands on its green), and choosing Colors: RGB in its properties
+/// shows gseg's palette (ground green). Throws std::invalid_argument if the label
 /// count differs from the point count, or intensity is asked for points packed closer than 16
 /// bytes.
 void writeLabelledPly(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,

@@ -7,7 +7,11 @@
 /// The file: one float32 band per layer, in the grid's order; the band's description is the
 /// layer's name (`elevation`, `slope`, ...), its unit type (GDAL's `GetUnitType()`) and its
 /// metadata items `UNIT` and `MEANING` the layer's unit and one-line meaning; NaN is the nodata
-/// value (unknown). The geotransform is in map-frame metres, north-up: the image's first row is the
+/// value (unknown). +inf ("no limit": the clearance where no obstacle is above the ground) is
+/// written as the finite kNoLimit (1000, in the band's unit) and the band gets the metadata item
+/// `NO_LIMIT=1000` saying so; -inf likewise as -kNoLimit. So GDAL's statistics (`gdalinfo -stats`,
+/// QGIS's default stretch) stay finite, where +inf made them NaN; readLayersGeoTiff() turns the
+/// cap of such a band back into +inf / -inf. The geotransform is in map-frame metres, north-up: the image's first row is the
 /// largest y (cells of row cy of the grid are image row height - 1 - cy), its first column the
 /// smallest x, so pixel (col, row) covers x in [originX + col * res, ...) and
 /// y in [originY + (height - 1 - row) * res, ...). The CRS is a local engineering one
@@ -23,6 +27,10 @@
 
 namespace gseg::map {
 
+/// [band unit] What +inf ("no limit") is written as in a layer GeoTIFF (-inf: -kNoLimit); no layer
+/// holds so large a finite value (a clearance of 1 km, a slope beyond 90 deg).
+constexpr float kNoLimit = 1000.0f;
+
 /// The GeoTIFF bytes of `grid`. Throws std::invalid_argument on a grid without cells or layers,
 /// a layer whose values are not width * height, an empty or duplicate layer name, and
 /// std::runtime_error with GDAL's message if GDAL fails.
@@ -37,7 +45,8 @@ void writeLayersGeoTiff(const std::string& path, const LayerGrid& grid);
 /// multi-band GeoTIFF whose geotransform is axis-aligned with square pixels (north-up, or with
 /// its first row the smallest y). Band i becomes layer i named by its description ("band N" if
 /// it has none), its unit from the unit type (else the `UNIT` metadata item), its meaning from the
-/// `MEANING` item; values read as float32, a band's nodata value becomes NaN. Throws
+/// `MEANING` item; values read as float32, a band's nodata value becomes NaN, and +-kNoLimit of a
+/// band with the `NO_LIMIT` item +-inf. Throws
 /// std::runtime_error naming `path` and what is wrong: missing or unreadable, not a GeoTIFF,
 /// truncated (a band that cannot be read whole), no geotransform, a rotated or sheared one,
 /// non-square pixels, no bands.

@@ -6,7 +6,12 @@
 ///
 /// Colours: a continuous layer (`elevation`, `slope`, ...) through the viridis colour map
 /// (matplotlib's perceptually uniform map, dark blue at the low end, yellow at the high end),
-/// with a colour bar labelled with its range and unit; the `class` layer in the class colours of
+/// with a colour bar labelled with its range and unit. The range is the 2nd to 98th percentile of
+/// the layer's finite values (a few outliers, a 63 deg slope at a wall, would otherwise leave the
+/// rest of the map in one dark colour); values beyond it take the end colours and the bar's end
+/// labels say so ("<= 0.00 deg", ">= 12.4 deg"), the title keeps the whole range. +inf cells (the
+/// clearance where no obstacle is above the ground) are white and named in the legend ("+inf: no
+/// obstacle above (no limit)"), -inf cells black. The `class` layer in the class colours of
 /// the map's other pictures (colourOf(): 1 traversable green, 2 not traversable red). NaN
 /// (unknown) cells in the colour of unknown cells of the map's pictures (grey), named in the
 /// legend; the page around the grid darker (backgroundColour()). A scale bar, the axes and a title
@@ -25,8 +30,8 @@ namespace gseg::map {
 /// What the picture of a layer shows besides the layer.
 struct LayerPictureOptions {
     std::string title;  ///< first line of the title after "<layer name> [unit]", e.g. the drive ("seq00: 10 scans"); may be long (wrapped)
-    double min = std::numeric_limits<double>::quiet_NaN();  ///< [layer unit] low end of the colour bar; NaN: the layer's smallest finite value
-    double max = std::numeric_limits<double>::quiet_NaN();  ///< [layer unit] high end; NaN: the layer's largest finite value
+    double min = std::numeric_limits<double>::quiet_NaN();  ///< [layer unit] low end of the colour bar; NaN: the 2nd percentile of the layer's finite values
+    double max = std::numeric_limits<double>::quiet_NaN();  ///< [layer unit] high end; NaN: the 98th percentile
     int maxSide = 2048;  ///< [pixels] longest side of the map area: a larger grid is reduced (a pixel shows the largest value of its cells)
 };
 
@@ -44,6 +49,8 @@ struct LayerPictureLayout {
     int cellsPerPixel = 1;            ///< > 1: a large grid, reduced
     bool classes = false;             ///< the `class` layer: class colours, no colour bar
     double low = 0, high = 0;         ///< [layer unit] the colour bar's range (equal when the layer holds one value or none)
+    bool clippedLow = false, clippedHigh = false;  ///< finite values below low / above high (in the end colours)
+    std::size_t positiveInfinite = 0, negativeInfinite = 0;  ///< cells at +inf / -inf (white / black, named in the legend)
     int barLeft = 0, barTop = 0, barHeight = 0;  ///< [pixels] the colour bar (high at the top); barHeight 0: none
     int legendTop = 0;                ///< [pixels] top of the legend band (legend left, axes and scale bar right)
     int gridWidth = 0, gridHeight = 0;  ///< [cells] of the grid drawn
@@ -54,6 +61,10 @@ struct LayerPictureLayout {
     /// [pixels per metre] of the map area.
     double pixelsPerMetre(double resolution) const { return double(pixelsPerCell) / (double(cellsPerPixel) * resolution); }
 };
+
+/// The colour of +inf cells (white: beyond the colour bar's high end) and of -inf cells (black).
+gseg::mrpt::Colour positiveInfinityColour();
+gseg::mrpt::Colour negativeInfinityColour();
 
 /// The layout of the picture of `layer`. Throws std::out_of_range if the grid has no such layer,
 /// std::invalid_argument on a grid without cells, a layer whose values are not width * height,

@@ -18,8 +18,11 @@ struct MapStats {
     std::size_t freeVoxels = 0;        ///< voxels known free in the obstacle tree
     std::size_t clearedObstacleVoxels = 0;  ///< voxels once occupied as obstacle, free by the end (seen through)
     std::size_t groundUnderObstacle = 0;    ///< occupied in both trees: shown as obstacle
-    std::size_t cellsTraversable = 0, cellsObstacle = 0;  ///< top-down grid
+    std::size_t cellsTraversable = 0, cellsObstacle = 0;  ///< top-down grid of the voxel columns (`_traversability.png`)
     std::size_t cellsUnknown = 0;      ///< cells without data inside the picture's frame
+    /// The costmap (`<prefix>_costmap.pgm`, the `class` layer as map_server loads it; the map a
+    /// planner uses): its free, occupied and unknown cells, every pixel of the PGM counted once.
+    std::size_t costmapFree = 0, costmapOccupied = 0, costmapUnknown = 0;
     double pathLength = 0;             ///< [m] length of the sensor path
     std::size_t bricks = 0;            ///< 8 x 8 x 8 voxel bricks holding the maps while integrating
     std::size_t brickValueBlocks = 0;  ///< words of 4 x 4 x 4 voxels with a value each (the others hold one)

@@ -16,7 +16,9 @@
 /// maxRange = 30         ; any gseg::SensorHeightOptions key (gseg/sensor_height.hpp), for distToGround = auto
 /// \endcode
 /// Saving (CMultiMetricMap names it `<prefix>_gseg_maps__CTraversabilityOctoMap_<NN>` (MRPT turns "::" into "__")) writes the
-/// four files of TraversabilityMap::write() with that prefix.
+/// 16 files of TraversabilityMap::write() with that prefix (TraversabilityMap::outputPaths(): the
+/// two OcTrees, the ColorOcTree, the voxel picture, PLY and .3Dscene, the costmap PGM + YAML a
+/// planner loads, the layers' GeoTIFF and one picture per layer).
 
 #include <gseg/map/map_builder.hpp>
 #include <gseg/map/traversability_map.hpp>

@@ -81,7 +81,8 @@ public:
     std::unique_ptr<octomap::ColorOcTree> colouredTree() const;
     /// The top-down grid of every occupied voxel column.
     TopDownGrid topDown() const;
-    /// Counters and voxel counts (walks both trees).
+    /// Counters and voxel counts (walks both trees), and the costmap's cells (the layers are
+    /// computed for them unless write() has already counted them for this many scans).
     MapStats stats() const;
     /// The 2.5D layers (elevation, slope, step, roughness, clearance, class, cost) from the ground
     /// points of every scan and the occupied obstacle voxels (gseg/map/terrain_layers.hpp).
@@ -96,7 +97,8 @@ public:
     /// - `<prefix>_traversability.ot`: ground and obstacle voxels in one ColorOcTree;
     /// - `<prefix>_traversability.png`: the top-down picture (writeTopDownPng());
     /// - `<prefix>_traversability.ply`: the centres of the occupied voxels, coloured, with a
-    ///   `label` property (1 ground, 0 obstacle) for CloudCompare and other point-cloud viewers;
+    ///   class scalar field `scalar_class` (1 ground, 2 obstacle; CloudCompare's "class") and a
+    ///   `label` property (1 ground, 0 obstacle) for other programs (gseg/io/ply.hpp);
     /// - `<prefix>_traversability.3Dscene`: an MRPT scene for SceneViewer3D: the same voxels as
     ///   coloured boxes (COctoMapVoxels), the driven path as a blue line with a blue box at each
     ///   sensor position, axes at its start;
@@ -121,6 +123,10 @@ private:
     std::unique_ptr<gseg::TerrainModel> terrain_;  ///< the drive's terrain model (driveTerrain), built when the layers are
     mutable std::unique_ptr<detail::MapTree> groundTree_, obstacleTree_;
     mutable std::unique_ptr<TopDownGrid> topDown_;
+    /// The costmap's free, occupied and unknown cells, as of `costmapScans_` scans (write()
+    /// counts them as it writes the PGM; stats() when asked before).
+    mutable std::size_t costmapCells_[3] = {0, 0, 0};
+    mutable std::size_t costmapScans_ = 0;
     std::vector<Eigen::Vector3d> path_;
     MapStats stats_;
 };
