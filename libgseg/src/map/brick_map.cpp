@@ -8,14 +8,14 @@
 
 namespace gseg::map::detail {
 
-BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
+inline BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
     bool inserted = false;
     const std::uint32_t i = index_.insert(brickCode, inserted);
     if (inserted) codes_.push_back(brickCode), bricks_.emplace_back();
     return bricks_[i];
 }
 
-void BrickMap::collapseIfUniform(Words& t) {
+inline void BrickMap::collapseIfUniform(Words& t) {
     for (unsigned w = 0; w < 8; ++w) {
         if (t.block[w] < 0) continue;
         const int n = __builtin_popcountll(t.exists[w]);
@@ -26,7 +26,7 @@ void BrickMap::collapseIfUniform(Words& t) {
     }
 }
 
-void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied) {
+inline void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied) {
     const unsigned w = local >> 6, v = local & 63;
     const std::uint64_t bit = 1ULL << v;
     const bool exists = t.exists[w] & bit;
