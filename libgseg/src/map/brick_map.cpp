@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <system_error>
 #include <thread>
 #include <numeric>
 #include <string>
@@ -128,8 +129,14 @@ void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vect
             errors[t] = std::current_exception();  // std::bad_alloc of a value block
         }
     };
-    for (unsigned t = 1; t < threads; ++t) helpers.emplace_back(share, t);
+    helpers.reserve(threads);
+    unsigned started = 1;
+    try {
+        for (; started < threads; ++started) helpers.emplace_back(share, started);
+    } catch (const std::system_error&) {  // no thread to be had (ulimit -u, address space): the rest here
+    }
     share(0);
+    for (unsigned t = started; t < threads; ++t) share(t);
     for (std::thread& h : helpers) h.join();
     for (const std::exception_ptr& e : errors)
         if (e) std::rethrow_exception(e);
