@@ -204,10 +204,20 @@ std::string memoryOptions(const Cli& cli) {
     return text;
 }
 
+/// What checkMemory() found, for the check after every scan (LayerGuard).
+struct MemoryBudget {
+    bool known = false;       ///< false: nothing to estimate from (the first scan could not be used)
+    gseg::map::MemoryEstimate estimate;
+    std::size_t inFlight = 0, scans = 0;  ///< as estimated (scans from the rawlog's bytes per scan)
+    gseg::map::MemoryLimit limit;
+    /// [bytes] the whole run with the layers over `cells` cells
+    double need(double cells) const { return estimate.peakWithWriting(inFlight, scans, cells); }
+};
+
 /// Memory, before any work (#18): the maps and the scans in flight, estimated from the first
 /// scan's rays at these options, against the limit (--max-memory, else what the machine and the
 /// process's limits leave). Throws std::runtime_error naming the options and the estimate.
-void checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, std::size_t inFlight) {
+MemoryBudget checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, std::size_t inFlight) {
     std::vector<float> points;
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     try {
@@ -215,14 +225,15 @@ void checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, st
             if (*part && (part != &first.raw || !first.presegmented()))
                 origin = gseg::map::appendWorldPoints(**part, first.robotPose, points);
     } catch (const std::invalid_argument&) {
-        return;  // a scan the builder will skip and name (e.g. a 2D scan): nothing to estimate from
+        return {};  // a scan the builder will skip and name (e.g. a 2D scan): nothing to estimate from
     }
     const gseg::map::RayFootprint f =
         gseg::map::rayFootprint(gseg::PointCloudView(points.data(), points.size() / 3), origin, cli.options);
     // The scans of the drive, from the bytes of the rawlog the second scan took.
     const double step = second ? second->fraction - first.fraction : 0;
     const std::size_t scans = !second ? 1 : step > 0 ? std::size_t(std::lround(std::min(1e9, 2 + (1 - second->fraction) / step))) : 2;
-    const double need = gseg::map::estimateMemory(f).peak(inFlight, std::max<std::size_t>(1, scans));
+    const gseg::map::MemoryEstimate estimate = gseg::map::estimateMemory(f);
+    const double need = estimate.peak(inFlight, std::max<std::size_t>(1, scans));
     gseg::map::MemoryLimit limit = gseg::map::memoryLimit();
     if (cli.maxMemory > 0 && (cli.maxMemory < limit.bytes || limit.machine))  // the user's word, within ulimit's
         limit = {cli.maxMemory, "--max-memory", false};
@@ -238,7 +249,63 @@ void checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, st
                       gseg::map::formatBytes(limit.bytes).c_str(), limit.what == "--max-memory" ? "" : ", or give --max-memory");
         throw std::runtime_error(text);
     }
+    return {true, estimate, inFlight, std::max<std::size_t>(1, scans), limit};
 }
+
+/// The 2.5D layers, the costmap and the GeoTIFF are dense over the box of the cells seen (#35): a
+/// pose that jumps kilometres makes that box (and the memory) huge long before the maps are
+/// written. After every scan, the maps' estimate plus the layers over the box so far against the
+/// limit: refused at the scan that makes it too big, naming the box and the largest jump.
+class LayerGuard {
+public:
+    LayerGuard(const Cli& cli, const MemoryBudget& budget) : cli_(cli), budget_(budget) {}
+
+    /// Throws std::runtime_error when the layers over the box, with the maps, exceed the limit.
+    void add(std::size_t k, const ScanResult& r) {
+        if (!budget_.known || !r.skipped.empty()) return;
+        const double before = box_.cells();
+        box_.add(r.update);
+        if (haveOrigin_) {
+            const double jump = (r.update.origin - lastOrigin_).norm();
+            if (jump > jump_) jump_ = jump, jumpScan_ = k;
+        }
+        haveOrigin_ = true, lastOrigin_ = r.update.origin;
+        if (box_.cells() == before) return;
+        const double layers = gseg::map::layerBytes(box_.cells()), need = budget_.need(box_.cells());
+        if (need <= budget_.limit.bytes) return;
+        const double res = cli_.options.resolution;
+        char text[700];
+        std::snprintf(text, sizeof text, "the scans up to %s cover %.0f m x %.0f m (x from %.1f m, y from %.1f m): the 2.5D "
+                      "layers over that box need about %s at --resolution %g m (%s with the maps), more than %s (%s); the "
+                      "largest step between two scans is %.0f m (to scan %zu): %s",
+                      r.describe.c_str(), box_.cellsX() * res, box_.cellsY() * res, box_.minX(res), box_.minY(res),
+                      gseg::map::formatBytes(layers).c_str(), res, gseg::map::formatBytes(need).c_str(),
+                      budget_.limit.what.c_str(), gseg::map::formatBytes(budget_.limit.bytes).c_str(), jump_, jumpScan_,
+                      jump_ > 100 ? "do the poses jump? Fix them, or map the parts of the drive separately, or use a coarser --resolution"
+                                  : "use a coarser --resolution, or map the drive in parts");
+        throw std::runtime_error(std::string(text) + (budget_.limit.what == "--max-memory" ? "" : ", or give --max-memory"));
+    }
+
+    /// "..." for the detail line: the estimate with the layers over the box of the whole drive.
+    std::string summary() const {
+        char text[200];
+        std::snprintf(text, sizeof text, "%s with writing (%s while integrating, maps %s, layers over %.0f x %.0f cells %s)",
+                      gseg::map::formatBytes(budget_.need(box_.cells())).c_str(),
+                      gseg::map::formatBytes(budget_.estimate.peak(budget_.inFlight, budget_.scans)).c_str(),
+                      gseg::map::formatBytes(budget_.estimate.maps(budget_.scans)).c_str(), box_.cellsX(), box_.cellsY(),
+                      gseg::map::formatBytes(gseg::map::layerBytes(box_.cells())).c_str());
+        return text;
+    }
+
+private:
+    const Cli& cli_;
+    MemoryBudget budget_;
+    gseg::map::LayerBox box_;
+    bool haveOrigin_ = false;
+    Eigen::Vector3d lastOrigin_ = Eigen::Vector3d::Zero();
+    double jump_ = 0;
+    std::size_t jumpScan_ = 0;
+};
 
 /// Runs `f`, turning an allocation failure into an error that says what was being done.
 template <class F>
@@ -273,8 +340,11 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
     // Memory, before any work: the first two scans (the second gives the rawlog's bytes per scan).
     const std::deque<ScanJob>& first = phase("reading the first scans", cli, [&]() -> const std::deque<ScanJob>& { return stream.prefetch(2); });
-    if (!first.empty()) checkMemory(cli, first[0], first.size() > 1 ? &first[1] : nullptr, gseg::map::MapBuilder::inFlight(how));
+    MemoryBudget budget;
+    if (!first.empty()) budget = checkMemory(cli, first[0], first.size() > 1 ? &first[1] : nullptr, gseg::map::MapBuilder::inFlight(how));
+    LayerGuard layerGuard(cli, budget);
     how.onScan = [&](std::size_t k, const ScanResult& r) {
+        layerGuard.add(k, r);
         if (!r.skipped.empty()) {
             const std::string& skipped = builder.tally().skipped.back();
             if (!quiet) progress.message("rawlog-octomap: skipped " + skipped);
@@ -293,6 +363,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     } catch (const gseg::map::OutOfMemory& e) {
         throw std::runtime_error(e.what() + memoryOptions(cli) + "; nothing written");
     }
+    if (budget.known) gseg::tools::detail("rawlog-octomap: memory estimated for the drive: %s\n", layerGuard.summary().c_str());
     const gseg::map::TraversabilityMap& map = builder.map();
     const gseg::map::BuildTally& tally = builder.tally();
     const std::size_t total = map.path().size() + tally.skipped.size();

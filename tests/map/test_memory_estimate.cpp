@@ -4,6 +4,7 @@
 // (under --max-memory and under `ulimit -v`) in one line, before any work, leaving nothing.
 #include <gseg/io/kitti.hpp>
 #include <gseg/map/memory_estimate.hpp>
+#include <gseg/map/scan_update.hpp>
 #include <support/child.hpp>
 #include <support/paths.hpp>
 
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <regex>
 
 #include <sys/resource.h>
 
@@ -134,6 +136,43 @@ TEST(MemoryEstimate, TheLimitIsTheLowestOfTheMachineAndTheProcessLimits) {
     EXPECT_EQ(gseg::map::formatBytes(27.4e9), "27 GB");
 }
 
+// #35: the 2.5D layers are dense over the box of the columns seen; the box and its bytes.
+TEST(MemoryEstimate, TheLayerBoxSpansTheGroundCellsAndTheObstacleColumnsOfEveryScan) {
+    gseg::map::LayerBox box;
+    EXPECT_TRUE(box.empty());
+    EXPECT_EQ(box.cells(), 0);
+    gseg::map::ScanUpdate u;
+    gseg::map::GroundCellSample c;
+    c.cell = (std::uint32_t(32768 - 10) << 16) | std::uint32_t(32768 + 5);  // cell (-10, 5)
+    u.groundCells.push_back(c);
+    box.add(u);
+    EXPECT_EQ(box.cellsX(), 1);
+    EXPECT_EQ(box.cellsY(), 1);
+    EXPECT_DOUBLE_EQ(box.minX(0.2), -2.0);
+    EXPECT_DOUBLE_EQ(box.minY(0.2), 1.0);
+    // An obstacle voxel at key (32768 + 29, 32768 - 20, 32768 + 3), as the ray casting codes it.
+    gseg::map::ScanUpdate v;
+    const auto spread = [](std::uint64_t k) {
+        std::uint64_t out = 0;
+        for (int b = 0; b < 16; ++b) out |= ((k >> b) & 1) << (3 * b);
+        return out;
+    };
+    v.obstacleHits.push_back(spread(32768 + 29) | spread(32768 - 20) << 1 | spread(32768 + 3) << 2);
+    box.add(v);
+    EXPECT_EQ(box.cellsX(), 40);  // -10 .. 29
+    EXPECT_EQ(box.cellsY(), 26);  // -20 .. 5
+    EXPECT_DOUBLE_EQ(box.minY(0.5), -10.0);
+    EXPECT_EQ(box.cells(), 40 * 26);
+    // At least the 7 float layers; a 6 km x 6 km box at 0.2 m: tens of gigabytes.
+    EXPECT_GE(gseg::map::layerBytes(1000), 28 * 1000);
+    EXPECT_GT(gseg::map::layerBytes(30000.0 * 30000.0), 40e9);
+    // The whole run's peak: more than while integrating, by the writing and the layers.
+    const gseg::map::MemoryEstimate e = gseg::map::estimateMemory(gseg::map::rayFootprint(
+        gseg::PointCloudView(spinningScan().data(), spinningScan().size() / 3), Eigen::Vector3d::Zero(), {}));
+    EXPECT_GT(e.peakWithWriting(6, 10, 0), e.peak(6, 10));
+    EXPECT_NEAR(e.peakWithWriting(6, 10, 1e6) - e.peakWithWriting(6, 10, 0), gseg::map::layerBytes(1e6), 1);
+}
+
 // The tool: the six sequence-00 scans through kitti2rawlog.
 class RawlogOctomapMemory : public ::testing::Test {
 protected:
@@ -201,6 +240,92 @@ TEST_F(RawlogOctomapMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKi
     EXPECT_LT(seconds, 30);
     expectNothingWritten();
 #endif
+}
+
+// #35: two scans 6 km apart diagonally (a GPS jump): the layers over the box would need tens of
+// gigabytes. Before: grew to 18.6 GB resident and was killed by the kernel after 147 s, writing
+// nothing. Now refused at the second scan, in one line naming the box and the jump.
+TEST_F(RawlogOctomapMemory, APoseJumpIsRefusedAtTheScanThatMakesTheLayersTooBigNotKilled) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
+#else
+    const std::string seq = fs::path(gseg::test::sharedData("semantickitti/sequences/00/poses.txt")).parent_path().string();
+    std::ofstream(dir_ / "jump.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 -4243 0 1 0 0 0 0 1 4243\n";  // camera frame: x right, z ahead
+    auto r = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + seq + "' --first 0 --last 1 --poses '" +
+                                    (dir_ / "jump.txt").string() + "' -o '" + (dir_ / "jump.rawlog").string() + "'");
+    ASSERT_EQ(r.status, 0) << r.output;
+    auto runJump = [&](const std::string& args, const std::string& limits, double& seconds) {
+        const auto t0 = std::chrono::steady_clock::now();
+        auto out = gseg::test::runCommand("sh -c \"" + limits + "exec '" + gseg::test::tool("rawlog-octomap") + "' -i '" +
+                                          (dir_ / "jump.rawlog").string() + "' -o '" + (dir_ / "m").string() + "' -c '" +
+                                          GSEG_SOURCE_DIR + "/config/kitti_hdl64.yaml' " + args + "\"");
+        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return out;
+    };
+    double seconds = 0;
+    r = runJump("-q", "ulimit -v 4000000; ", seconds);
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_EQ(r.output.rfind("rawlog-octomap: the scans up to scan 1 ('VELODYNE' at rawlog entry ", 0), 0u) << r.output;
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("cover 43[0-9][0-9] m x 43[0-9][0-9] m \\(x from -[0-9.]+ m, y from -[0-9.]+ m\\)")))
+        << r.output;
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("the 2.5D layers over that box need about [0-9]+ GB at --resolution 0.2 m")))
+        << r.output;
+    EXPECT_NE(r.output.find("more than the address-space limit (ulimit -v) ("), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the largest step between two scans is 6001 m (to scan 1): do the poses jump?"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("or use a coarser --resolution, or give --max-memory"), std::string::npos) << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one line: " << r.output;
+    EXPECT_LT(seconds, 30) << "refused at once, not after growing for minutes";
+    expectNothingWritten();
+    // The user's own limit is named as such; one that fits the layers maps the two scans.
+    r = runJump("-q --max-memory 2G", "", seconds);
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("more than --max-memory (2.0 GB); the largest step"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("or give --max-memory"), std::string::npos) << r.output;
+    expectNothingWritten();
+    // The same two scans 600 m apart: a box of 0.2 GB of layers, mapped.
+    std::ofstream(dir_ / "jump.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 -424 0 1 0 0 0 0 1 424\n";
+    r = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -w -i '" + seq + "' --first 0 --last 1 --poses '" +
+                               (dir_ / "jump.txt").string() + "' -o '" + (dir_ / "jump.rawlog").string() + "'");
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = runJump("-q --max-memory 2G", "", seconds);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir_ / "m_layers.tif"));
+#endif
+}
+
+/// "173 MB" / "1.2 GB" in `text` after `prefix`, in bytes; -1 if absent.
+double bytesAfter(const std::string& text, const std::string& prefix) {
+    std::smatch m;
+    if (!std::regex_search(text, m, std::regex(prefix + "([0-9.]+) (MB|GB)"))) return -1;
+    return std::stod(m[1].str()) * (m[2].str() == "GB" ? 1e9 : 1e6);
+}
+
+// #35: the estimate of the whole run (maps, scans in flight, writing, the layers over the box seen)
+// against the peak resident memory rawlog-octomap measures, on the four drives of
+// semantickitti-drives (ten scans each, 0.2 m): within 25 %.
+TEST(MemoryEstimate, TheWholeRunIsWithin25PercentOfThePeakOnTheSharedDrives) {
+    int drives = 0;
+    for (const char* seq : {"00", "05", "07", "09"}) {
+        const std::string poses = gseg::test::sharedData(std::string("semantickitti-drives/sequences/") + seq + "/poses.txt");
+        if (poses.empty()) continue;
+        ++drives;
+        const fs::path dir = gseg::test::freshDir("memory", std::string("drive") + seq);
+        auto r = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + fs::path(poses).parent_path().string() +
+                                        "' -o '" + (dir / "d.rawlog").string() + "'");
+        ASSERT_EQ(r.status, 0) << r.output;
+        r = gseg::test::runCommand("'" + gseg::test::tool("rawlog-octomap") + "' -v -i '" + (dir / "d.rawlog").string() + "' -o '" +
+                                   (dir / "m").string() + "' -c '" + GSEG_SOURCE_DIR + "/config/kitti_hdl64.yaml' --threads 2");
+        ASSERT_EQ(r.status, 0) << r.output;
+        const double estimate = bytesAfter(r.output, "memory estimated for the drive: ");
+        const double peak = bytesAfter(r.output, "peak memory: [0-9]+ MB while integrating, ");
+        ASSERT_GT(estimate, 0) << r.output;
+        ASSERT_GT(peak, 0) << r.output;
+        EXPECT_GT(estimate, 0.75 * peak) << seq << ": " << estimate / 1e6 << " MB estimated, " << peak / 1e6 << " MB measured";
+        EXPECT_LT(estimate, 1.25 * peak) << seq << ": " << estimate / 1e6 << " MB estimated, " << peak / 1e6 << " MB measured";
+        fs::remove_all(dir);
+    }
+    if (drives == 0) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti-drives/sequences/00/poses.txt");
 }
 
 }  // namespace

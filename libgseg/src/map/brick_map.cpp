@@ -3,30 +3,33 @@
 #include "brick_map.hpp"
 
 #include <algorithm>
+#include <exception>
+#include <system_error>
+#include <thread>
 #include <numeric>
 #include <string>
 
 namespace gseg::map::detail {
 
-BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
+inline BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
     bool inserted = false;
     const std::uint32_t i = index_.insert(brickCode, inserted);
     if (inserted) codes_.push_back(brickCode), bricks_.emplace_back();
     return bricks_[i];
 }
 
-void BrickMap::collapseIfUniform(Words& t) {
+inline void BrickMap::collapseIfUniform(Words& t, Pool& pool) {
     for (unsigned w = 0; w < 8; ++w) {
         if (t.block[w] < 0) continue;
         const int n = __builtin_popcountll(t.exists[w]);
         if (t.atMin[w] != n && t.atMax[w] != n) continue;
         t.uniform[w] = t.atMin[w] == n ? l_.clampMin : l_.clampMax;
-        freeBlocks_.push_back(t.block[w]);
+        pool.free.push_back(t.block[w]);
         t.block[w] = -1;
     }
 }
 
-void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied) {
+inline void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits) {
     const unsigned w = local >> 6, v = local & 63;
     const std::uint64_t bit = 1ULL << v;
     const bool exists = t.exists[w] & bit;
@@ -37,12 +40,12 @@ void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied) 
     else if (value > l_.clampMax) value = l_.clampMax;
     if (exists && value == old) return;  // at the bound already
     if (t.block[w] < 0) {  // one value for the word so far: give it 64
-        if (freeBlocks_.empty()) {
-            if (blockCount_ % kBlocksPerChunk == 0) chunks_.emplace_back(new float[kBlocksPerChunk * 64]);
-            freeBlocks_.push_back(std::int32_t(blockCount_++));
+        if (pool.free.empty()) {
+            if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
+            pool.free.push_back(poolBits | std::int32_t(pool.count++));
         }
-        t.block[w] = freeBlocks_.back();
-        freeBlocks_.pop_back();
+        t.block[w] = pool.free.back();
+        pool.free.pop_back();
         std::fill(block(t.block[w]), block(t.block[w]) + 64, t.uniform[w]);
     }
     if (exists) {
@@ -55,37 +58,88 @@ void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied) 
     t.atMax[w] += value == l_.clampMax;
 }
 
+void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const std::vector<Run>& groundHits,
+                          const std::vector<Run>& obstacleHits) {
+    Pool& groundPool = pools_[kGround * kShards + shard];
+    Pool& obstaclePool = pools_[kObstacles * kShards + shard];
+    const auto groundBits = std::int32_t((kGround * kShards + shard) << kPoolShift);
+    const auto obstacleBits = std::int32_t((kObstacles * kShards + shard) << kPoolShift);
+    for (const Run& r : free) {
+        if (r.shard != shard) continue;
+        Brick& b = bricks_[r.brick];
+        for (const std::uint64_t* c = r.from; c != r.to; ++c) {
+            update(b.map[kGround], unsigned(*c & 511), l_.miss, true, groundPool, groundBits);
+            update(b.map[kObstacles], unsigned(*c & 511), l_.miss, false, obstaclePool, obstacleBits);
+        }
+        collapseIfUniform(b.map[kGround], groundPool);
+        collapseIfUniform(b.map[kObstacles], obstaclePool);
+    }
+    for (const Run& r : groundHits) {
+        if (r.shard != shard) continue;
+        Brick& b = bricks_[r.brick];
+        for (const std::uint64_t* c = r.from; c != r.to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.hit, false, groundPool, groundBits);
+        collapseIfUniform(b.map[kGround], groundPool);
+    }
+    for (const Run& r : obstacleHits) {
+        if (r.shard != shard) continue;
+        Brick& b = bricks_[r.brick];
+        for (const std::uint64_t* c = r.from; c != r.to; ++c) {
+            update(b.map[kObstacles], unsigned(*c & 511), l_.hit, false, obstaclePool, obstacleBits);
+            b.everObstacle[(*c >> 6) & 7] |= 1ULL << (*c & 63);
+        }
+        collapseIfUniform(b.map[kObstacles], obstaclePool);
+    }
+}
+
 void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
                          const std::vector<std::uint64_t>& obstacleHits) {
-    // Brick by brick: the codes of one brick are consecutive in a sorted list.
-    auto forEachBrick = [&](const std::vector<std::uint64_t>& codes, auto&& perBrick) {
+    // First, on this thread, every brick the scan touches (made in list order: the same bricks in
+    // the same order as one voxel at a time), as runs: the codes of one brick are consecutive in
+    // a sorted list. Then the shards, each on one thread (both maps of its bricks).
+    auto runsOf = [&](const std::vector<std::uint64_t>& codes, std::vector<Run>& runs) {
+        runs.clear();
         for (std::size_t i = 0; i < codes.size();) {
             const std::uint64_t brick = codes[i] >> 9;
             std::size_t j = i;
             while (j < codes.size() && codes[j] >> 9 == brick) ++j;
-            perBrick(brickOf(brick), &codes[i], &codes[j]);
+            const Brick& b = brickOf(brick);
+            runs.push_back({std::uint32_t(&b - bricks_.data()), shardOf(brick), codes.data() + i, codes.data() + j});
             i = j;
         }
     };
-    forEachBrick(free, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
-        for (const std::uint64_t* c = from; c != to; ++c) {
-            update(b.map[kGround], unsigned(*c & 511), l_.miss, true);
-            update(b.map[kObstacles], unsigned(*c & 511), l_.miss, false);
+    std::vector<Run>& freeRuns = runs_[0];  // kept between scans (their memory)
+    std::vector<Run>& groundRuns = runs_[1];
+    std::vector<Run>& obstacleRuns = runs_[2];
+    runsOf(free, freeRuns);
+    runsOf(groundHits, groundRuns);
+    runsOf(obstacleHits, obstacleRuns);
+    auto part = [&](unsigned shard) { applyShard(shard, freeRuns, groundRuns, obstacleRuns); };
+    const std::size_t voxels = free.size() + groundHits.size() + obstacleHits.size();
+    const unsigned threads = voxels < 20000 ? 1u : std::min(threads_, kShards);  // small scans: not worth a thread
+    if (threads <= 1) {
+        for (unsigned k = 0; k < kShards; ++k) part(k);
+        return;
+    }
+    std::vector<std::thread> helpers;
+    std::vector<std::exception_ptr> errors(threads);
+    auto share = [&](unsigned t) {
+        try {
+            for (unsigned k = t; k < kShards; k += threads) part(k);
+        } catch (...) {
+            errors[t] = std::current_exception();  // std::bad_alloc of a value block
         }
-        collapseIfUniform(b.map[kGround]);
-        collapseIfUniform(b.map[kObstacles]);
-    });
-    forEachBrick(groundHits, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
-        for (const std::uint64_t* c = from; c != to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.hit, false);
-        collapseIfUniform(b.map[kGround]);
-    });
-    forEachBrick(obstacleHits, [&](Brick& b, const std::uint64_t* from, const std::uint64_t* to) {
-        for (const std::uint64_t* c = from; c != to; ++c) {
-            update(b.map[kObstacles], unsigned(*c & 511), l_.hit, false);
-            b.everObstacle[(*c >> 6) & 7] |= 1ULL << (*c & 63);
-        }
-        collapseIfUniform(b.map[kObstacles]);
-    });
+    };
+    helpers.reserve(threads);
+    unsigned started = 1;
+    try {
+        for (; started < threads; ++started) helpers.emplace_back(share, started);
+    } catch (const std::system_error&) {  // no thread to be had (ulimit -u, address space): the rest here
+    }
+    share(0);
+    for (unsigned t = started; t < threads; ++t) share(t);
+    for (std::thread& h : helpers) h.join();
+    for (const std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);
 }
 
 std::size_t BrickMap::clearedObstacles() const {

@@ -34,6 +34,12 @@ class BrickMap {
 public:
     explicit BrickMap(const LogOdds& l) : l_(l) {}
 
+    /// Threads that applyScan() may use (1: the calling thread only). The maps are the same
+    /// whatever the number: each map's bricks are split into kShards fixed shards by brick
+    /// position, each shard is updated by one thread in list order, with value blocks of its own
+    /// (one pool per map and shard), so every voxel sees the same operations in the same order.
+    void setThreads(unsigned threads) { threads_ = threads < 1 ? 1 : threads; }
+
     /// One scan: misses on `free` in both maps (ground: only where not occupied), hits on the
     /// ground and obstacle voxels in their own map (which are remembered as ever obstacle). All
     /// lists sorted.
@@ -85,10 +91,15 @@ public:
     std::unique_ptr<MapTree> toTree(MapIndex m, const MapTree& configured) const;
 
     std::size_t bricks() const { return bricks_.size(); }
-    std::size_t blocksInUse() const { return blockCount_ - freeBlocks_.size(); }  ///< words with 64 values
+    std::size_t blocksInUse() const {  ///< words with 64 values
+        std::size_t n = 0;
+        for (const Pool& p : pools_) n += p.count - p.free.size();
+        return n;
+    }
     std::size_t bytes() const {  ///< memory held (capacity, not size)
-        return index_.bytes() + codes_.capacity() * sizeof(std::uint64_t) + bricks_.capacity() * sizeof(Brick) +
-               chunks_.size() * kBlocksPerChunk * 64 * sizeof(float) + freeBlocks_.capacity() * sizeof(std::int32_t);
+        std::size_t n = index_.bytes() + codes_.capacity() * sizeof(std::uint64_t) + bricks_.capacity() * sizeof(Brick);
+        for (const Pool& p : pools_) n += p.chunks.size() * kBlocksPerChunk * 64 * sizeof(float) + p.free.capacity() * sizeof(std::int32_t);
+        return n;
     }
 
 private:
@@ -104,25 +115,44 @@ private:
         Words map[2];
         std::uint64_t everObstacle[8] = {0, 0, 0, 0, 0, 0, 0, 0};  ///< obstacle hit at least once
     };
-    static constexpr std::size_t kBlocksPerChunk = 4096;
+    static constexpr std::size_t kBlocksPerChunk = 1024;
+    /// Shards per map: bricks by the lowest bit of their x and y (a checkerboard of 2 x 2 bricks).
+    static constexpr unsigned kShards = 4;
+    static unsigned shardOf(std::uint64_t brickCode) { return unsigned(brickCode & 3); }
+    /// A block id: the pool (map * kShards + shard) in the bits from kPoolShift, the block within it below.
+    static constexpr int kPoolShift = 27;
+    /// Value blocks of one (map, shard): kBlocksPerChunk x 64 floats per chunk, and the free ones.
+    struct Pool {
+        std::vector<std::unique_ptr<float[]>> chunks;
+        std::vector<std::int32_t> free;  ///< block ids (pool bits included)
+        std::size_t count = 0;           ///< blocks made
+    };
 
     LogOdds l_;
     CodeIndex index_;                   ///< brick code -> position in bricks_
     std::vector<std::uint64_t> codes_;  ///< brick code (Morton code >> 9) per brick
     std::vector<Brick> bricks_;
-    std::vector<std::unique_ptr<float[]>> chunks_;  ///< value blocks, kBlocksPerChunk x 64 floats each
-    std::vector<std::int32_t> freeBlocks_;
-    std::size_t blockCount_ = 0;
+    Pool pools_[2 * kShards];
+    unsigned threads_ = 1;
 
-    float* block(std::int32_t b) { return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 64]; }
     const float* block(std::int32_t b) const {
-        return &chunks_[std::size_t(b) / kBlocksPerChunk][(std::size_t(b) % kBlocksPerChunk) * 64];
+        const std::size_t local = std::size_t(b) & ((std::size_t(1) << kPoolShift) - 1);
+        return &pools_[std::size_t(b) >> kPoolShift].chunks[local / kBlocksPerChunk][(local % kBlocksPerChunk) * 64];
     }
+    float* block(std::int32_t b) { return const_cast<float*>(static_cast<const BrickMap*>(this)->block(b)); }
     float valueOf(const Words& t, unsigned w, unsigned v) const { return t.block[w] >= 0 ? block(t.block[w])[v] : t.uniform[w]; }
     Brick& brickOf(std::uint64_t brickCode);
-    void collapseIfUniform(Words& t);
+    void collapseIfUniform(Words& t, Pool& pool);
     /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics).
-    void update(Words& t, unsigned local, float delta, bool skipOccupied);
+    void update(Words& t, unsigned local, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits);
+    /// The voxels of one brick in one of a scan's lists (applyScan()).
+    struct Run {
+        std::uint32_t brick;       ///< position in bricks_
+        std::uint32_t shard;
+        const std::uint64_t *from, *to;
+    };
+    std::vector<Run> runs_[3];  ///< applyScan()'s runs of free, ground and obstacle voxels
+    void applyShard(unsigned shard, const std::vector<Run>& free, const std::vector<Run>& groundHits, const std::vector<Run>& obstacleHits);
     std::vector<std::size_t> sortedBricks() const;
 };
 

@@ -103,6 +103,7 @@ void MapBuilder::run(ScanStream& stream, const BuildOptions& o) {
     const unsigned local = o.threads, workers = o.threads + o.remoteWorkers;
     workers_.clear();
     for (unsigned i = 0; i < std::max(1u, local); ++i) workers_.emplace_back(config_, map_.options());
+    map_.setUpdateThreads(std::max(1u, local));  // the voxels of a scan's update by tiles (same maps for any number)
     if (tally_.scansByRank.size() < o.ranks) tally_.scansByRank.resize(o.ranks, 0);
     // `what()` names the phase, built only when an allocation failed.
     auto guarded = [](const auto& what, auto&& f) -> decltype(f()) {

@@ -1,5 +1,9 @@
 #include <gseg/map/memory_estimate.hpp>
 
+#include <gseg/map/scan_update.hpp>
+
+#include "voxel_keys.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -99,6 +103,33 @@ MemoryEstimate estimateMemory(const RayFootprint& f) {
     e.firstMap = kBytesPerMapBrick * f.bricks + kBytesPerMapWord * f.words;
     e.growthPerScan = kSparseGrowth * (kBytesPerMapBrick * f.sparseBricks + kBytesPerMapWord * f.sparseWords) + kMapGrowth * e.firstMap;
     return e;
+}
+
+void LayerBox::add(const ScanUpdate& u) {
+    auto extend = [&](long x, long y) {
+        lo_[0] = std::min(lo_[0], x), hi_[0] = std::max(hi_[0], x);
+        lo_[1] = std::min(lo_[1], y), hi_[1] = std::max(hi_[1], y);
+    };
+    for (const GroundCellSample& c : u.groundCells) extend(long(c.cell >> 16), long(c.cell & 0xffffu));
+    // Obstacle hits are sorted by Morton code: the ones of a column are not together, but their
+    // x, y come from the code's low two bits of each triple.
+    for (std::uint64_t code : u.obstacleHits) extend(long(detail::compactBits(code)), long(detail::compactBits(code >> 1)));
+}
+
+// Per cell: the 7 layers (28 B) and, while they are computed, 5 temporaries (20 B); while the
+// GeoTIFF is encoded, GDAL's in-memory copy of the 7 layers (28 B) beside the layers, and its
+// compressed output (at most about the copy: a few B for the mostly unknown cells of a big box);
+// the costmap and its PGM (2 B).
+constexpr double kBytesPerLayerCell = 28 + 28 + 4 + 2;
+
+double layerBytes(double cells) { return kBytesPerLayerCell * cells; }
+
+// Calibration (peak RSS of rawlog-octomap with writing against the one before writing, sequence
+// 00 through kitti2rawlog: 6, 60 and 600 scans): the files take about this much per byte of the maps.
+constexpr double kWritingPerMapByte = 1.9;
+
+double MemoryEstimate::peakWithWriting(std::size_t inFlight, std::size_t scans, double layerCells) const {
+    return peak(inFlight, scans) + kWritingPerMapByte * maps(scans) + layerBytes(layerCells);
 }
 
 namespace {

@@ -170,6 +170,8 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
     stats_.rays += u.rays;
 }
 
+void TraversabilityMap::setUpdateThreads(unsigned threads) { voxels_->setThreads(threads); }
+
 std::unique_ptr<octomap::ColorOcTree> TraversabilityMap::colouredTree() const {
     auto tree = std::make_unique<octomap::ColorOcTree>(options_.resolution);
     tree->setOccupancyThres(options_.occupancyThreshold);

@@ -47,13 +47,44 @@ struct MemoryEstimate {
     double firstMap = 0;     ///< the maps after the first scan
     double growthPerScan = 0;  ///< the maps grow by this with every further scan
     /// [bytes] The peak with `inFlight` scans being cast or waiting at once, after `scans` scans.
-    double peak(std::size_t inFlight, std::size_t scans) const {
-        return process + perScan * double(inFlight) + firstMap + growthPerScan * double(scans > 0 ? scans - 1 : 0);
-    }
+    double peak(std::size_t inFlight, std::size_t scans) const { return process + perScan * double(inFlight) + maps(scans); }
+    /// [bytes] The maps after `scans` scans.
+    double maps(std::size_t scans) const { return firstMap + growthPerScan * double(scans > 0 ? scans - 1 : 0); }
+    /// [bytes] The peak of a whole run, writing included: peak() and then, while the files are
+    /// written, what they take beside the maps (writingPerMapByte() per byte of the maps: the
+    /// voxel lists, trees and scene) and the 2.5D layers over `layerCells` cells (layerBytes()).
+    double peakWithWriting(std::size_t inFlight, std::size_t scans, double layerCells) const;
 };
 
 /// The estimate for scans like `footprint`'s (rayFootprint()).
 MemoryEstimate estimateMemory(const RayFootprint& footprint);
+
+struct ScanUpdate;
+
+/// The box of map cells (x, y columns, at the map resolution) that the 2.5D layers, the costmap and
+/// the layers' GeoTIFF cover: every column with a ground point or an obstacle hit of a scan. The
+/// layers are dense over this box, so their memory follows its area, not the ground seen: a pose
+/// that jumps kilometres away makes it huge (#35). Grown scan by scan with add().
+class LayerBox {
+public:
+    /// Extends the box by the columns of the update's ground cells and obstacle hits.
+    void add(const ScanUpdate& update);
+    bool empty() const { return hi_[0] < lo_[0]; }
+    /// [cells] along x and y (0 when empty)
+    double cellsX() const { return empty() ? 0 : double(hi_[0] - lo_[0] + 1); }
+    double cellsY() const { return empty() ? 0 : double(hi_[1] - lo_[1] + 1); }
+    double cells() const { return cellsX() * cellsY(); }
+    /// [m] the box's lower-left corner and its size, at cells of edge `resolution`
+    double minX(double resolution) const { return (lo_[0] - 32768) * resolution; }
+    double minY(double resolution) const { return (lo_[1] - 32768) * resolution; }
+
+private:
+    long lo_[2] = {1L << 20, 1L << 20}, hi_[2] = {-1, -1};  ///< OctoMap key x, y (cell index + 32768)
+};
+
+/// [bytes] The 2.5D layers over `cells` cells at their peak: 7 float layers and the temporaries of
+/// their computation, then the GeoTIFF's in-memory copy beside them, and the costmap.
+double layerBytes(double cells);
 
 /// [bytes] What this process may still allocate: the smallest of the machine's available memory
 /// (MemAvailable of /proc/meminfo), RLIMIT_AS less the address space in use and RLIMIT_DATA less

@@ -68,6 +68,8 @@ public:
     /// Applies one scan's update (castScan() with this map's options). Updates must be applied in
     /// scan order; the result depends on nothing else.
     void apply(const ScanUpdate& update);
+    /// Threads apply() may use for the voxels (default 1): the maps are the same for any number.
+    void setUpdateThreads(unsigned threads);
 
     bool empty() const { return stats_.scans == 0; }
     /// The maps as OctoMap trees (built when first asked for after a scan; pruned where eight
