@@ -25,6 +25,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -317,7 +318,10 @@ PyResult toPython(gseg::mrpt::ScanSegmentation&& s, std::size_t points) {
     return r;
 }
 
-/// GroundSegmenter: one per thread (it keeps scratch memory); segment() releases the GIL.
+/// GroundSegmenter: segment() releases the GIL and then takes the object's mutex (it keeps scratch
+/// memory): threads sharing one segmenter take turns and get the labels of serial calls; one
+/// segmenter per thread segments in parallel. The mutex is taken only with the GIL released (never
+/// the other way round), so a thread waiting for it never blocks the thread that holds it.
 class PySegmenter {
 public:
     explicit PySegmenter(const PyParams& p) : segmenter_(p.config), params_(p) {}
@@ -333,6 +337,7 @@ public:
         gseg::mrpt::ScanSegmentation s;
         {
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);
             s = segmenter_.segment(p.view, false, checkHeight ? gseg::mrpt::HeightCheck::Now : gseg::mrpt::HeightCheck::Never);
         }
         return toPython(std::move(s), p.view.size());
@@ -342,6 +347,7 @@ public:
 private:
     gseg::mrpt::ScanSegmenter segmenter_;
     PyParams params_;
+    std::mutex mutex_;
 };
 
 py::dict countsDict(const gseg::Counts& c) {
@@ -422,6 +428,7 @@ public:
         ::mrpt::poses::CPose3D sensorPose;
         {
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);  // one reader: threads sharing the iterator take turns
             try {
                 for (;;) {
                     if (!stream_->next(job)) break;
@@ -441,6 +448,7 @@ public:
 
 private:
     std::unique_ptr<gseg::map::ScanStream> stream_;
+    std::mutex mutex_;
 };
 
 py::dict statsDict(const gseg::map::MapStats& s) {
@@ -459,7 +467,9 @@ py::dict statsDict(const gseg::map::MapStats& s) {
     return d;
 }
 
-/// The map builder of rawlog-octomap, fed scan by scan.
+/// The map builder of rawlog-octomap, fed scan by scan. Every method that touches the builder
+/// releases the GIL and then takes the object's mutex (as PySegmenter): threads sharing one builder
+/// insert one scan at a time, in the order they get the mutex.
 class PyMapBuilder {
 public:
     explicit PyMapBuilder(const PyParams& p) : builder_(p.config, p.config.traversability) {}
@@ -478,8 +488,9 @@ public:
             for (py::ssize_t c = 0; c < (withIntensity ? 4 : 3); ++c) xyzi[std::size_t(4 * i + c)] = f(i, c);
         const auto obs = gseg::mrpt::pointCloudObservation(xyzi.data(), p.view.size(), mount, "LIDAR",
                                                            ::mrpt::Clock::fromDouble(double(scans_)));
-        ++scans_;
+        ++scans_;  // under the GIL
         py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
         try {
             return builder_.insert(*obs, robot);
         } catch (const std::exception& e) {
@@ -490,7 +501,7 @@ public:
 
     std::vector<std::string> write(const std::filesystem::path& prefixPath, bool overwrite) {
         const std::string prefix = prefixPath.string();
-        if (builder_.map().empty()) throw py::value_error("no scan was inserted: nothing to write");
+        if (empty()) throw py::value_error("no scan was inserted: nothing to write");
         std::vector<gseg::io::NamedPath> outputs;
         for (const auto& path : gseg::map::TraversabilityMap::outputPaths(prefix)) outputs.push_back({"prefix", path});
         try {
@@ -502,6 +513,7 @@ public:
             throw py::value_error(m);
         }
         py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
         try {
             return builder_.map().write(prefix);
         } catch (const std::exception& e) {
@@ -510,12 +522,31 @@ public:
         }
     }
 
-    py::dict stats() const { return statsDict(builder_.map().stats()); }
-    std::vector<std::string> skipped() const { return builder_.tally().skipped; }
+    py::dict stats() {
+        gseg::map::MapStats s;
+        {
+            py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);
+            s = builder_.map().stats();
+        }
+        return statsDict(s);
+    }
+    std::vector<std::string> skipped() {
+        py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
+        return builder_.tally().skipped;
+    }
 
 private:
+    bool empty() {
+        py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
+        return builder_.map().empty();
+    }
+
     gseg::map::MapBuilder builder_;
     std::size_t scans_ = 0;
+    std::mutex mutex_;
 };
 
 }  // namespace
@@ -584,8 +615,9 @@ ones with Params(old, key=value).)doc")
 
     py::class_<PySegmenter>(m, "GroundSegmenter", R"doc(
 GSeg3D ground segmentation with one configuration (Params). Deterministic: the same points give
-the same labels on every call. It keeps scratch memory between calls: use one per thread;
-segment() releases the GIL, so threads segment in parallel.)doc")
+the same labels on every call. segment() releases the GIL: one segmenter per thread segments in
+parallel; threads sharing one segmenter are safe and get the same labels, but take turns (it keeps
+scratch memory between calls, guarded by a lock).)doc")
         .def(py::init([](const py::object& params) {
                  return std::make_unique<PySegmenter>(params.is_none() ? PyParams{} : params.cast<PyParams>());
              }),
@@ -618,7 +650,8 @@ Builds gseg's traversability maps from scans with poses, as rawlog-octomap does:
 segmented with the configuration (Params: segmentation keys, distToGround or "auto", and the
 `traversability` options: resolution [m], maxRange [m], clearance [m], ...), moved into the world
 frame and ray-cast into the maps, in the order given. write() puts the same files as
-`rawlog-octomap -o PREFIX` (byte for byte for the same scans and poses).)doc")
+`rawlog-octomap -o PREFIX` (byte for byte for the same scans and poses). Threads may share one
+builder: its methods take a lock (with the GIL released), so scans go in one at a time.)doc")
         .def(py::init([](const py::object& params) {
                  return std::make_unique<PyMapBuilder>(params.is_none() ? PyParams{} : params.cast<PyParams>());
              }),
