@@ -486,11 +486,23 @@ public:
         const auto f = fa.unchecked<2>();
         for (py::ssize_t i = 0; i < f.shape(0); ++i)
             for (py::ssize_t c = 0; c < (withIntensity ? 4 : 3); ++c) xyzi[std::size_t(4 * i + c)] = f(i, c);
+        bool anyFinite = false;
+        for (std::size_t i = 0; i < p.view.size() && !anyFinite; ++i) {
+            const float* q = p.view.point(i);
+            anyFinite = std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
+        }
         const auto obs = gseg::mrpt::pointCloudObservation(xyzi.data(), p.view.size(), mount, "LIDAR",
                                                            ::mrpt::Clock::fromDouble(double(scans_)));
-        ++scans_;  // under the GIL
+        const std::size_t index = scans_++;  // under the GIL
         py::gil_scoped_release release;
         const std::lock_guard<std::mutex> lock(mutex_);
+        if (!anyFinite) {  // skipped and said so (the map is unchanged), as a scan the segmenter refuses
+            gseg::map::ScanResult r;
+            r.describe = "scan " + std::to_string(index);
+            r.skipped = "no finite point (every row holds a NaN or an infinity)";
+            builder_.integrate(r);
+            return false;
+        }
         try {
             return builder_.insert(*obs, robot);
         } catch (const std::exception& e) {
@@ -501,6 +513,7 @@ public:
 
     std::vector<std::string> write(const std::filesystem::path& prefixPath, bool overwrite) {
         const std::string prefix = prefixPath.string();
+        if (prefix.empty()) throw py::value_error("prefix is empty (it starts the name of every file written, e.g. 'out/map')");
         if (empty()) throw py::value_error("no scan was inserted: nothing to write");
         std::vector<gseg::io::NamedPath> outputs;
         for (const auto& path : gseg::map::TraversabilityMap::outputPaths(prefix)) outputs.push_back({"prefix", path});

@@ -96,7 +96,10 @@ std::string scoreCsv(const EvalMapResult& r) {
     return out;
 }
 
-std::vector<std::string> reportPaths(const std::string& prefix) { return {prefix + "_map_score.csv", prefix + "_map_cells.png"}; }
+std::vector<std::string> reportPaths(const std::string& prefix) {
+    io::checkOutputPrefix(prefix);
+    return {prefix + "_map_score.csv", prefix + "_map_cells.png"};
+}
 
 int run(const EvalMapCli& cli) {
     const io::RosMap rosMap = io::readRosMap(cli.map);

@@ -348,6 +348,21 @@ def test_the_map_builder_refuses_bad_poses_empty_maps_and_existing_outputs(tmp_p
         list(gseg.RawlogScans(str(tmp_path / "absent.rawlog")))
 
 
+def test_an_all_nan_scan_is_reported_skipped_and_bad_prefixes_are_refused(tmp_path):
+    # Round four of #34: an all-NaN scan was accepted (True, nothing in skipped()); write('') wrote
+    # into the current folder while the CLI refuses -o "".
+    builder = gseg.MapBuilder()
+    assert not builder.insert(np.full((100, 3), np.nan, np.float32), np.eye(4))
+    assert len(builder.skipped()) == 1 and "no finite point" in builder.skipped()[0]
+    assert builder.stats()["scans"] == 0
+    assert builder.insert(synthetic_scan(1), np.eye(4))
+    for prefix, match in (("", "prefix is empty"), (str(tmp_path) + "/", "ends in '/'"), (str(tmp_path), "is a folder"),
+                          ("/dev/null", "not a regular file")):
+        with pytest.raises(ValueError, match=match):
+            builder.write(prefix)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_paths_may_be_pathlib_paths_and_file_objects_are_refused(kitti_scan, tmp_path):
     assert gseg.read_kitti_bin(kitti_scan).shape[1] == 4  # a pathlib.Path
     with open(kitti_scan, "rb") as f:

@@ -92,6 +92,16 @@ OutputTarget resolveOutput(const std::string& given) {
     return t;
 }
 
+void checkOutputPrefix(const std::string& prefix) {
+    if (prefix.empty()) throw std::invalid_argument("the output prefix is empty (it starts the name of every file written)");
+    const std::string example = " (a prefix starts every file's name: out/map gives out/map_ground.bt, ...)";
+    if (prefix.back() == '/') throw std::invalid_argument("the output prefix " + prefix + " ends in '/'" + example);
+    struct stat st {};
+    if (::stat(prefix.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+        throw std::invalid_argument("the output prefix " + prefix + " is " + (S_ISDIR(st.st_mode) ? "a folder" : "not a regular file") +
+                                    example);
+}
+
 bool mustBeNew(const std::string& path) {
     std::lock_guard<std::mutex> lock(g_newMutex);
     return g_new.count(key(path)) > 0;

@@ -46,7 +46,14 @@ std::vector<std::size_t> kittiThinned(const float* xyzi, std::size_t points, uns
 void thinKittiScan(std::vector<float>& xyzi, std::vector<std::uint32_t>& labels, unsigned ringStep, unsigned pointStep);
 
 /// Reads a whole regular file as bytes (memory: the file's size); throws std::runtime_error naming
-/// the file if it is missing, not a regular file (a folder, a pipe, a device) or unreadable.
-std::vector<std::uint8_t> readFileBytes(const std::string& path);
+/// the file if it is missing, not a regular file (a folder, a pipe, a device) or unreadable. The
+/// file is looked at (stat) before it is opened, so a FIFO is refused instead of waited on.
+/// `maxBytes`: a larger file is refused (naming its size and the bound) before anything is read.
+std::vector<std::uint8_t> readFileBytes(const std::string& path, std::uint64_t maxBytes = UINT64_MAX);
+
+/// The size [bytes] of a regular file, looked at without opening it; throws std::runtime_error
+/// "PATH: not a regular file (a FIFO)" (a folder, a device, ...) or "PATH: cannot open (reason)".
+/// For readers that open a file with another library: call it first, so a FIFO never blocks them.
+std::uint64_t regularFileSize(const std::string& path);
 
 }  // namespace gseg::io

@@ -1,0 +1,239 @@
+// Issue #34, round four: inputs that were read or waited on without bound, and silent wrong
+// results. Each case: the exit code, the message's key words, and the earlier outputs unchanged.
+#include <gseg/io/kitti.hpp>
+#include <gseg/io/output_checks.hpp>
+#include <gseg/io/ros_map.hpp>
+#include <gseg/traversability_options.hpp>
+#include <support/child.hpp>
+#include <support/paths.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+using gseg::io::RosMap;
+
+namespace {
+
+const char* const kIdentity12 = "1 0 0 0 0 1 0 0 0 0 1 0";
+const fs::path kVlp16 = "/usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog";
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+void writeText(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+/// A one-scan labelled drive: 10 cells of road at y = 0 and, at y = 3 (0.2 m cells), road under a
+/// building (as test_map_score's tool case); and a trinary map calling cells 0-4 of the road free
+/// and the building row occupied.
+struct Case {
+    fs::path dir, drive, map;
+};
+
+Case makeCase(const std::string& name) {
+    Case c;
+    c.dir = gseg::test::freshDir("hostile_inputs", name);
+    c.drive = c.dir / "drive";
+    fs::create_directories(c.drive / "velodyne"), fs::create_directories(c.drive / "labels");
+    std::vector<float> xyzi;
+    std::vector<std::uint32_t> labels;
+    auto cell = [&](int cx, int cy, std::uint32_t label, int n, float z0) {
+        for (int k = 0; k < n; ++k)
+            xyzi.insert(xyzi.end(), {0.2f * float(cx) + 0.1f, 0.2f * float(cy) + 0.1f, z0 + 0.01f * float(k), 0.f}), labels.push_back(label);
+    };
+    for (int cx = 0; cx < 10; ++cx) cell(cx, 0, 40, 3, -1.7f), cell(cx, 3, 40, 3, -1.7f), cell(cx, 3, 50, 2, -1.0f);
+    std::ofstream(c.drive / "velodyne/000000.bin", std::ios::binary).write(reinterpret_cast<const char*>(xyzi.data()), std::streamsize(xyzi.size() * 4));
+    std::ofstream(c.drive / "labels/000000.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), std::streamsize(labels.size() * 4));
+    writeText(c.drive / "poses.txt", std::string(kIdentity12) + "\n");
+    writeText(c.drive / "calib.txt", std::string("P0: ") + kIdentity12 + "\nTr: " + kIdentity12 + "\n");
+    RosMap m = RosMap::unknown(10, 6, 0.2, 0.0, 0.0);
+    for (int cx = 0; cx < 5; ++cx) m.value(cx, 0) = RosMap::kFree;
+    for (int cx = 0; cx < 10; ++cx) m.value(cx, 3) = RosMap::kOccupied;
+    gseg::io::writeRosMap((c.dir / "map").string(), m);
+    c.map = c.dir / "map.yaml";
+    return c;
+}
+
+/// gseg eval-map under `timeout 60` (a reader that blocks fails the test instead of hanging it).
+gseg::test::CommandResult evalMap(const std::string& args) {
+    return gseg::test::runCommand("timeout 60 '" + gseg::test::tool("gseg") + "' eval-map " + args + " 2>&1");
+}
+
+std::size_t lines(const std::string& s) { return std::size_t(std::count(s.begin(), s.end(), '\n')); }
+
+/// The figures of eval-map's output (the table after the progress and the title).
+std::string table(const std::string& output) {
+    const auto at = output.find("map  height band");
+    return at == std::string::npos ? "no table in: " + output : output.substr(at);
+}
+
+/// A map YAML beside the case's, naming `image` with the other keys of map.yaml.
+fs::path yamlNaming(const Case& c, const std::string& name, const std::string& image, const std::string& extra = "") {
+    const fs::path y = c.dir / name;
+    writeText(y, "image: " + image + "\nresolution: 0.2\norigin: [0, 0, 0]\n" + extra);
+    return y;
+}
+
+}  // namespace
+
+TEST(HostileMapInputs, FifoDeviceFolderAndHugeImagesAreRefusedNamingTheFileAndTheReportIsKept) {
+    const Case c = makeCase("images");
+    const std::string report = (c.dir / "r").string();
+    ASSERT_EQ(evalMap(q(c.drive) + " " + q(c.map) + " -q --report '" + report + "'").status, 0);
+    const std::string before = gseg::test::readText(report + "_map_score.csv");
+    ASSERT_FALSE(before.empty());
+    ASSERT_EQ(::mkfifo((c.dir / "fifo.pgm").c_str(), 0600), 0);
+    ASSERT_EQ(::mkfifo((c.dir / "fifo.yaml").c_str(), 0600), 0);
+    // A 4 KB PGM whose header claims 65536 x 65536, and a sparse one as large as its claim.
+    writeText(c.dir / "claims.pgm", "P5\n65536 65536\n255\n");
+    fs::resize_file(c.dir / "claims.pgm", 4096);
+    writeText(c.dir / "sparse.pgm", "P5\n65536 65536\n255\n");
+    fs::resize_file(c.dir / "sparse.pgm", (std::uintmax_t(1) << 32) + 20);
+    fs::create_directories(c.dir / "folder.pgm");
+    struct Bad {
+        fs::path yaml;
+        std::string words;
+    };
+    const std::vector<Bad> cases = {
+        {yamlNaming(c, "fifo_image.yaml", "fifo.pgm"), "fifo.pgm: not a regular file (a FIFO)"},
+        {yamlNaming(c, "zero.yaml", "/dev/zero"), "/dev/zero: not a regular file (a character device)"},
+        {yamlNaming(c, "folder.yaml", "folder.pgm"), "folder.pgm: not a regular file (a folder)"},
+        {yamlNaming(c, "claims.yaml", "claims.pgm"), "claims.pgm: the header claims 65536 x 65536 pixels, more than"},
+        {yamlNaming(c, "sparse.yaml", "sparse.pgm"), "sparse.pgm: the header claims 65536 x 65536 pixels, more than"},
+        {c.dir / "fifo.yaml", "fifo.yaml: not a regular file (a FIFO)"},
+    };
+    for (const Bad& b : cases) {
+        const auto r = evalMap(q(c.drive) + " " + q(b.yaml) + " -w -q --report '" + report + "'");
+        EXPECT_EQ(r.status, 1) << b.yaml << ": " << r.output;
+        EXPECT_NE(r.output.find(b.words), std::string::npos) << r.output;
+        EXPECT_EQ(lines(r.output), 1u) << r.output;
+        EXPECT_EQ(gseg::test::readText(report + "_map_score.csv"), before) << b.yaml;
+    }
+}
+
+TEST(HostileMapInputs, AbsurdResolutionIsRefusedNamingTheKey) {
+    const Case c = makeCase("resolution");
+    for (const std::string bad : {"1e300", "1e-300"}) {
+        writeText(c.dir / "res.yaml", "image: map.pgm\nresolution: " + bad + "\norigin: [0, 0, 0]\n");
+        const auto r = evalMap(q(c.drive) + " " + q(c.dir / "res.yaml"));
+        EXPECT_EQ(r.status, 1) << r.output;
+        EXPECT_NE(r.output.find("res.yaml:2: resolution: " + bad + " m is outside"), std::string::npos) << r.output;
+    }
+}
+
+TEST(HostileMapInputs, HashInsideANameIsNoCommentAndRawModeIsReadAsOccupancyPercent) {
+    const Case c = makeCase("names");
+    const auto reference = evalMap(q(c.drive) + " " + q(c.map));
+    ASSERT_EQ(reference.status, 0) << reference.output;
+    ASSERT_NE(reference.output.find("traversable recall                  50.00"), std::string::npos) << reference.output;
+    // image: m#1.pgm is the file m#1.pgm (YAML: '#' starts a comment only after a blank).
+    fs::copy_file(c.dir / "map.pgm", c.dir / "m#1.pgm");
+    const auto hash = evalMap(q(c.drive) + " " + q(yamlNaming(c, "hash.yaml", "m#1.pgm # the map, a comment")));
+    EXPECT_EQ(hash.status, 0) << hash.output;
+    EXPECT_EQ(table(hash.output), table(reference.output));
+    // mode: raw, the pixel values occupancy in percent (0 free, 100 occupied, above 100 unknown):
+    // the same cells as the trinary map, so the same figures.
+    RosMap raw = gseg::io::readRosMap(c.map.string());
+    for (auto& v : raw.pixels) v = v == RosMap::kFree ? 0 : v == RosMap::kOccupied ? 100 : 255;
+    raw.mode = "raw";
+    gseg::io::writeRosMap((c.dir / "raw").string(), raw);
+    ASSERT_NE(gseg::test::readText((c.dir / "raw.yaml").string()).find("mode: raw"), std::string::npos);
+    const auto r = evalMap(q(c.drive) + " " + q(c.dir / "raw.yaml"));
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(table(r.output), table(reference.output));
+}
+
+TEST(HostileMapInputs, ElevationGeoTiffFifoGeographicAndHugeBandsAreRefusedBeforeReading) {
+    if (gseg::test::runCommand("command -v gdal_create >/dev/null 2>&1").status != 0) GTEST_SKIP() << "gdal_create absent (gdal-bin)";
+    const Case c = makeCase("elevation");
+    ASSERT_EQ(::mkfifo((c.dir / "fifo.tif").c_str(), 0600), 0);
+    // 30 float32 bands of 16384 x 16384 (30 GiB) in a sparse file of some 50 KB; and degrees.
+    ASSERT_EQ(gseg::test::runCommand("cd " + q(c.dir) + " && gdal_create -q -of GTiff -outsize 16384 16384 -bands 30 -ot Float32 "
+                                     "-co SPARSE_OK=TRUE -co TILED=YES -a_srs EPSG:3857 -a_ullr 0 16384 16384 0 huge.tif && "
+                                     "gdal_create -q -of GTiff -outsize 10 10 -bands 1 -ot Float32 -a_srs EPSG:4326 "
+                                     "-a_ullr 0 1 1 0 degrees.tif").status,
+              0);
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"fifo.tif", "fifo.tif: not a regular file (a FIFO)"},
+        {"huge.tif", "huge.tif: too large: 30 bands of 16384 x 16384 cells"},
+        {"degrees.tif", "degrees.tif: its coordinates are geographic (degrees"},
+    };
+    for (const auto& [file, words] : cases) {
+        const auto r = evalMap(q(c.drive) + " " + q(c.map) + " --elevation " + q(c.dir / file));
+        EXPECT_EQ(r.status, 1) << file << ": " << r.output;
+        EXPECT_NE(r.output.find(words), std::string::npos) << r.output;
+        EXPECT_EQ(lines(r.output), 1u) << r.output;
+    }
+}
+
+TEST(HostileConfigInputs, AFifoAsConfigurationIsRefusedByEveryReaderWithoutBlocking) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("hostile_inputs", "config_fifo");
+    ASSERT_EQ(::mkfifo((dir / "c.yaml").c_str(), 0600), 0);
+    ASSERT_EQ(::mkfifo((dir / "c.ini").c_str(), 0600), 0);
+    for (const std::string config : {"c.yaml", "c.ini"}) {
+        for (const std::string& command : {"gseg segment -c " + q(dir / config) + " x.bin",
+                                           "rawlog-octomap -i " + q(kVlp16) + " -o " + q(dir / "m") + " -c " + q(dir / config),
+                                           "rawlog-gseg -i " + q(kVlp16) + " -o " + q(dir / "o.rawlog") + " -c " + q(dir / config)}) {
+            const auto r = gseg::test::runCommand("timeout 60 " + gseg::test::tool("") + command + " 2>&1");
+            EXPECT_NE(r.status, 0) << command << ": " << r.output;
+            EXPECT_NE(r.status, 124) << command << ": blocked";
+            EXPECT_NE(r.output.find("not a regular file (a FIFO)"), std::string::npos) << command << ": " << r.output;
+        }
+    }
+    // The library's reader of every file read whole.
+    try {
+        gseg::io::readFileBytes((dir / "c.yaml").string());
+        ADD_FAILURE() << "a FIFO was read";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("c.yaml: not a regular file (a FIFO)"), std::string::npos) << e.what();
+    }
+}
+
+TEST(HostileOptions, DerivedKeysFollowTheResolutionAndAbsurdRangesNameTheKey) {
+    gseg::map::TraversabilityOptions o;
+    o.resolution = 2;  // documented 0.01-10; groundRiseRadius (default 1 m) never set by the user
+    EXPECT_NO_THROW(o.validate());
+    o = {};
+    o.maxRange = 1e-300;
+    try {
+        o.validate();
+        ADD_FAILURE() << "maxRange 1e-300 accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("maxRange = 1e-300: must be at least the resolution"), std::string::npos) << e.what();
+    }
+    o = {};
+    o.resolution = 0.05, o.groundRiseRadius = 100, o.maxGroundRise = 100;  // 2000 cells' radius: minutes per scan
+    try {
+        o.validate();
+        ADD_FAILURE() << "groundRiseRadius 100 at 0.05 m accepted";
+    } catch (const std::invalid_argument& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("groundRiseRadius = 100 m at resolution 0.05 m"), std::string::npos) << m;
+        EXPECT_NE(m.find("at most 200"), std::string::npos) << m;
+    }
+    o.resolution = 0.5;  // 200 cells: accepted
+    EXPECT_NO_THROW(o.validate());
+}
+
+TEST(HostileOutputs, APrefixEndingInASlashOrNamingADeviceIsRefusedAndNothingIsMade) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
+    const fs::path dir = gseg::test::freshDir("hostile_inputs", "prefix");
+    fs::create_directories(dir / "out");
+    for (const std::string& prefix : {(dir / "out").string() + "/", (dir / "out").string(), std::string("/dev/null")}) {
+        const auto r = gseg::test::runToolCommand("rawlog-octomap", "-i " + q(kVlp16) + " -o " +
+                                                                        q(prefix) + " --poses x.txt");
+        EXPECT_EQ(r.status, 2) << prefix << ": " << r.output;
+        EXPECT_NE(r.output.find("the output prefix " + prefix + " "), std::string::npos) << r.output;
+    }
+    EXPECT_TRUE(fs::is_empty(dir / "out"));
+    EXPECT_FALSE(fs::exists("/dev/null_ground.bt"));
+    EXPECT_THROW(gseg::io::checkOutputPrefix(""), std::invalid_argument);
+    EXPECT_NO_THROW(gseg::io::checkOutputPrefix((dir / "out/map").string()));
+}
