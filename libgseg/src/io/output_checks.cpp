@@ -1,4 +1,5 @@
 #include <gseg/io/output_checks.hpp>
+#include <gseg/io/temporary_cleanup.hpp>
 
 #include <cerrno>
 #include <cstring>
@@ -170,6 +171,10 @@ std::string cannotWriteIn(const std::string& folder) {
 }  // namespace
 
 void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules) {
+    // First, what a killed run left at these outputs: a half-committed set rolled back to the old
+    // one (its journal), its temporaries removed; then the outputs are what they were before it.
+    for (const NamedPath& out : outputs)
+        if (!out.path.empty()) removeStaleTemporaries(out.path);
     checkOutputsAreNotInputs(inputs, outputs);
     std::set<std::string> writable;  // folders tried already (a run may write thousands of files into many)
     for (const NamedPath& out : outputs) {
