@@ -446,3 +446,19 @@ TEST(Observations2mapWrapper, SigtermAndSigintStopObservations2mapAndRemoveItsTe
             << sig;
     }
 }
+
+TEST(HostileMapInputs, EvalMapSaysWhatItDoesAfterReadingAndWarnsOfFineCells) {
+    // #34: on a 0.01 m map eval-map ran for minutes with nothing said after reading the scans.
+    const Case c = makeCase("fine");
+    RosMap fine = RosMap::unknown(200, 120, 0.01, 0.0, 0.0);
+    gseg::io::writeRosMap((c.dir / "fine").string(), fine);
+    const auto r = evalMap(q(c.drive) + " " + q(c.dir / "fine.yaml"));
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("gseg eval-map: the truth of 80 labelled points on 0.01 m cells (cells finer than 0.05 m: this and the "
+                            "scoring may take minutes)"),
+              std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("gseg eval-map: scoring "), std::string::npos) << r.output;
+    const auto coarse = evalMap(q(c.drive) + " " + q(c.map));
+    EXPECT_NE(coarse.output.find("gseg eval-map: the truth of 80 labelled points on 0.2 m cells\n"), std::string::npos) << coarse.output;
+    EXPECT_EQ(evalMap(q(c.drive) + " " + q(c.map) + " -q").output, "");
+}
