@@ -98,7 +98,8 @@ void readPgm(const std::string& file, RosMap& map) {
     try {
         size = regularFileSize(file);
     } catch (const std::exception& e) {
-        fail(file, 0, std::string(e.what()).substr(file.size() + 2) + "; the map image must be a PGM file");
+        const std::string what = e.what(), head = file + ": ";
+        fail(file, 0, (what.rfind(head, 0) == 0 ? what.substr(head.size()) : what) + "; the map image must be a PGM file");
     }
     std::ifstream in(file, std::ios::binary);
     if (!in) fail(file, 0, "cannot open the map image");
@@ -245,6 +246,7 @@ RosMap readRosMap(const std::string& yamlPath) {
     const auto& image = need("image");
     const std::string name = unquote(image.first);
     if (name.empty()) fail(yamlPath, image.second, "image is empty");
+    if (name.find('\0') != std::string::npos) fail(yamlPath, image.second, "image: the name holds a NUL byte");
     readPgm(name.front() == '/' ? name : folderOf(yamlPath) + name, map);
     try {
         validate(map);
