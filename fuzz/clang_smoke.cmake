@@ -10,7 +10,7 @@ if(NOT rc EQUAL 0)
   message(FATAL_ERROR "configuring the clang fuzz build failed:\n${out}\n${err}")
 endif()
 set(targets)
-foreach(t kitti ply config segmenter rawlog)
+foreach(t kitti ply config segmenter rawlog map)
   list(APPEND targets --target fuzz_${t})
 endforeach()
 execute_process(COMMAND ${CMAKE_COMMAND} --build "${BUILD}" -j2 ${targets}

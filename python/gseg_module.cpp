@@ -27,6 +27,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -354,7 +355,10 @@ PyResult toPython(gseg::mrpt::ScanSegmentation&& s, std::size_t points) {
     return r;
 }
 
-/// GroundSegmenter: one per thread (it keeps scratch memory); segment() releases the GIL.
+/// GroundSegmenter: segment() releases the GIL and then takes the object's mutex (it keeps scratch
+/// memory): threads sharing one segmenter take turns and get the labels of serial calls; one
+/// segmenter per thread segments in parallel. The mutex is taken only with the GIL released (never
+/// the other way round), so a thread waiting for it never blocks the thread that holds it.
 class PySegmenter {
 public:
     explicit PySegmenter(const PyParams& p) : segmenter_(p.config), params_(p) {}
@@ -370,6 +374,7 @@ public:
         gseg::mrpt::ScanSegmentation s;
         {
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);
             s = segmenter_.segment(p.view, false, checkHeight ? gseg::mrpt::HeightCheck::Now : gseg::mrpt::HeightCheck::Never);
         }
         return toPython(std::move(s), p.view.size());
@@ -379,6 +384,7 @@ public:
 private:
     gseg::mrpt::ScanSegmenter segmenter_;
     PyParams params_;
+    std::mutex mutex_;
 };
 
 py::dict countsDict(const gseg::Counts& c) {
@@ -459,6 +465,7 @@ public:
         ::mrpt::poses::CPose3D sensorPose;
         {
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);  // one reader: threads sharing the iterator take turns
             try {
                 for (;;) {
                     if (!stream_->next(job)) break;
@@ -478,6 +485,7 @@ public:
 
 private:
     std::unique_ptr<gseg::map::ScanStream> stream_;
+    std::mutex mutex_;
 };
 
 py::dict statsDict(const gseg::map::MapStats& s) {
@@ -499,7 +507,9 @@ py::dict statsDict(const gseg::map::MapStats& s) {
     return d;
 }
 
-/// The map builder of rawlog-octomap, fed scan by scan.
+/// The map builder of rawlog-octomap, fed scan by scan. Every method that touches the builder
+/// releases the GIL and then takes the object's mutex (as PySegmenter): threads sharing one builder
+/// insert one scan at a time, in the order they get the mutex.
 class PyMapBuilder {
 public:
     explicit PyMapBuilder(const PyParams& p) : builder_(p.config, p.config.traversability) {}
@@ -516,10 +526,23 @@ public:
         const auto f = fa.unchecked<2>();
         for (py::ssize_t i = 0; i < f.shape(0); ++i)
             for (py::ssize_t c = 0; c < (withIntensity ? 4 : 3); ++c) xyzi[std::size_t(4 * i + c)] = f(i, c);
+        bool anyFinite = false;
+        for (std::size_t i = 0; i < p.view.size() && !anyFinite; ++i) {
+            const float* q = p.view.point(i);
+            anyFinite = std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
+        }
         const auto obs = gseg::mrpt::pointCloudObservation(xyzi.data(), p.view.size(), mount, "LIDAR",
                                                            ::mrpt::Clock::fromDouble(double(scans_)));
-        ++scans_;
+        const std::size_t index = scans_++;  // under the GIL
         py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (!anyFinite) {  // skipped and said so (the map is unchanged), as a scan the segmenter refuses
+            gseg::map::ScanResult r;
+            r.describe = "scan " + std::to_string(index);
+            r.skipped = "no finite point (every row holds a NaN or an infinity)";
+            builder_.integrate(r);
+            return false;
+        }
         try {
             return builder_.insert(*obs, robot);
         } catch (const std::exception& e) {
@@ -530,7 +553,8 @@ public:
 
     std::vector<std::string> write(const std::filesystem::path& prefixPath, bool overwrite) {
         const std::string prefix = prefixPath.string();
-        if (builder_.map().empty()) throw py::value_error("no scan was inserted: nothing to write");
+        if (prefix.empty()) throw py::value_error("prefix is empty (it starts the name of every file written, e.g. 'out/map')");
+        if (empty()) throw py::value_error("no scan was inserted: nothing to write");
         std::vector<gseg::io::NamedPath> outputs;
         for (const auto& path : gseg::map::TraversabilityMap::outputPaths(prefix)) outputs.push_back({"prefix", path});
         try {
@@ -542,6 +566,7 @@ public:
             throw py::value_error(m);
         }
         py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
         try {
             return builder_.map().write(prefix);
         } catch (const std::exception& e) {
@@ -550,12 +575,31 @@ public:
         }
     }
 
-    py::dict stats() const { return statsDict(builder_.map().stats()); }
-    std::vector<std::string> skipped() const { return builder_.tally().skipped; }
+    py::dict stats() {
+        gseg::map::MapStats s;
+        {
+            py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(mutex_);
+            s = builder_.map().stats();
+        }
+        return statsDict(s);
+    }
+    std::vector<std::string> skipped() {
+        py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
+        return builder_.tally().skipped;
+    }
 
 private:
+    bool empty() {
+        py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
+        return builder_.map().empty();
+    }
+
     gseg::map::MapBuilder builder_;
     std::size_t scans_ = 0;
+    std::mutex mutex_;
 };
 
 }  // namespace
@@ -637,8 +681,9 @@ Params(p, heightGate=0.2).)doc")
 
     py::class_<PySegmenter>(m, "GroundSegmenter", R"doc(
 GSeg3D ground segmentation with one configuration (Params). Deterministic: the same points give
-the same labels on every call. It keeps scratch memory between calls: use one per thread;
-segment() releases the GIL, so threads segment in parallel.)doc")
+the same labels on every call. segment() releases the GIL: one segmenter per thread segments in
+parallel; threads sharing one segmenter are safe and get the same labels, but take turns (it keeps
+scratch memory between calls, guarded by a lock).)doc")
         .def(py::init([](const py::object& params) {
                  return std::make_unique<PySegmenter>(params.is_none() ? PyParams{} : params.cast<PyParams>());
              }),
@@ -671,7 +716,8 @@ Builds gseg's traversability maps from scans with poses, as rawlog-octomap does:
 segmented with the configuration (Params: segmentation keys, distToGround or "auto", and the
 `traversability` options: resolution [m], maxRange [m], clearance [m], ...), moved into the world
 frame and ray-cast into the maps, in the order given. write() puts the same files as
-`rawlog-octomap -o PREFIX` (byte for byte for the same scans and poses).)doc")
+`rawlog-octomap -o PREFIX` (byte for byte for the same scans and poses). Threads may share one
+builder: its methods take a lock (with the GIL released), so scans go in one at a time.)doc")
         .def(py::init([](const py::object& params) {
                  return std::make_unique<PyMapBuilder>(params.is_none() ? PyParams{} : params.cast<PyParams>());
              }),

@@ -29,7 +29,7 @@ const OptionTable<TraversabilityOptions>& table() {
             {"maxGroundRise", &O::maxGroundRise, "m",
              "a cell whose elevation lies more than this above the lowest elevation within groundRiseRadius is not traversable "
              "(flat tops of hedges and bushes the segmenter calls ground); > groundRiseRadius * tan(maxSlope)"},
-            {"groundRiseRadius", &O::groundRiseRadius, "m", "radius of the neighbourhood of maxGroundRise, >= resolution"},
+            {"groundRiseRadius", &O::groundRiseRadius, "m", "radius of the neighbourhood of maxGroundRise, (0, 100] and at most 200 cells (below the resolution: the cell alone)"},
             {"obstacleClearProbability", &O::obstacleClearProbability, "-",
              "an obstacle voxel once hit stays an obstacle in the layers and costmap until its occupancy probability falls to this "
              "or below (porous vegetation and fences stay, what moved away is cleared), in (0, occupancyThreshold]"},
@@ -56,6 +56,9 @@ const OptionTable<TraversabilityOptions>& table() {
     return t;
 }
 
+/// [cells] the largest groundRiseRadius / resolution (a disc of about 126,000 cells looked at per cell).
+constexpr double kMaxGroundRiseCells = 200;
+
 /// lo < v < hi (or lo <= v <= hi with `inclusive`).
 void requireInRange(double v, const char* name, double lo, double hi, bool inclusive = false) {
     const bool ok = inclusive ? (v >= lo && v <= hi) : (v > lo && v < hi);
@@ -71,7 +74,12 @@ void requireInRange(double v, const char* name, double lo, double hi, bool inclu
 
 void TraversabilityOptions::validate() const {
     requireInRange(resolution, "resolution [m]", 0.01, 10.0, true);
-    if (!(maxRange > 0)) throw std::invalid_argument("TraversabilityOptions.maxRange = " + std::to_string(maxRange) + ": must be > 0 m");
+    if (!(maxRange >= resolution)) {
+        std::ostringstream s;  // %g: 1e-300 must not read as 0.000000
+        s << "TraversabilityOptions.maxRange = " << maxRange << ": must be at least the resolution (" << resolution
+          << " m; a shorter ray leaves the map empty)";
+        throw std::invalid_argument(s.str());
+    }
     if (maxRange / resolution > kMaxRayVoxels)
         throw std::invalid_argument("TraversabilityOptions: maxRange / resolution = " + std::to_string(maxRange) + " / " +
                                     std::to_string(resolution) + " gives rays of " + std::to_string(long(maxRange / resolution)) +
@@ -88,9 +96,19 @@ void TraversabilityOptions::validate() const {
     if (!(maxStep > 0)) throw std::invalid_argument("TraversabilityOptions.maxStep = " + std::to_string(maxStep) + ": must be > 0 m");
     if (!(maxRoughness > 0))
         throw std::invalid_argument("TraversabilityOptions.maxRoughness = " + std::to_string(maxRoughness) + ": must be > 0 m");
-    if (!(groundRiseRadius >= resolution && groundRiseRadius <= 100))
+    // Below the resolution the neighbourhood is the cell alone (no rise): accepted, so a coarse
+    // --resolution is not refused for a default radius the user never set. Its cost grows with
+    // (radius / resolution)^2 per cell: bounded in cells.
+    if (!(groundRiseRadius > 0 && groundRiseRadius <= 100))
         throw std::invalid_argument("TraversabilityOptions.groundRiseRadius = " + std::to_string(groundRiseRadius) +
-                                    ": must lie in [resolution, 100] m");
+                                    ": must lie in (0, 100] m");
+    if (groundRiseRadius / resolution > kMaxGroundRiseCells) {
+        std::ostringstream s;
+        s << "TraversabilityOptions.groundRiseRadius = " << groundRiseRadius << " m at resolution " << resolution << " m is a disc of "
+          << long(groundRiseRadius / resolution) << " cells' radius per cell: at most " << kMaxGroundRiseCells
+          << " (its time grows with the square; lower groundRiseRadius or raise the resolution)";
+        throw std::invalid_argument(s.str());
+    }
     if (!(maxGroundRise > groundRiseRadius * std::tan(maxSlope * 3.14159265358979323846 / 180.0)))
         throw std::invalid_argument("TraversabilityOptions.maxGroundRise = " + std::to_string(maxGroundRise) +
                                     ": must exceed groundRiseRadius * tan(maxSlope) = " +

@@ -184,6 +184,9 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
     if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";
     result.message += "; wrote " + outPath;
     result.unmatched = unmatchedSensor(cli.sensors, t.lidarScans);
+    if (result.unmatched.empty() && t.lidarScans.empty() && t.segmentedHalves == 0)  // exit 3, said whatever the verbosity
+        result.unmatched = "no 3D LiDAR scan in the rawlog (CObservationPointCloud, CObservationVelodyneScan, "
+                           "CObservation3DRangeScan): nothing segmented, every entry passed through";
     result.code = t.skipped.empty() && result.unmatched.empty() ? kDone : kPartlyDone;
     return result;
 }
@@ -331,7 +334,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         "failing input is named and leaves no output, the others are written. An output that exists is refused unless "
         "-w. Under mpirun or srun the inputs are split over the processes. Exit code: 0 done, 1 bad input (nothing "
         "written for it), 2 bad usage, 3 done but some scans could not be segmented (passed through unchanged and named "
-        "on stderr) or a --sensor label matched no observation (named with the labels the rawlog has).",
+        "on stderr), a --sensor label matched no observation (named with the labels the rawlog has) or the rawlog has no "
+        "3D LiDAR scan at all (every entry passed through).",
         true, ranks.root());
     line.addMpiTimeout();
     TCLAP::CmdLine& cmd = line.cmd();

@@ -114,7 +114,7 @@ TEST(RosMap, BadFilesAreRefusedNamingFileAndReason) {
     refused(good, "P5\n2 2\n65535\n", "maxval");
     refused("image: b.pgm\norigin: [0, 0, 0]\n", pgm, "no 'resolution'");
     refused("image: b.pgm\nresolution: nan\norigin: [0, 0, 0]\n", pgm, "not a finite number");
-    refused("image: b.pgm\nresolution: -1\norigin: [0, 0, 0]\n", pgm, "positive");
+    refused("image: b.pgm\nresolution: -1\norigin: [0, 0, 0]\n", pgm, "resolution: -1 m is outside 0.0001 to 1000");
     refused("image: b.pgm\nresolution: 0.2\norigin: [0, 0]\n", pgm, "three values");
     refused("image: b.pgm\nresolution: 0.2\norigin: [0, 0, 0.5]\n", pgm, "rotated");
     refused("image: b.pgm\nresolution: 0.2\nresolution: 0.3\norigin: [0, 0, 0]\n", pgm, "b.yaml:3: key 'resolution' repeated");

@@ -114,6 +114,80 @@ def test_threads_segment_in_parallel_with_the_same_labels(kitti_scan):
     assert all(np.array_equal(r, expected) for r in results)
 
 
+def synthetic_scan(seed):
+    """A flat ground 1.7 m below the sensor with a few boxes on it (no shared data needed)."""
+    rng = np.random.default_rng(seed)
+    ground = np.column_stack([rng.uniform(-30, 30, 20000), rng.uniform(-30, 30, 20000), rng.normal(-1.7, 0.02, 20000)])
+    boxes = [np.column_stack([rng.uniform(x, x + 2, 1500), rng.uniform(y, y + 2, 1500), rng.uniform(-1.7, 0.3, 1500)])
+             for x, y in ((5, 3), (-8, 6), (12, -10))]
+    points = np.vstack([ground] + boxes).astype(np.float32)
+    return points[np.hypot(points[:, 0], points[:, 1]) > 2]
+
+
+def run_threads(count, work):
+    errors = []
+
+    def guarded(k):
+        try:
+            work(k)
+        except Exception as e:  # noqa: BLE001 - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=guarded, args=(k,)) for k in range(count)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+
+
+def test_threads_sharing_one_segmenter_get_the_labels_of_serial_calls():
+    # Round four of #34: 6 threads x 3 calls on one GroundSegmenter crashed the interpreter.
+    scans = [synthetic_scan(k) for k in range(3)]
+    segmenter = gseg.GroundSegmenter()
+    serial = [segmenter.segment(s).labels for s in scans]
+    assert all(0 < int(l.sum()) < len(l) for l in serial)
+    results = {}
+
+    def work(k):
+        for call in range(3):
+            i = (k + call) % len(scans)
+            results[(k, call)] = (i, segmenter.segment(scans[i]).labels)
+
+    run_threads(8, work)
+    assert len(results) == 24
+    for i, labels in results.values():
+        assert np.array_equal(labels, serial[i])
+
+
+def test_threads_sharing_one_map_builder_give_the_map_of_serial_inserts(tmp_path):
+    # Round four of #34: two threads calling MapBuilder.insert() on one builder crashed 5 of 5 runs.
+    points = synthetic_scan(7)
+    serial = gseg.MapBuilder()
+    for _ in range(12):
+        assert serial.insert(points, np.eye(4))
+    shared = gseg.MapBuilder()
+    inserted = []
+
+    def work(k):
+        for _ in range(3):
+            inserted.append(shared.insert(points, np.eye(4)))
+            shared.stats()  # read while others insert
+            shared.skipped()
+
+    run_threads(4, work)
+    assert inserted == [True] * 12
+    assert shared.stats() == serial.stats()
+    assert shared.skipped() == serial.skipped() == []
+    mine = shared.write(str(tmp_path / "shared"))
+    theirs = serial.write(str(tmp_path / "serial"))
+    for a, b in zip(mine, theirs):
+        data = open(a, "rb").read()
+        if a.endswith(".yaml"):
+            data = data.replace(b"shared_costmap.pgm", b"serial_costmap.pgm")
+        assert data == open(b, "rb").read(), a
+
+
 def test_params_from_keywords_dicts_and_files_and_bad_keys_name_the_key(tmp_path):
     assert gseg.Params().distToGround == "auto"  # as a file that does not set it
     assert gseg.Params() == gseg.Params({}) and gseg.Params(distToGround=1.723).distToGround == 1.723
@@ -272,6 +346,21 @@ def test_the_map_builder_refuses_bad_poses_empty_maps_and_existing_outputs(tmp_p
     assert builder.write(str(tmp_path / "m"), overwrite=True) == paths
     with pytest.raises(ValueError, match="absent.rawlog"):
         list(gseg.RawlogScans(str(tmp_path / "absent.rawlog")))
+
+
+def test_an_all_nan_scan_is_reported_skipped_and_bad_prefixes_are_refused(tmp_path):
+    # Round four of #34: an all-NaN scan was accepted (True, nothing in skipped()); write('') wrote
+    # into the current folder while the CLI refuses -o "".
+    builder = gseg.MapBuilder()
+    assert not builder.insert(np.full((100, 3), np.nan, np.float32), np.eye(4))
+    assert len(builder.skipped()) == 1 and "no finite point" in builder.skipped()[0]
+    assert builder.stats()["scans"] == 0
+    assert builder.insert(synthetic_scan(1), np.eye(4))
+    for prefix, match in (("", "prefix is empty"), (str(tmp_path) + "/", "ends in '/'"), (str(tmp_path), "is a folder"),
+                          ("/dev/null", "not a regular file")):
+        with pytest.raises(ValueError, match=match):
+            builder.write(prefix)
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_paths_may_be_pathlib_paths_and_file_objects_are_refused(kitti_scan, tmp_path):

@@ -29,7 +29,7 @@ struct TraversabilityOptions {
     double maxStep = 0.25;            ///< [m] largest height jump (up or down) to a neighbouring cell that is traversable, > 0
     double maxRoughness = 0.1;        ///< [m] largest standard deviation of a cell's ground heights that is traversable, > 0
     double maxGroundRise = 0.38;      ///< [m] a cell whose elevation lies more than this above the lowest elevation within groundRiseRadius is not traversable (flat tops of hedges and bushes the segmenter calls ground); > groundRiseRadius * tan(maxSlope)
-    double groundRiseRadius = 1.0;    ///< [m] radius of the neighbourhood of maxGroundRise, >= resolution
+    double groundRiseRadius = 1.0;    ///< [m] radius of the neighbourhood of maxGroundRise, (0, 100] and at most 200 cells (below the resolution: the cell alone)
     double obstacleClearProbability = 0.12;  ///< [-] in the layers and costmap an obstacle voxel once hit stays an obstacle until its occupancy probability falls to this or below (porous vegetation and fences stay; what moved away is cleared), in (0, occupancyThreshold]
     double minObstacleHeight = 0.3;   ///< [m] obstacle voxels whose centre lies lower than this above the cell's ground do not block it (the step rules judge it), >= 0
     // ---- the drive's terrain model (#31, gseg/terrain_model.hpp) and gap filling in the layers ----

@@ -146,11 +146,55 @@ void AtomicFile::close() {
     if (::close(fd) != 0) fail("closing the written file failed", errno);
 }
 
+namespace {
+
+/// The journal of a set being put in place (see rollBackJournal() in temporary_cleanup.cpp): one
+/// line per file, "R\t<file>\t<bak>" for one that replaces a previous version (kept aside as
+/// <bak> until all are in place), "N\t<file>\t<temporary>" for a new one. Written whole beside
+/// the first file before any rename, removed once all are in place: a run killed in between
+/// (SIGKILL: no handler runs) leaves it, and the next run to that folder rolls the set back.
+/// Returns its path, or "" where it could not be written (then no rollback after SIGKILL).
+std::string writeJournal(const std::string& first, const std::string& lines) {
+    const std::string temp = sideFilePath(first, "tmp"), journal = sideFilePath(first, "set");
+    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) return "";
+    bool ok = true;
+    for (std::size_t at = 0; ok && at < lines.size();) {
+        const ssize_t n = ::write(fd, lines.data() + at, lines.size() - at);
+        if (n < 0 && errno == EINTR) continue;
+        ok = n > 0;
+        at += ok ? std::size_t(n) : 0;
+    }
+    ok = ::close(fd) == 0 && ok;
+    if (ok && std::rename(temp.c_str(), journal.c_str()) == 0) return journal;
+    ::unlink(temp.c_str());
+    return "";
+}
+
+}  // namespace
+
 void commitTogether(const std::vector<AtomicFile*>& files) {
     for (AtomicFile* f : files) f->close();  // every write checked before anything is replaced
     SignalDeferral hold;                     // a termination signal waits until all are in place or none
     std::vector<AtomicFile*> placed;
-    std::vector<std::string> backups(files.size());
+    std::vector<std::string> backups(files.size()), backupNames(files.size());
+    std::string lines;
+    std::size_t inPlace = 0;  // files put in place by rename (not streamed)
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        const AtomicFile* f = files[i];
+        if (f->target_.stream) continue;
+        ++inPlace;
+        if (!f->exclusive_) backupNames[i] = sideFilePath(f->target_.file, "bak");
+        lines += f->exclusive_ ? "N\t" + f->target_.file + "\t" + f->temp_ + "\n" : "R\t" + f->target_.file + "\t" + backupNames[i] + "\n";
+    }
+    setActivity("putting " + std::to_string(inPlace) + " written file" + (inPlace == 1 ? "" : "s") + " in place");
+    // One rename is atomic by itself; a set of several needs the journal.
+    std::string journal;
+    for (const AtomicFile* f : files)
+        if (inPlace > 1 && !f->target_.stream) {
+            journal = writeJournal(f->target_.file, lines);
+            break;
+        }
     auto rollBack = [&] {
         for (std::size_t i = 0; i < files.size(); ++i) {
             AtomicFile* f = files[i];
@@ -161,6 +205,7 @@ void commitTogether(const std::vector<AtomicFile*>& files) {
             if (!f->target_.stream) ::unlink(f->temp_.c_str());
             f->registered_.reset();
         }
+        if (!journal.empty()) ::unlink(journal.c_str());
     };
     // New files first: they fail if another run made them meanwhile, and nothing was replaced yet.
     for (int pass = 0; pass < 2; ++pass) {
@@ -172,7 +217,7 @@ void commitTogether(const std::vector<AtomicFile*>& files) {
             if (f->exclusive_) {
                 err = placeExclusively(f->temp_, file);
             } else {
-                const std::string backup = sideFilePath(file, "bak");  // the previous version, until all are in place
+                const std::string& backup = backupNames[i];  // the previous version, until all are in place
                 if (::link(file.c_str(), backup.c_str()) == 0) backups[i] = backup;
                 else if (errno != ENOENT && errno != EPERM && errno != EOPNOTSUPP) err = errno;
                 if (!err && std::rename(f->temp_.c_str(), file.c_str()) != 0) err = errno;
@@ -190,6 +235,11 @@ void commitTogether(const std::vector<AtomicFile*>& files) {
             placed.push_back(f);
         }
     }
+    // All in place: removing the journal is the commit point (a run killed after it keeps the new
+    // set; the next run only removes the kept-aside versions).
+    if (!journal.empty()) ::unlink(journal.c_str());
+    setActivity(files.size() == 1 ? std::string("ending (the output was written and is complete)")
+                                  : "ending (all " + std::to_string(files.size()) + " outputs were written and are complete)");
     for (std::size_t i = 0; i < files.size(); ++i) {
         if (!backups[i].empty()) ::unlink(backups[i].c_str());
         writtenByThisProcess(files[i]->target_.given);
@@ -204,6 +254,9 @@ void AtomicFile::commit() {
 }
 
 AtomicFileSet::AtomicFileSet(const std::vector<std::string>& paths) {
+    if (!paths.empty())  // what a signal's message names from here on (no longer the last entry read)
+        setActivity("writing " + paths.front() +
+                    (paths.size() > 1 ? " and the other " + std::to_string(paths.size() - 1) + " outputs" : std::string()));
     for (const std::string& p : paths) {
         files_.push_back(std::make_unique<AtomicFile>(p));
         files_.back()->inSet_ = true;

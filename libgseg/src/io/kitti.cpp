@@ -9,8 +9,35 @@
 
 namespace gseg::io {
 
-std::vector<std::uint8_t> readFileBytes(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+namespace {
+
+/// What a file that is not a regular file is, for the message.
+const char* kindOf(mode_t mode) {
+    if (S_ISDIR(mode)) return "a folder";
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISCHR(mode)) return "a character device";
+    if (S_ISBLK(mode)) return "a block device";
+    if (S_ISSOCK(mode)) return "a socket";
+    return "not a file";
+}
+
+void requireRegular(const std::string& path, const struct stat& st) {
+    if (!S_ISREG(st.st_mode)) throw std::runtime_error(path + ": not a regular file (" + kindOf(st.st_mode) + ")");
+}
+
+}  // namespace
+
+std::uint64_t regularFileSize(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) throw std::runtime_error(path + ": cannot open (" + std::strerror(errno) + ")");
+    requireRegular(path, st);
+    return std::uint64_t(st.st_size);
+}
+
+std::vector<std::uint8_t> readFileBytes(const std::string& path, std::uint64_t maxBytes) {
+    regularFileSize(path);  // before open(): a FIFO would block it
+    // O_NONBLOCK: should the path turn into a FIFO between stat() and open(), open() still returns.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) throw std::runtime_error(path + ": cannot open (" + std::strerror(errno) + ")");
     struct Closer {
         int fd;
@@ -18,7 +45,10 @@ std::vector<std::uint8_t> readFileBytes(const std::string& path) {
     } closer{fd};
     struct stat st {};
     if (::fstat(fd, &st) != 0) throw std::runtime_error(path + ": cannot read its size (" + std::strerror(errno) + ")");
-    if (!S_ISREG(st.st_mode)) throw std::runtime_error(path + ": not a regular file");
+    requireRegular(path, st);
+    if (std::uint64_t(st.st_size) > maxBytes)
+        throw std::runtime_error(path + ": " + std::to_string(st.st_size) + " bytes, more than the " + std::to_string(maxBytes) +
+                                 " this file may have");
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(st.st_size));
     std::size_t done = 0;
     while (done < bytes.size()) {

@@ -1,4 +1,5 @@
 #include <gseg/io/output_checks.hpp>
+#include <gseg/io/temporary_cleanup.hpp>
 
 #include <cerrno>
 #include <cstring>
@@ -92,6 +93,16 @@ OutputTarget resolveOutput(const std::string& given) {
     return t;
 }
 
+void checkOutputPrefix(const std::string& prefix) {
+    if (prefix.empty()) throw std::invalid_argument("the output prefix is empty (it starts the name of every file written)");
+    const std::string example = " (a prefix starts every file's name: out/map gives out/map_ground.bt, ...)";
+    if (prefix.back() == '/') throw std::invalid_argument("the output prefix " + prefix + " ends in '/'" + example);
+    struct stat st {};
+    if (::stat(prefix.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+        throw std::invalid_argument("the output prefix " + prefix + " is " + (S_ISDIR(st.st_mode) ? "a folder" : "not a regular file") +
+                                    example);
+}
+
 bool mustBeNew(const std::string& path) {
     std::lock_guard<std::mutex> lock(g_newMutex);
     return g_new.count(key(path)) > 0;
@@ -160,6 +171,10 @@ std::string cannotWriteIn(const std::string& folder) {
 }  // namespace
 
 void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules) {
+    // First, what a killed run left at these outputs: a half-committed set rolled back to the old
+    // one (its journal), its temporaries removed; then the outputs are what they were before it.
+    for (const NamedPath& out : outputs)
+        if (!out.path.empty()) removeStaleTemporaries(out.path);
     checkOutputsAreNotInputs(inputs, outputs);
     std::set<std::string> writable;  // folders tried already (a run may write thousands of files into many)
     for (const NamedPath& out : outputs) {

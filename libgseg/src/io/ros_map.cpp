@@ -1,6 +1,8 @@
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/kitti.hpp>  // readFileBytes, regularFileSize
 #include <gseg/io/ros_map.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -83,11 +85,29 @@ long pgmNumber(const std::string& bytes, std::size_t& i, const std::string& file
     return v;
 }
 
+/// [pixels] the largest map image read (1 GiB of grey values): a header claiming more is refused
+/// before anything is allocated.
+constexpr std::uint64_t kMaxPixels = std::uint64_t(1) << 30;
+/// [bytes] the largest map YAML read (a map_server YAML is a few hundred bytes).
+constexpr std::uint64_t kMaxYamlBytes = std::uint64_t(1) << 20;
+
 void readPgm(const std::string& file, RosMap& map) {
+    // stat first: a FIFO, a device (/dev/zero) or a folder is refused before open() could block
+    // or a read could run without end.
+    std::uint64_t size = 0;
+    try {
+        size = regularFileSize(file);
+    } catch (const std::exception& e) {
+        const std::string what = e.what(), head = file + ": ";
+        fail(file, 0, (what.rfind(head, 0) == 0 ? what.substr(head.size()) : what) + "; the map image must be a PGM file");
+    }
     std::ifstream in(file, std::ios::binary);
     if (!in) fail(file, 0, "cannot open the map image");
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) fail(file, 0, "cannot read the map image");
+    // The header only (at most 64 KiB, comments included): the pixels are read once their count is
+    // known to fit the file and the bound.
+    std::string bytes(std::size_t(std::min<std::uint64_t>(size, 1 << 16)), '\0');
+    in.read(bytes.data(), std::streamsize(bytes.size()));
+    if (in.bad() || std::size_t(in.gcount()) != bytes.size()) fail(file, 0, "cannot read the map image");
     std::size_t i = 0;
     const std::string magic = bytes.size() >= 2 ? bytes.substr(0, 2) : bytes;
     if (magic != "P5") fail(file, 0, "not a binary PGM (P5) image (gseg reads the PGM maps that map_saver and gseg write)");
@@ -97,10 +117,33 @@ void readPgm(const std::string& file, RosMap& map) {
     pgmNumber(bytes, i, file, "maxval", 1, 255);
     if (i >= bytes.size() || !std::isspace(static_cast<unsigned char>(bytes[i]))) fail(file, 0, "truncated PGM header");
     ++i;  // the single white space before the pixels
-    const std::size_t n = std::size_t(map.width) * std::size_t(map.height);
-    if (bytes.size() - i < n)
-        fail(file, 0, "truncated: " + std::to_string(bytes.size() - i) + " of " + std::to_string(n) + " pixel bytes");
-    map.pixels.assign(bytes.begin() + std::ptrdiff_t(i), bytes.begin() + std::ptrdiff_t(i + n));
+    const std::uint64_t n = std::uint64_t(map.width) * std::uint64_t(map.height);
+    if (n > kMaxPixels)
+        fail(file, 0, "the header claims " + std::to_string(map.width) + " x " + std::to_string(map.height) + " pixels, more than the " +
+                          std::to_string(kMaxPixels) + " of a map gseg reads");
+    if (size - i < n) fail(file, 0, "truncated: " + std::to_string(size - i) + " of " + std::to_string(n) + " pixel bytes");
+    map.pixels.resize(std::size_t(n));
+    in.clear();
+    in.seekg(std::streamoff(i));
+    in.read(reinterpret_cast<char*>(map.pixels.data()), std::streamsize(n));
+    if (!in || std::uint64_t(in.gcount()) != n) fail(file, 0, "cannot read the map image's pixels (changed while reading?)");
+}
+
+/// The line without its YAML comment: '#' starts one at the line's start or after a blank, outside
+/// quotes ("m#1.pgm" is a name, "m.pgm # the map" a name and a comment).
+std::string withoutComment(const std::string& line) {
+    char quote = 0;
+    for (std::size_t k = 0; k < line.size(); ++k) {
+        const char c = line[k];
+        if (quote) {
+            if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+            quote = c;
+        } else if (c == '#' && (k == 0 || line[k - 1] == ' ' || line[k - 1] == '\t')) {
+            return line.substr(0, k);
+        }
+    }
+    return line;
 }
 
 }  // namespace
@@ -119,7 +162,8 @@ RosMap RosMap::unknown(int width, int height, double resolution, double originX,
 RosCell RosMap::at(long long cx, long long cy) const {
     if (cx < 0 || cy < 0 || cx >= width || cy >= height) return RosCell::Unknown;
     const double v = value(int(cx), int(cy));
-    const double p = negate ? v / 255.0 : (255.0 - v) / 255.0;
+    if (mode == "raw" && v > 100) return RosCell::Unknown;
+    const double p = mode == "raw" ? v / 100.0 : negate ? v / 255.0 : (255.0 - v) / 255.0;
     if (p > occupiedThresh) return RosCell::Occupied;
     if (p < freeThresh) return RosCell::Free;
     return RosCell::Unknown;
@@ -144,16 +188,20 @@ void validate(const RosMap& map) {
 }
 
 RosMap readRosMap(const std::string& yamlPath) {
-    std::ifstream in(yamlPath);
-    if (!in) fail(yamlPath, 0, "cannot open the map YAML");
+    std::string text;
+    try {
+        const std::vector<std::uint8_t> bytes = readFileBytes(yamlPath, kMaxYamlBytes);  // stat before open
+        text.assign(bytes.begin(), bytes.end());
+    } catch (const std::exception& e) {
+        throw std::runtime_error(std::string(e.what()) + " (the map YAML)");
+    }
+    std::istringstream in(text);
     std::map<std::string, std::pair<std::string, int>> keys;  // value, line
     std::string line;
     int lineNo = 0;
     while (std::getline(in, line)) {
         ++lineNo;
-        const auto hash = line.find('#');
-        if (hash != std::string::npos) line.resize(hash);
-        line = trim(line);
+        line = trim(withoutComment(line));
         if (line.empty() || line == "---") continue;
         const auto colon = line.find(':');
         if (colon == std::string::npos) fail(yamlPath, lineNo, "expected 'key: value', got '" + line + "'");
@@ -161,7 +209,6 @@ RosMap readRosMap(const std::string& yamlPath) {
         if (keys.count(key)) fail(yamlPath, lineNo, "key '" + key + "' repeated (first on line " + std::to_string(keys[key].second) + ")");
         keys[key] = {trim(line.substr(colon + 1)), lineNo};
     }
-    if (in.bad()) fail(yamlPath, 0, "cannot read the map YAML");
     const auto need = [&](const std::string& key) -> const std::pair<std::string, int>& {
         const auto it = keys.find(key);
         if (it == keys.end()) fail(yamlPath, 0, "no '" + key + "' key (a map_server map names image, resolution and origin)");
@@ -170,7 +217,8 @@ RosMap readRosMap(const std::string& yamlPath) {
     RosMap map;
     const auto& res = need("resolution");
     map.resolution = number(yamlPath, res.second, "resolution", res.first);
-    if (map.resolution <= 0) fail(yamlPath, res.second, "resolution must be positive");
+    if (!(map.resolution >= 1e-4 && map.resolution <= 1e3))
+        fail(yamlPath, res.second, "resolution: " + trim(res.first) + " m is outside 0.0001 to 1000 m per cell");
     const auto& origin = need("origin");
     {
         std::string t = trim(origin.first);
@@ -198,6 +246,7 @@ RosMap readRosMap(const std::string& yamlPath) {
     const auto& image = need("image");
     const std::string name = unquote(image.first);
     if (name.empty()) fail(yamlPath, image.second, "image is empty");
+    if (name.find('\0') != std::string::npos) fail(yamlPath, image.second, "image: the name holds a NUL byte");
     readPgm(name.front() == '/' ? name : folderOf(yamlPath) + name, map);
     try {
         validate(map);

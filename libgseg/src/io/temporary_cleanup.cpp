@@ -6,12 +6,14 @@
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <dirent.h>
 #include <map>
 #include <mutex>
 #include <stdexcept>
 #include <sys/types.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace gseg::io {
@@ -144,7 +146,7 @@ bool processRuns(long pid) { return pid > 0 && (::kill(pid_t(pid), 0) == 0 || er
 std::string staleOwner(const std::string& entry) {
     if (entry.size() < 6 || entry[0] != '.') return "";
     const std::string kind = entry.substr(entry.size() - 4);
-    if (kind != ".tmp" && kind != ".bak") return "";
+    if (kind != ".tmp" && kind != ".bak" && kind != ".set") return "";
     const std::string tag = ".gseg-" + thisHost() + "-";
     const std::size_t at = entry.rfind(tag);
     if (at == std::string::npos || at < 1) return "";
@@ -156,6 +158,39 @@ std::string staleOwner(const std::string& entry) {
     const long pid = std::strtol(rest.substr(0, dash).c_str(), nullptr, 10);
     if (pid == long(::getpid()) || processRuns(pid)) return "";
     return entry.substr(1, at - 1);
+}
+
+/// Rolls back the set a dead run was putting in place (its journal, see commitTogether() in
+/// atomic_file.cpp): each replaced file gets its kept-aside previous version back, each new file
+/// that was placed is removed; then the journal goes. Lines: "R\t<file>\t<bak>" (replaced) or
+/// "N\t<file>\t<temporary>" (new). A journal only exists while a set is incomplete.
+void rollBackJournal(const std::string& journal) {
+    std::string text;
+    if (FILE* f = std::fopen(journal.c_str(), "rb")) {
+        char buf[4096];
+        for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) text.append(buf, n);
+        std::fclose(f);
+    }
+    std::size_t at = 0;
+    while (at < text.size()) {
+        std::size_t end = text.find('\n', at);
+        if (end == std::string::npos) break;  // a journal is complete before any rename (written, then renamed in place)
+        const std::string line = text.substr(at, end - at);
+        at = end + 1;
+        const std::size_t t1 = line.find('\t'), t2 = line.find('\t', t1 == std::string::npos ? 0 : t1 + 1);
+        if (line.size() < 2 || t1 != 1 || t2 == std::string::npos) continue;
+        const std::string file = line.substr(2, t2 - 2), side = line.substr(t2 + 1);
+        if (line[0] == 'R') {
+            // The previous version: back in place (a no-op where the link was made but the rename not).
+            struct stat st {};
+            if (::lstat(side.c_str(), &st) == 0 && std::rename(side.c_str(), file.c_str()) == 0) ::unlink(side.c_str());
+        } else if (line[0] == 'N') {
+            struct stat st {};
+            if (::lstat(side.c_str(), &st) != 0) ::unlink(file.c_str());  // its temporary is gone: it was placed
+            else ::unlink(side.c_str());
+        }
+    }
+    ::unlink(journal.c_str());
 }
 
 std::mutex g_staleMutex;
@@ -232,13 +267,20 @@ std::size_t removeStaleTemporaries(const std::string& path) noexcept {
         auto folder = g_stale.find(dir);
         if (folder == g_stale.end()) {
             folder = g_stale.emplace(dir, std::map<std::string, std::vector<std::string>>{}).first;
+            std::vector<std::string> journals;
             if (DIR* d = ::opendir(dir.empty() ? "." : dir.c_str())) {
                 while (const dirent* e = ::readdir(d)) {
                     const std::string owner = staleOwner(e->d_name);
-                    if (!owner.empty()) folder->second[owner].push_back(dir + e->d_name);
+                    if (owner.empty()) continue;
+                    const std::string entry = e->d_name;
+                    if (entry.compare(entry.size() - 4, 4, ".set") == 0) journals.push_back(dir + entry);
+                    else folder->second[owner].push_back(dir + entry);
                 }
                 ::closedir(d);
             }
+            // A dead run's incomplete set: rolled back (previous versions restored) before its
+            // side files are removed below.
+            for (const std::string& j : journals) rollBackJournal(j);
         }
         const auto stale = folder->second.find(name.substr(0, kNameChars));
         if (stale == folder->second.end()) return 0;

@@ -1,11 +1,13 @@
 // The GeoTIFF of a map's 2.5D layers (GDAL's GTiff driver, built in memory under /vsimem/ and
 // written by gseg's atomic writer; read back with GDAL, refusing what is not a layer file).
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/kitti.hpp>  // regularFileSize
 #include <gseg/map/layer_file.hpp>
 
 #include <cpl_error.h>
 #include <cpl_vsi.h>
 #include <gdal.h>
+#include <ogr_srs_api.h>
 
 #include <algorithm>
 #include <atomic>
@@ -30,6 +32,8 @@ constexpr const char* kMapFrameWkt =
 /// [cells] the largest grid the reader accepts (1 GiB of float32 per band): a damaged header
 /// claiming more is refused instead of exhausting memory.
 constexpr std::uint64_t kMaxCells = std::uint64_t(1) << 28;
+/// [values] the most cells x bands read (4 GiB of float32), checked before the bands are read.
+constexpr std::uint64_t kMaxValues = std::uint64_t(1) << 30;
 
 void registerDrivers() {
     static std::once_flag once;
@@ -173,6 +177,11 @@ void writeLayersGeoTiff(const std::string& path, const LayerGrid& grid) {
 
 LayerGrid readLayersGeoTiff(const std::string& path) {
     {
+        try {
+            gseg::io::regularFileSize(path);  // stat before open: a FIFO is refused, not waited on
+        } catch (const std::exception& e) {
+            throw std::runtime_error(std::string(e.what()) + " (a layer GeoTIFF)");
+        }
         std::ifstream probe(path, std::ios::binary);
         if (!probe) refuse(path, std::string("cannot open: ") + std::strerror(errno));
         char magic[4] = {};
@@ -191,6 +200,13 @@ LayerGrid readLayersGeoTiff(const std::string& path) {
     if (w < 1 || h < 1) refuse(path, "no cells");
     if (std::uint64_t(w) * std::uint64_t(h) > kMaxCells)
         refuse(path, "too large (" + std::to_string(w) + " x " + std::to_string(h) + " cells; at most " + std::to_string(kMaxCells) + ")");
+    if (std::uint64_t(w) * std::uint64_t(h) * std::uint64_t(n) > kMaxValues)
+        refuse(path, "too large: " + std::to_string(n) + " bands of " + std::to_string(w) + " x " + std::to_string(h) +
+                         " cells would take " + std::to_string(std::uint64_t(w) * std::uint64_t(h) * std::uint64_t(n) * 4 >> 20) +
+                         " MiB; at most " + std::to_string(kMaxValues * 4 >> 20) + " MiB of layers are read");
+    if (OGRSpatialReferenceH srs = GDALGetSpatialRef(ds.h); srs && OSRIsGeographic(srs))
+        refuse(path, "its coordinates are geographic (degrees of latitude and longitude); gseg's layers are in metres of the "
+                     "map frame (reproject it, e.g. gdalwarp -t_srs to a projected CRS in metres)");
     double gt[6];
     if (GDALGetGeoTransform(ds.h, gt) != CE_None) refuse(path, "no geotransform (a TIFF, not a GeoTIFF in map-frame metres)");
     if (gt[2] != 0.0 || gt[4] != 0.0) refuse(path, "rotated or sheared geotransform (only axis-aligned grids are layer files)");

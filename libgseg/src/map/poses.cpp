@@ -1,3 +1,4 @@
+#include <gseg/io/kitti.hpp>  // regularFileSize
 #include <gseg/map/poses.hpp>
 
 #include <algorithm>
@@ -54,6 +55,7 @@ bool isSkipped(const std::string& line) {
 }
 
 std::ifstream openText(const std::string& path) {
+    gseg::io::regularFileSize(path);  // stat before open: a FIFO is refused, not waited on
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open (" + std::strerror(errno) + ")");
     return in;

@@ -2,6 +2,7 @@
 
 #include <gseg/io/ply.hpp>
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/output_checks.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/layer_file.hpp>
 #include <gseg/map/layer_picture.hpp>
@@ -273,6 +274,7 @@ LayerGrid TraversabilityMap::layers() const {
 }
 
 std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefix) {
+    gseg::io::checkOutputPrefix(prefix);  // not empty, not "out/", not /dev/null
     std::vector<std::string> paths{prefix + "_ground.bt",          prefix + "_obstacles.bt",       prefix + "_traversability.ot",
             prefix + "_traversability.png", prefix + "_traversability.ply", prefix + "_traversability.3Dscene",
             prefix + "_costmap.pgm",        prefix + "_costmap.yaml"};

@@ -94,6 +94,7 @@ void RawlogSegmenter::push(std::size_t entry, const std::shared_ptr<::mrpt::seri
     const auto obs = std::dynamic_pointer_cast<::mrpt::obs::CObservation>(object);
     const auto count = [this](const ::mrpt::obs::CObservation* o) {
         if (o && isLidarObservation(*o) && !isSegmentedHalf(*o)) ++totals_.lidarScans[o->sensorLabel];
+        if (o && isSegmentedHalf(*o)) ++totals_.segmentedHalves;
     };
     count(obs.get());
     flushPending(obs.get());

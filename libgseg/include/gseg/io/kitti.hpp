@@ -28,7 +28,14 @@ std::vector<std::uint32_t> parseKittiLabels(const std::uint8_t* data, std::size_
                                             std::size_t expectedPoints = SIZE_MAX);
 
 /// Reads a whole regular file as bytes (memory: the file's size); throws std::runtime_error naming
-/// the file if it is missing, not a regular file (a folder, a pipe, a device) or unreadable.
-std::vector<std::uint8_t> readFileBytes(const std::string& path);
+/// the file if it is missing, not a regular file (a folder, a pipe, a device) or unreadable. The
+/// file is looked at (stat) before it is opened, so a FIFO is refused instead of waited on.
+/// `maxBytes`: a larger file is refused (naming its size and the bound) before anything is read.
+std::vector<std::uint8_t> readFileBytes(const std::string& path, std::uint64_t maxBytes = UINT64_MAX);
+
+/// The size [bytes] of a regular file, looked at without opening it; throws std::runtime_error
+/// "PATH: not a regular file (a FIFO)" (a folder, a device, ...) or "PATH: cannot open (reason)".
+/// For readers that open a file with another library: call it first, so a FIFO never blocks them.
+std::uint64_t regularFileSize(const std::string& path);
 
 }  // namespace gseg::io

@@ -49,6 +49,12 @@ struct OutputRules {
 /// one existing later (another run made it meanwhile) fails instead of replacing it.
 void checkOutputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, OutputRules rules);
 
+/// Checks a prefix that names a set of files (PREFIX_ground.bt, ...): throws std::invalid_argument
+/// if it is empty, ends in '/' (the files would be named "_ground.bt" inside a folder) or is an
+/// existing folder, device or other thing that is not a regular file (`-o /dev/null` would create
+/// the set in /dev). A prefix naming an existing regular file is fine (its name only starts the set's).
+void checkOutputPrefix(const std::string& prefix);
+
 /// Whether checkOutputs() was told that `path` must be a new file (no -w), and this process has
 /// not written it since.
 bool mustBeNew(const std::string& path);

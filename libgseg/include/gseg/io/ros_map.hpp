@@ -39,7 +39,8 @@ struct RosMap {
     std::uint8_t& value(int cx, int cy) { return pixels[std::size_t(height - 1 - cy) * std::size_t(width) + std::size_t(cx)]; }
     std::uint8_t value(int cx, int cy) const { return pixels[std::size_t(height - 1 - cy) * std::size_t(width) + std::size_t(cx)]; }
     /// The class of cell (cx, cy) under the thresholds (occupancy = (255 - v) / 255, or v / 255
-    /// with negate); Unknown outside the map.
+    /// with negate; mode raw: occupancy = v / 100 for v up to 100, larger values unknown, as
+    /// map_server loads raw maps); Unknown outside the map.
     RosCell at(long long cx, long long cy) const;
     /// The cell holding map-frame (x, y) (floor; may be outside the map).
     long long cellX(double x) const;

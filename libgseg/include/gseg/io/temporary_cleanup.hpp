@@ -57,12 +57,17 @@ std::vector<std::string> registeredTemporaries();
 
 /// The one naming rule of temporaries and kept-aside previous versions: `<folder>/.<name>.gseg-
 /// <host>-<pid>-<n>.<kind>` beside the file `path` (same folder, so the final rename is atomic).
-/// `kind` is "tmp" or "bak"; `n` tells apart several of one process.
+/// `kind` is "tmp", "bak" or "set" (the journal of a set being put in place); `n` tells apart
+/// several of one process.
 std::string sideFilePath(const std::string& path, const char* kind);
 
 /// Removes the side files (see sideFilePath()) of `path` left by processes of this host that no
 /// longer run (a killed run's temporaries and kept-aside versions); returns how many. A folder is
-/// read once per process, however many outputs it holds. Never throws.
+/// read once per process, however many outputs it holds. Never throws. First, a dead run's set
+/// journal found in the folder (a run killed, e.g. by SIGKILL, between the renames of a set) is
+/// rolled back: its replaced files get their previous versions back, its new files are removed,
+/// so the set is all old again. (The journal lies beside the set's first file: a later run finds
+/// it when it writes into that folder.)
 std::size_t removeStaleTemporaries(const std::string& path) noexcept;
 
 }  // namespace gseg::io

@@ -91,7 +91,8 @@ public:
     /// Without any ground point or obstacle: one unknown cell at the first sensor position.
     LayerGrid layers() const;
 
-    /// The files write() writes for `prefix`, in this order.
+    /// The files write() writes for `prefix`, in this order. Throws std::invalid_argument for a
+    /// prefix io::checkOutputPrefix() refuses (empty, "out/", a folder, /dev/null).
     static std::vector<std::string> outputPaths(const std::string& prefix);
     /// Writes, all of them or none (temporary files, then renamed; if a rename fails the previous
     /// versions are put back):

@@ -53,6 +53,7 @@ struct RawlogTotals {
     double ms = 0;                 ///< segmentation time of all scans
     std::vector<ScanReport> skipped;  ///< scans that could not be segmented (passed through)
     std::map<std::string, std::size_t> lidarScans;  ///< LiDAR observations seen per sensorLabel (selected by `sensors` or not)
+    std::size_t segmentedHalves = 0;  ///< `_ground` / `_obstacles` observations seen (a segmented rawlog's)
 };
 
 /// Turns input entries into output entries. Output order is input order; an observation-layout
