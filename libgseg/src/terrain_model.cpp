@@ -80,7 +80,7 @@ std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const Po
             }
             TerrainSample& c = out[table[h] - 1];
             c.lowZ = std::min(c.lowZ, p[2]), c.highZ = std::max(c.highZ, p[2]);
-            if (isGround) ++c.groundCount, c.groundSumZ += p[2], c.groundSumZ2 += double(p[2]) * p[2];
+            if (isGround) ++c.groundCount, c.groundSumZ += p[2];
         }
     };
     add(ground, true);
@@ -127,7 +127,8 @@ void TerrainModel::add(const std::vector<TerrainSample>& samples) {
         c->highMax = std::max(c->highMax, s.highZ);
         if (s.groundCount > 0) {
             ++c->groundScans;
-            c->groundCount += s.groundCount, c->groundSumZ += s.groundSumZ, c->groundSumZ2 += s.groundSumZ2;
+            c->groundCount = std::uint32_t(std::min<std::uint64_t>(std::uint64_t(c->groundCount) + s.groundCount, 0xffffffffu));
+            c->groundSumZ += s.groundSumZ;
         }
     }
 }

@@ -240,11 +240,11 @@ TEST(HostileOutputs, APrefixEndingInASlashOrNamingADeviceIsRefusedAndNothingIsMa
 
 namespace {
 
-/// The 16 files of `rawlog-octomap -o PREFIX`, PREFIX-relative.
+/// The 17 files of `rawlog-octomap -o PREFIX`, PREFIX-relative.
 const std::vector<std::string> kMapFiles = {
     "_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply", "_traversability.3Dscene",
     "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png",
-    "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png"};
+    "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png", "_layer_source.png"};
 
 bool canStrace() {
     return gseg::test::runCommand("command -v strace >/dev/null && strace -o /dev/null true").status == 0;
@@ -253,7 +253,7 @@ bool canStrace() {
 }  // namespace
 
 TEST(HostileSignals, ASigkillBetweenTheRenamesOfASetIsRolledBackToTheOldSetByTheNextRun) {
-    // #34: a SIGKILL between the renames of the 16-file commit left 8 new and 9 old files, and the
+    // #34: a SIGKILL between the renames of the 16-file commit (17 files since #31's source layer) left 8 new and 9 old files, and the
     // next run deleted the kept-aside previous versions instead of restoring them. strace sends
     // SIGKILL on entry to the N-th rename (the first is the set's journal put in place).
     if (!canStrace()) GTEST_SKIP() << "strace is absent or cannot trace here (apt-get install strace)";
@@ -293,7 +293,7 @@ TEST(HostileSignals, ASigkillBetweenTheRenamesOfASetIsRolledBackToTheOldSetByThe
 }
 
 TEST(HostileSignals, ASigtermAfterEveryFileIsInPlaceSaysTheOutputsAreComplete) {
-    // #34: a SIGTERM held back during the renames and acted on once all 16 were in place said
+    // #34: a SIGTERM held back during the renames and acted on once all the files were in place said
     // "interrupted while reading entry 30", which reads as "nothing changed".
     if (!canStrace()) GTEST_SKIP() << "strace is absent or cannot trace here (apt-get install strace)";
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
@@ -306,7 +306,7 @@ TEST(HostileSignals, ASigtermAfterEveryFileIsInPlaceSaysTheOutputsAreComplete) {
         " -q -w -i " + q(kVlp16) + " --poses " + q(dir / "stationary.tum") + " --pose-tolerance 1e12 -c " +
         q(fs::path(GSEG_SOURCE_DIR) / "config/vlp16.yaml") + " --threads 1 -o " + q(prefix) + " 2>&1");
     EXPECT_EQ(r.status, 128 + 15) << r.output;
-    EXPECT_NE(r.output.find("interrupted (SIGTERM) while ending (all 16 outputs were written and are complete)"), std::string::npos)
+    EXPECT_NE(r.output.find("interrupted (SIGTERM) while ending (all 17 outputs were written and are complete)"), std::string::npos)
         << r.output;
     EXPECT_EQ(r.output.find("reading entry"), std::string::npos) << r.output;
     for (const std::string& f : kMapFiles) EXPECT_NE(gseg::test::readText(prefix + f), "old") << f;
@@ -379,9 +379,9 @@ TEST(Observations2mapWrapper, AMisspeltSectionAWrongIndexOtherMapsAndAnAbsurdCou
     }
 }
 
-TEST(Observations2mapWrapper, EveryOneOfTheSixteenFilesIsCheckedAndListed) {
+TEST(Observations2mapWrapper, EveryOneOfTheMapFilesIsCheckedAndListed) {
     if (sanitizedPlugin()) GTEST_SKIP() << "a sanitized plugin cannot be preloaded into the stand-in";
-    // The stand-in writes the 16 files of map 00 as the plugin would.
+    // The stand-in writes the 17 files of map 00 as the plugin would.
     std::string writes;
     for (const std::string& f : kMapFiles) writes += "echo new > \"$3_gseg_maps__CTraversabilityOctoMap_00" + f + "\"\n";
     const Wrapper w = makeWrapper("sixteen", writes);
@@ -401,14 +401,14 @@ TEST(Observations2mapWrapper, EveryOneOfTheSixteenFilesIsCheckedAndListed) {
         << r.output;
     const auto help = gseg::test::runCommand(gseg::test::tool("gseg-observations2map") + " --help");
     for (const std::string& f : kMapFiles) EXPECT_NE(help.output.find(f.substr(1)), std::string::npos) << f;
-    // One file missing afterwards: nothing said written.
+    // One file missing afterwards (the last): nothing said written.
     std::string fifteen;
     for (std::size_t k = 0; k + 1 < kMapFiles.size(); ++k)
         fifteen += "echo new > \"$3_gseg_maps__CTraversabilityOctoMap_00" + kMapFiles[k] + "\"\n";
     const Wrapper v = makeWrapper("fifteen", fifteen);
     r = runWrapper(v, q(v.ini) + " " + q(v.simplemap) + " " + q(v.prefix));
     EXPECT_EQ(r.status, 1) << r.output;
-    EXPECT_NE(r.output.find("observations2map wrote no " + v.prefix + "_gseg_maps__CTraversabilityOctoMap_00_layer_cost.png"),
+    EXPECT_NE(r.output.find("observations2map wrote no " + v.prefix + "_gseg_maps__CTraversabilityOctoMap_00" + kMapFiles.back()),
               std::string::npos) << r.output;
 }
 

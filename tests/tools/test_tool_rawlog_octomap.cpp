@@ -127,12 +127,12 @@ TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
     EXPECT_NE(r.out.find("voxel columns (_traversability.png, not the costmap): "), std::string::npos) << r.out;
     // Every file is written, named in "wrote" lines; the writing has a line of its own while it lasts.
     const auto files = gseg::map::TraversabilityMap::outputPaths(dir + "/m");
-    EXPECT_EQ(files.size(), 16u);
+    EXPECT_EQ(files.size(), 17u);
     for (const std::string& f : files) {
         EXPECT_TRUE(fs::exists(f)) << f;
         EXPECT_NE(r.out.find("wrote " + f + "\n"), std::string::npos) << f << " in: " << r.out;
     }
-    EXPECT_NE(r.err.find("rawlog-octomap: writing 16 map files (" + dir + "/m_*) ...\n"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("rawlog-octomap: writing 17 map files (" + dir + "/m_*) ...\n"), std::string::npos) << r.err;
     fs::remove_all(dir);
 }
 

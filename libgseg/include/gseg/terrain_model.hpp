@@ -58,13 +58,12 @@ struct TerrainSample {
     std::int32_t ix = 0, iy = 0;     ///< cell index
     std::uint32_t groundCount = 0;   ///< ground points of the scan in the cell
     double groundSumZ = 0;           ///< [m] sum of their heights
-    double groundSumZ2 = 0;          ///< [m^2] sum of their squared heights
     float lowZ = 0;                  ///< [m] lowest return of the scan in the cell (any label)
     float highZ = 0;                 ///< [m] highest return of the scan in the cell (any label)
 
     bool operator==(const TerrainSample& o) const {
         return ix == o.ix && iy == o.iy && groundCount == o.groundCount && groundSumZ == o.groundSumZ &&
-               groundSumZ2 == o.groundSumZ2 && lowZ == o.lowZ && highZ == o.highZ;
+               lowZ == o.lowZ && highZ == o.highZ;
     }
 };
 
@@ -80,8 +79,8 @@ struct TerrainCell {
     enum State : std::uint8_t { None = 0, Anchor = 1, Grown = 2 };
     std::uint32_t groundScans = 0;  ///< scans that found ground here
     std::uint32_t lowScans = 0;     ///< scans with a return here
-    std::uint64_t groundCount = 0;  ///< ground points, all scans
-    double groundSumZ = 0, groundSumZ2 = 0;  ///< [m], [m^2]
+    std::uint32_t groundCount = 0;  ///< ground points, all scans
+    double groundSumZ = 0;          ///< [m] sum of their heights
     double lowSum = 0;              ///< [m] sum of the scans' lowest returns
     float lowMin = std::numeric_limits<float>::infinity(), lowMax = -std::numeric_limits<float>::infinity();  ///< [m] of the scans' lowest returns
     float highMax = -std::numeric_limits<float>::infinity();   ///< [m] highest return of any scan

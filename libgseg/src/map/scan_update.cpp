@@ -230,7 +230,7 @@ public:
 
     std::vector<gseg::TerrainSample> terrainSamples() {
         const std::uint64_t n = varint();
-        if (n > (s_.size() - pos_) / 33) throw std::runtime_error("scan update: list longer than the data");
+        if (n > (s_.size() - pos_) / 25) throw std::runtime_error("scan update: list longer than the data");
         std::vector<gseg::TerrainSample> out(n);
         for (auto& t : out) {
             const std::uint64_t cell = raw64();
@@ -238,7 +238,7 @@ public:
             const std::uint64_t count = varint();
             if (count > 0xffffffffULL) throw std::runtime_error("scan update: count out of range");
             t.groundCount = std::uint32_t(count);
-            t.groundSumZ = real64(), t.groundSumZ2 = real64(), t.lowZ = real32(), t.highZ = real32();
+            t.groundSumZ = real64(), t.lowZ = real32(), t.highZ = real32();
         }
         return out;
     }
@@ -321,7 +321,7 @@ std::string serializeScanUpdate(const ScanUpdate& u) {
     for (const gseg::TerrainSample& t : u.terrain) {
         putRaw64(out, (std::uint64_t(std::uint32_t(t.ix)) << 32) | std::uint32_t(t.iy));
         putVarint(out, t.groundCount);
-        putDouble(out, t.groundSumZ), putDouble(out, t.groundSumZ2), putFloat(out, t.lowZ), putFloat(out, t.highZ);
+        putDouble(out, t.groundSumZ), putFloat(out, t.lowZ), putFloat(out, t.highZ);
     }
     return out;
 }

@@ -16,7 +16,7 @@
 /// maxRange = 30         ; any gseg::SensorHeightOptions key (gseg/sensor_height.hpp), for distToGround = auto
 /// \endcode
 /// Saving (CMultiMetricMap names it `<prefix>_gseg_maps__CTraversabilityOctoMap_<NN>` (MRPT turns "::" into "__")) writes the
-/// 16 files of TraversabilityMap::write() with that prefix (TraversabilityMap::outputPaths(): the
+/// 17 files of TraversabilityMap::write() with that prefix (TraversabilityMap::outputPaths(): the
 /// two OcTrees, the ColorOcTree, the voxel picture, PLY and .3Dscene, the costmap PGM + YAML a
 /// planner loads, the layers' GeoTIFF and one picture per layer).
 
