@@ -38,7 +38,6 @@ using gseg::map::TraversabilityMap;
 using gseg::map::TraversabilityOptions;
 using gseg::test::Box;
 using gseg::test::Lidar;
-using gseg::test::Scene;
 using gseg::test::Truth;
 
 constexpr double kSensorHeight = 1.8;  ///< [m] above the ground under the sensor
@@ -229,12 +228,7 @@ TEST(TerrainModel, InvalidOptionsAreRefusedByName) {
 // ---------------------------------------------------------------------------------------------
 // The map's layers on simulated drives
 
-/// A world: ground height z(x, y), what is ground by truth, obstacle boxes (some per scan).
-struct World {
-    std::function<double(double, double)> ground = [](double, double) { return 0.0; };
-    std::vector<Box> boxes;
-    std::function<std::vector<Box>(int scan)> boxesOfScan;
-};
+using gseg::test::World;
 
 /// What the "short-reach segmenter" calls ground: truth ground on the road (|y| < 3.5) within
 /// 12 m of the sensor. Everything else (verges, far ground) is left non-ground, as a single scan
@@ -254,23 +248,14 @@ std::vector<LayerGrid> drive(const World& w, int scans, const std::vector<Traver
     for (int k = 0; k < scans; ++k) {
         const double sx = x0 + k;
         const Eigen::Vector3d s(sx, 0.0, w.ground(sx, 0.0) + kSensorHeight);
-        Scene scene;
-        scene.terrains.push_back({[g = w.ground, s](double x, double y) { return g(x + s.x(), y + s.y()) - s.z(); }, Truth::Ground});
-        std::vector<Box> boxes = w.boxes;
-        if (w.boxesOfScan)
-            for (const Box& b : w.boxesOfScan(k)) boxes.push_back(b);
-        for (Box b : boxes) {
-            for (int a = 0; a < 3; ++a) b.lo[a] -= s[a], b.hi[a] -= s[a];
-            scene.boxes.push_back(b);
-        }
         lidar.seed = 11 + std::uint32_t(k);
-        const gseg::test::SimScan scan = gseg::test::simulate(scene, lidar);
+        const gseg::test::SimScan scan = gseg::test::simulateInWorld(w, k, s.x(), s.y(), s.z(), lidar);
         std::vector<float> ground, obstacles;
         for (std::size_t i = 0; i < scan.size(); ++i) {
             const float* p = &scan.xyz[3 * i];
-            const bool g = scan.truth[i] == Truth::Ground && segmenter(p[0], p[1], p[1] + s.y());
+            const bool g = scan.truth[i] == Truth::Ground && segmenter(p[0] - float(s.x()), p[1] - float(s.y()), p[1]);
             auto& to = g ? ground : obstacles;
-            for (int a = 0; a < 3; ++a) to.push_back(p[a] + float(s[a]));
+            for (int a = 0; a < 3; ++a) to.push_back(p[a]);
         }
         for (TraversabilityMap& m : maps)
             m.insertScan(gseg::PointCloudView(ground.data(), ground.size() / 3), gseg::PointCloudView(obstacles.data(), obstacles.size() / 3), s);

@@ -33,12 +33,7 @@ using gseg::test::Truth;
 constexpr double kSensorHeight = 1.8;  ///< [m] above the ground under the sensor
 constexpr double kPi = 3.14159265358979323846;
 
-/// A world in world coordinates: ground height z(x, y) and obstacle boxes, possibly per scan.
-struct World {
-    std::function<double(double, double)> ground = [](double, double) { return 0.0; };
-    std::vector<Box> boxes;                                    ///< in every scan
-    std::function<std::vector<Box>(int scan)> boxesOfScan;     ///< more boxes in scan k (moving things)
-};
+using gseg::test::World;
 
 /// Sensor positions along x at `step` metres from x0, kSensorHeight above the ground.
 std::vector<Eigen::Vector3d> straightDrive(const World& w, double x0, int scans, double step) {
@@ -57,21 +52,12 @@ TraversabilityMap drive(const World& w, const std::vector<Eigen::Vector3d>& sens
     lidar.maxRange = 40;
     for (std::size_t k = 0; k < sensors.size(); ++k) {
         const Eigen::Vector3d s = sensors[k];
-        Scene scene;
-        scene.terrains.push_back({[g = w.ground, s](double x, double y) { return g(x + s.x(), y + s.y()) - s.z(); }, Truth::Ground});
-        std::vector<Box> boxes = w.boxes;
-        if (w.boxesOfScan)
-            for (const Box& b : w.boxesOfScan(int(k))) boxes.push_back(b);
-        for (Box b : boxes) {
-            for (int a = 0; a < 3; ++a) b.lo[a] -= s[a], b.hi[a] -= s[a];
-            scene.boxes.push_back(b);
-        }
         lidar.seed = 7 + std::uint32_t(k);
-        const gseg::test::SimScan scan = gseg::test::simulate(scene, lidar);
+        const gseg::test::SimScan scan = gseg::test::simulateInWorld(w, int(k), s.x(), s.y(), s.z(), lidar);
         std::vector<float> ground, obstacles;
         for (std::size_t i = 0; i < scan.size(); ++i) {
             auto& to = scan.truth[i] == Truth::Ground ? ground : obstacles;
-            for (int a = 0; a < 3; ++a) to.push_back(scan.xyz[3 * i + a] + float(s[a]));
+            for (int a = 0; a < 3; ++a) to.push_back(scan.xyz[3 * i + a]);
         }
         map.insertScan(gseg::PointCloudView(ground.data(), ground.size() / 3),
                        gseg::PointCloudView(obstacles.data(), obstacles.size() / 3), s);

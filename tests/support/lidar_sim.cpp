@@ -155,4 +155,21 @@ PR groundPR(const SimScan& scan, const std::vector<std::uint8_t>& labels) {
     return pr;
 }
 
+SimScan simulateInWorld(const World& world, int scan, double x, double y, double z, const Lidar& lidar) {
+    Scene scene;
+    scene.terrains.push_back({[g = world.ground, x, y, z](double px, double py) { return g(px + x, py + y) - z; }, Truth::Ground});
+    std::vector<Box> boxes = world.boxes;
+    if (world.boxesOfScan)
+        for (const Box& b : world.boxesOfScan(scan)) boxes.push_back(b);
+    const double at[3] = {x, y, z};
+    for (Box b : boxes) {
+        for (int a = 0; a < 3; ++a) b.lo[a] -= at[a], b.hi[a] -= at[a];
+        scene.boxes.push_back(b);
+    }
+    SimScan out = simulate(scene, lidar);
+    for (std::size_t i = 0; i < out.size(); ++i)
+        for (int a = 0; a < 3; ++a) out.xyz[3 * i + std::size_t(a)] += float(at[a]);
+    return out;
+}
+
 }  // namespace gseg::test

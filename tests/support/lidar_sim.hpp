@@ -94,6 +94,18 @@ struct SimScan {
 /// Casts every beam; rays that hit nothing within maxRange give no point.
 SimScan simulate(const Scene& scene, const Lidar& lidar);
 
+/// A world in world coordinates (metres, z up): ground height z(x, y) and obstacle boxes, some of
+/// them only in some scans (moving things). For simulated drives.
+struct World {
+    std::function<double(double, double)> ground = [](double, double) { return 0.0; };
+    std::vector<Box> boxes;                                 ///< in every scan
+    std::function<std::vector<Box>(int scan)> boxesOfScan;  ///< more boxes in scan k
+};
+
+/// Scan `scan` of a drive through `world` from the sensor at world position (x, y, z): the points
+/// in the world frame (the sensor's axes are the world's), with their truth.
+SimScan simulateInWorld(const World& world, int scan, double x, double y, double z, const Lidar& lidar);
+
 /// Ground precision and recall of `labels` (1 ground) against the truth; DontCare points ignored.
 struct PR {
     double precision = 0, recall = 0;
