@@ -420,6 +420,22 @@ TEST(Observations2mapWrapper, MrptsOwnMessageIsShownNeverItsKeyPrompt) {
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_NE(r.output.find("gseg-observations2map: Error: the file is a rawlog, not a CSimpleMap"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("Press any key"), std::string::npos) << r.output;
+    // What MRPT 2.5.8's observations2map prints given a rawlog (seen with the real one): the
+    // exception's message with its further lines, not its closing "Program finished" line.
+    const Wrapper real = makeWrapper("prompt_real",
+                                     "echo ' observations2map - Part of the MRPT'\nprintf 'Loading simplemap...==== MRPT exception ====\\n'\n"
+                                     "echo 'Message:  Stored class does not match with existing object!!:'\n"
+                                     "echo ' Stored: mrpt::obs::CObservationOdometry'\necho ' Expected: mrpt::maps::CSimpleMap'\n"
+                                     "echo 'Location: ./libs/serialization/src/CArchive.cpp:508: [void ReadObject(CSerializable*)'\n"
+                                     "echo 'Call stack backtrace:'\necho '[0 ]     0x7fa7452b1ae3 '\necho\n"
+                                     "echo 'Program finished for an exception!!'\necho 'Press any key to continue...'\nexit 255\n");
+    const auto m = runWrapper(real, q(real.ini) + " " + q(real.simplemap) + " " + q(real.prefix));
+    EXPECT_EQ(m.status, 1) << m.output;
+    EXPECT_NE(m.output.find("gseg-observations2map: Stored class does not match with existing object!!: Stored: "
+                            "mrpt::obs::CObservationOdometry Expected: mrpt::maps::CSimpleMap (configuration "),
+              std::string::npos)
+        << m.output;
+    EXPECT_EQ(m.output.find("Program finished"), std::string::npos) << m.output;
 }
 
 TEST(Observations2mapWrapper, SigtermAndSigintStopObservations2mapAndRemoveItsTemporaries) {
