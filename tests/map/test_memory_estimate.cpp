@@ -305,6 +305,9 @@ double bytesAfter(const std::string& text, const std::string& prefix) {
 // against the peak resident memory rawlog-octomap measures, on the four drives of
 // semantickitti-drives (ten scans each, 0.2 m): within 25 %.
 TEST(MemoryEstimate, TheWholeRunIsWithin25PercentOfThePeakOnTheSharedDrives) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "AddressSanitizer's shadow memory and quarantine inflate the measured peak: the estimate is for plain builds";
+#endif
     int drives = 0;
     for (const char* seq : {"00", "05", "07", "09"}) {
         const std::string poses = gseg::test::sharedData(std::string("semantickitti-drives/sequences/") + seq + "/poses.txt");
