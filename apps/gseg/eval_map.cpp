@@ -123,7 +123,11 @@ int run(const EvalMapCli& cli) {
     std::snprintf(stage, sizeof stage, "gseg eval-map: the truth of %zu labelled points on %.3g m cells%s", drive.points.size(), rosMap.resolution,
                   rosMap.resolution < 0.05 ? " (cells finer than 0.05 m: this and the scoring may take minutes)" : "");
     progress.message(stage);
-    const map::DriveTruth truth = map::computeTruth(drive, map::gridOf(rosMap), cli.clearance);
+    Progress cells(tools::progressOut(), "gseg eval-map", "cells");  // the truth's cells: minutes on fine cells
+    const map::DriveTruth truth = map::computeTruth(drive, map::gridOf(rosMap), cli.clearance, [&](std::size_t done, std::size_t total) {
+        cells.update(done, double(done) / double(total));
+    });
+    cells.finish(truth.cells.size());
     if (truth.cells.empty())
         throw std::runtime_error(cli.drive + ": no cell of the drive has a truth (no labelled ground or obstacle)");
     EvalMapResult r;

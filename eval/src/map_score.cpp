@@ -96,7 +96,8 @@ std::uint64_t DriveTruth::cellKey(long long cx, long long cy) {
 
 ScoreGrid gridOf(const io::RosMap& map) { return {map.resolution, map.originX, map.originY}; }
 
-DriveTruth computeTruth(const LabelledDrive& drive, const ScoreGrid& grid, double clearance) {
+DriveTruth computeTruth(const LabelledDrive& drive, const ScoreGrid& grid, double clearance,
+                        const std::function<void(std::size_t, std::size_t)>& progress) {
     if (!(std::isfinite(grid.resolution) && grid.resolution > 0) || !std::isfinite(grid.originX) || !std::isfinite(grid.originY))
         throw std::invalid_argument("map score: the grid needs a positive resolution and a finite origin");
     if (!(std::isfinite(clearance) && clearance > kObstacleLow))
@@ -148,7 +149,9 @@ DriveTruth computeTruth(const LabelledDrive& drive, const ScoreGrid& grid, doubl
     // Truth per cell.
     const long long r = std::max(1LL, (long long)std::nearbyint(kFallbackRadius / grid.resolution));  // Python's round: half to even
     std::vector<double> near;
+    std::size_t done = 0;
     for (const Span& s : spans) {
+        if (progress && ++done % 4096 == 0) progress(done, spans.size());
         const long long cx = refs[s.begin].cx, cy = refs[s.begin].cy;
         const auto own = out.groundHeight.find(refs[s.begin].key);
         double ref;
@@ -175,6 +178,7 @@ DriveTruth computeTruth(const LabelledDrive& drive, const ScoreGrid& grid, doubl
         if (obstacles >= 2) out.cells.push_back({cx, cy, TruthClass::Obstacle});
         else if (own != out.groundHeight.end()) out.cells.push_back({cx, cy, TruthClass::Traversable});
     }
+    if (progress) progress(spans.size(), spans.size());
     return out;
 }
 

@@ -474,6 +474,9 @@ TEST(HostileMapInputs, EvalMapSaysWhatItDoesAfterReadingAndWarnsOfFineCells) {
                             "scoring may take minutes)"),
               std::string::npos) << r.output;
     EXPECT_NE(r.output.find("gseg eval-map: scoring "), std::string::npos) << r.output;
+    // The truth's pass over the cells (minutes on fine cells) has its own progress, ending in its total.
+    EXPECT_NE(r.output.find(" cells, "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" in all"), std::string::npos) << r.output;
     const auto coarse = evalMap(q(c.drive) + " " + q(c.map));
     EXPECT_NE(coarse.output.find("gseg eval-map: the truth of 80 labelled points on 0.2 m cells\n"), std::string::npos) << coarse.output;
     EXPECT_EQ(evalMap(q(c.drive) + " " + q(c.map) + " -q").output, "");

@@ -100,7 +100,10 @@ struct DriveTruth {
 
 /// Truth per cell of `grid` from the drive's points; `clearance` [m] > 0.3. Throws
 /// std::invalid_argument on a bad grid or clearance, or a point more than 2^31 cells from the origin.
-DriveTruth computeTruth(const LabelledDrive& drive, const ScoreGrid& grid, double clearance = 2.0);
+/// `progress(done, total)`: called every 4096 cells of the truth's last pass (the one that takes
+/// minutes on fine cells) and at its end; may be empty.
+DriveTruth computeTruth(const LabelledDrive& drive, const ScoreGrid& grid, double clearance = 2.0,
+                        const std::function<void(std::size_t, std::size_t)>& progress = {});
 
 /// What a map says about a cell.
 enum class Prediction : std::uint8_t { Unknown = 0, Free = 1, Occupied = 2 };
