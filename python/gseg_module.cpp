@@ -1,6 +1,7 @@
 // gseg's Python module (_gseg): the core API on numpy arrays. The package gseg/__init__.py
 // re-exports it. Points are viewed in place where their layout allows (float32, x y z
 // consecutive, any fixed row stride), else converted once to float32 N x 3.
+#include <gseg/drive_terrain.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/output_checks.hpp>
 #include <gseg/io/ply.hpp>
@@ -359,12 +360,17 @@ PyResult toPython(gseg::mrpt::ScanSegmentation&& s, std::size_t points) {
 /// memory): threads sharing one segmenter take turns and get the labels of serial calls; one
 /// segmenter per thread segments in parallel. The mutex is taken only with the GIL released (never
 /// the other way round), so a thread waiting for it never blocks the thread that holds it.
+/// A 4 x 4 rigid transform given from Python (ValueError naming `name` otherwise).
+::mrpt::poses::CPose3D poseOf(const py::handle& obj, const char* name);
+
 class PySegmenter {
 public:
     explicit PySegmenter(const PyParams& p) : segmenter_(p.config), params_(p) {}
 
-    PyResult segment(const py::handle& points, bool checkHeight) {
+    PyResult segment(const py::handle& points, bool checkHeight, const py::handle& pose) {
         Points p = viewPoints(points);
+        const std::optional<::mrpt::poses::CPose3D> sensorPose =
+            pose.is_none() ? std::nullopt : std::optional<::mrpt::poses::CPose3D>(poseOf(pose, "pose"));
         bool anyFinite = false;
         for (std::size_t i = 0; i < p.view.size() && !anyFinite; ++i) {
             const float* q = p.view.point(i);
@@ -376,6 +382,18 @@ public:
             py::gil_scoped_release release;
             const std::lock_guard<std::mutex> lock(mutex_);
             s = segmenter_.segment(p.view, false, checkHeight ? gseg::mrpt::HeightCheck::Now : gseg::mrpt::HeightCheck::Never);
+            const gseg::map::TraversabilityOptions& t = params_.config.traversability;
+            if (sensorPose && t.driveTerrain) {  // the drive's context, causal: the scans given before with their poses
+                std::vector<float> world(3 * p.view.size());
+                for (std::size_t i = 0; i < p.view.size(); ++i) {
+                    double x = 0, y = 0, z = 0;
+                    sensorPose->composePoint(p.view.x(i), p.view.y(i), p.view.z(i), x, y, z);
+                    world[3 * i] = float(x), world[3 * i + 1] = float(y), world[3 * i + 2] = float(z);
+                }
+                if (!drive_) drive_ = std::make_unique<gseg::DriveTerrain>(t.terrainOptions(), t.maxRange);
+                drive_->label(gseg::PointCloudView(world.data(), p.view.size()), s.result,
+                              Eigen::Vector3d(sensorPose->x(), sensorPose->y(), sensorPose->z()));
+            }
         }
         return toPython(std::move(s), p.view.size());
     }
@@ -384,6 +402,7 @@ public:
 private:
     gseg::mrpt::ScanSegmenter segmenter_;
     PyParams params_;
+    std::unique_ptr<gseg::DriveTerrain> drive_;  ///< the drive's terrain model of the scans given with a pose
     std::mutex mutex_;
 };
 
@@ -688,7 +707,7 @@ scratch memory between calls, guarded by a lock).)doc")
                  return std::make_unique<PySegmenter>(params.is_none() ? PyParams{} : params.cast<PyParams>());
              }),
              py::arg("params") = py::none())
-        .def("segment", &PySegmenter::segment, py::arg("points"), py::arg("check_height") = false, R"doc(
+        .def("segment", &PySegmenter::segment, py::arg("points"), py::arg("check_height") = false, py::arg("pose") = py::none(), R"doc(
 Labels every point.
 
 points: numpy array (N, 3) or (N, 4) (x, y, z[, intensity]) in metres, sensor frame (x forward,
@@ -696,6 +715,11 @@ points: numpy array (N, 3) or (N, 4) (x, y, z[, intensity]) in metres, sensor fr
         consecutive (C order, any row stride) is read in place, without a copy.
 check_height: with a fixed distToGround, compare it with this scan's own estimate and put a
         warning in result.height['warning'] where they disagree (costs about one segmentation).
+pose: the sensor's pose in the world frame (a 4 x 4 rigid transform, world from sensor),
+        for scans of a drive given in the drive's order: the segmenter then keeps the drive's
+        terrain model of the scans given before (causal) and labels ground the non-ground points
+        lying on it (traversability.driveTerrain and terrain* keys; the area around the sensor is
+        kept). Without a pose each scan is labelled alone, the same labels as gseg.segment().
 Returns a Result. Raises ValueError on an empty array, a wrong shape or no finite point, TypeError
 on a dtype other than float32 or float64 (convert with points.astype(numpy.float32)). Points with NaN/inf coordinates are labelled non-ground.)doc")
         .def_property_readonly("params", &PySegmenter::params);

@@ -52,8 +52,13 @@ void TerrainOptions::validate() const {
     if (minSupport < 1) throw std::invalid_argument("TerrainOptions.minSupport = " + std::to_string(minSupport) + ": must be >= 1");
 }
 
-std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const PointCloudView& nonGround, double cellSize,
-                                          double maxRange, const Eigen::Vector3d& origin) {
+namespace {
+
+/// The samples of the points of `ground` that `take(i, true)` accepts, then of those of
+/// `nonGround` that `take(i, false)` accepts (see terrainSamples()).
+template <class Take>
+std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCloudView& nonGround, Take&& take,
+                                     double cellSize, double maxRange, const Eigen::Vector3d& origin) {
     if (!(std::isfinite(cellSize) && cellSize > 0)) throw std::invalid_argument("terrainSamples: cell size must be positive");
     // Each point adds to its cell's sample, in input order (ground first): an open-addressing
     // table from the cell to its sample, sized by the points (memory follows the points).
@@ -63,6 +68,7 @@ std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const Po
     std::vector<std::uint32_t> table(slots, 0);  // 0: empty, else index into out + 1
     auto add = [&](const PointCloudView& pts, bool isGround) {
         for (std::size_t i = 0; i < pts.size(); ++i) {
+            if (!take(i, isGround)) continue;
             const float* p = pts.point(i);
             if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
             const double dx = p[0] - origin.x(), dy = p[1] - origin.y(), dz = p[2] - origin.z();
@@ -87,6 +93,20 @@ std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const Po
     add(nonGround, false);
     std::sort(out.begin(), out.end(), [](const TerrainSample& a, const TerrainSample& b) { return a.ix != b.ix ? a.ix < b.ix : a.iy < b.iy; });
     return out;
+}
+
+}  // namespace
+
+std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const PointCloudView& nonGround, double cellSize,
+                                          double maxRange, const Eigen::Vector3d& origin) {
+    return samplesOf(ground, nonGround, [](std::size_t, bool) { return true; }, cellSize, maxRange, origin);
+}
+
+std::vector<TerrainSample> terrainSamples(const PointCloudView& points, const std::vector<std::uint8_t>& labels, double cellSize,
+                                          double maxRange, const Eigen::Vector3d& origin) {
+    if (labels.size() != points.size())
+        throw std::invalid_argument("terrainSamples: " + std::to_string(labels.size()) + " labels for " + std::to_string(points.size()) + " points");
+    return samplesOf(points, points, [&](std::size_t i, bool ground) { return labels[i] == (ground ? 1 : 0); }, cellSize, maxRange, origin);
 }
 
 TerrainModel::TerrainModel(const TerrainOptions& options) : options_(options) { options_.validate(); }
@@ -249,6 +269,23 @@ void TerrainModel::build() {
                 }
         std::sort(pending.begin(), pending.end());
     }
+}
+
+std::size_t TerrainModel::forgetFartherThan(double x, double y, double radius) {
+    const double side = kTileSize * options_.cellSize;
+    std::size_t dropped = 0;
+    for (auto it = tiles_.begin(); it != tiles_.end();) {
+        const double x0 = std::int32_t(std::uint32_t(it->first >> 32)) * side, y0 = std::int32_t(std::uint32_t(it->first)) * side;
+        const double dx = std::max({0.0, x0 - x, x - (x0 + side)}), dy = std::max({0.0, y0 - y, y - (y0 + side)});
+        if (dx * dx + dy * dy > radius * radius) {
+            cells_ -= it->second->used;
+            it = tiles_.erase(it);
+            ++dropped;
+        } else {
+            ++it;
+        }
+    }
+    return dropped;
 }
 
 void TerrainModel::forEachModelled(const std::function<void(std::int32_t, std::int32_t, const TerrainCell&)>& f) const {

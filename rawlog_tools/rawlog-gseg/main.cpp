@@ -17,6 +17,7 @@
 #include "common/ranks.hpp"
 
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/map/drive_model.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
@@ -45,6 +46,7 @@ struct Cli {
     std::vector<std::string> sensors;
     bool replace = false;
     bool overwrite = false;  ///< -w: replace outputs that exist
+    bool driveContext = true;  ///< label with the whole drive's terrain model where the rawlog has poses (#31)
 };
 
 /// Exit codes (also in --help).
@@ -157,9 +159,24 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
     options.replace = cli.replace;
     options.frame = cli.frame == "vehicle" ? gseg::GroundFilter::OutputFrame::Vehicle : gseg::GroundFilter::OutputFrame::Sensor;
 
+    // The drive's context (#31): pass 1 builds the whole drive's terrain model where every scan
+    // has a pose; pass 2 (below) labels each scan with it.
+    gseg::map::DriveModel drive;
+    if (cli.driveContext) {
+        gseg::Progress pass1(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name) + ": the drive's terrain (pass 1 of 2)",
+                             "scans");
+        drive = gseg::map::driveModelOf(in, config, cli.sensors, [&](std::size_t scans, double) { pass1.update(scans, -1, ""); });
+        pass1.finish(drive.scans);
+        if (drive.model) {
+            options.driveModel = drive.model;
+            options.poseOf = [&drive](std::size_t entry, const std::string& label) { return drive.poseOf(entry, label); };
+        }
+    }
+
     FileResult result;
     gseg::mrpt::RawlogWriter writer(outPath);
-    gseg::Progress progress(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name), "scans");
+    gseg::Progress progress(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name) + (drive.model ? " (pass 2 of 2)" : ""),
+                            "scans");
     Reporter reporter(name, result.skipped, result.warnings, progress);
     gseg::mrpt::RawlogSegmenter segmenter(
         config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); },
@@ -179,6 +196,13 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
                   t.scans ? t.ms / double(t.scans) : 0.0);
     result.message = text;
     if (reporter.scans()) result.message += ", " + reporter.heights(config.distToGroundAuto) + " " + gseg::mrpt::configOrigin(cli.config);
+    if (drive.model) {
+        std::snprintf(text, sizeof text, ", %zu scans labelled with the drive's terrain model (%zu anchored + %zu grown cells, poses: %s): "
+                      "%zu points turned ground", t.withDrive, drive.model->anchors(), drive.model->grown(), drive.poseSource.c_str(), t.driveRelabelled);
+        result.message += text;
+    } else if (cli.driveContext && t.scans) {
+        result.message += ", single-scan labels (no drive context: " + drive.why + ")";
+    }
     if (t.nonFinite) result.message += ", " + std::to_string(t.nonFinite) + " non-finite points labelled non-ground";
     if (t.alreadySplit) result.message += ", " + std::to_string(t.alreadySplit) + " already split (passed through)";
     if (!t.skipped.empty()) result.message += ", " + std::to_string(t.skipped.size()) + " skipped (passed through, named above)";
@@ -348,6 +372,9 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     TCLAP::ValueArg<std::string> cfg("c", "config", "YAML or INI parameters (distToGround: auto allowed)", false, "",
                                      "FILE", cmd);
     TCLAP::SwitchArg replace("", "replace", "drop the original scans (default: keep them)", cmd);
+    TCLAP::SwitchArg noDrive("", "no-drive-context", "label each scan alone; by default, where the rawlog has a pose for "
+                             "every scan, a first pass builds the drive's terrain model and each scan is labelled with it "
+                             "(ground the scan alone missed; traversability: driveTerrain and terrain* keys)", cmd);
     TCLAP::MultiArg<std::string> sensor("", "sensor", "segment only observations with this sensorLabel "
                                         "(repeatable; default all LiDAR observations)", false, "LABEL", cmd);
     TCLAP::ValueArg<std::string> frame("", "frame", "output points in the sensor frame (default) or the vehicle "
@@ -355,7 +382,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     ranks.setTimeout("rawlog-gseg", line.mpiTimeout());
     const Cli cli = {in.getValue(),       list.getValue(),   outArg.getValue(), cfg.getValue(),
-                     frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite()};
+                     frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite(), !noDrive.getValue()};
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
         return runBatch(cli, ranks);

@@ -71,7 +71,7 @@ TEST(TerrainSamples, SumsLowestAndHighestPerCellSkippingNaNAndFarPoints) {
     EXPECT_NEAR(s[1].groundSumZ, 2.2, 1e-6);
     EXPECT_FLOAT_EQ(s[1].lowZ, 0.5f);   // a non-ground point is the lowest return
     EXPECT_FLOAT_EQ(s[1].highZ, 3.0f);
-    EXPECT_THROW(gseg::terrainSamples({}, {}, 0.0), std::invalid_argument);
+    EXPECT_THROW(gseg::terrainSamples(gseg::PointCloudView(), gseg::PointCloudView(), 0.0), std::invalid_argument);
 }
 
 /// A 20 x 20 cell flat ground patch (cells 0..19) seen as ground by `scans` scans at z = 0.

@@ -73,6 +73,13 @@ struct TerrainSample {
 std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const PointCloudView& nonGround, double cellSize,
                                           double maxRange = std::numeric_limits<double>::infinity(),
                                           const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
+/// The same from one scan's points and its labels (1: ground, 0: not, anything else: left out,
+/// e.g. a reflection below the ground), without
+/// copying the points apart; the same samples as the form above given the ground and the other
+/// points in input order. Throws std::invalid_argument if the sizes differ.
+std::vector<TerrainSample> terrainSamples(const PointCloudView& points, const std::vector<std::uint8_t>& labels, double cellSize,
+                                          double maxRange = std::numeric_limits<double>::infinity(),
+                                          const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
 /// One cell of the model.
 struct TerrainCell {
@@ -124,6 +131,11 @@ public:
     /// Calls f(ix, iy, cell) for every modelled cell (state Anchor or Grown, after build()), in a
     /// fixed order (tile by tile, sorted).
     void forEachModelled(const std::function<void(std::int32_t ix, std::int32_t iy, const TerrainCell& cell)>& f) const;
+
+    /// Drops the tiles lying wholly farther than `radius` (horizontally) from (x, y), with their
+    /// evidence: a stream's rolling model (DriveTerrain) keeps memory to the area around the sensor.
+    /// Returns the tiles dropped.
+    std::size_t forgetFartherThan(double x, double y, double radius);
 
     std::size_t cells() const { return cells_; }           ///< cells with evidence
     std::size_t anchors() const { return anchors_; }       ///< after build()

@@ -38,6 +38,43 @@ GroundFilter::Output GroundFilter::filter(const ::mrpt::obs::CObservation& obs) 
     return split(gm::sensorFramePoints(obs), sensorPose, &obs, obs.sensorLabel);
 }
 
+GroundFilter::Output GroundFilter::filter(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose) {
+    ::mrpt::poses::CPose3D sensorPose;
+    obs.getSensorPose(sensorPose);
+    return split(gm::sensorFramePoints(obs), sensorPose, &obs, obs.sensorLabel, &robotPose);
+}
+
+void GroundFilter::useDriveModel(std::shared_ptr<const gseg::TerrainModel> model) {
+    driveModel_ = std::move(model);
+    causal_.reset();
+}
+
+void GroundFilter::collectDriveModel(gseg::TerrainModel* model) { collect_ = model; }
+
+void GroundFilter::relabelWithDrive(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& worldSensorPose,
+                                    Output& out) {
+    const gseg::map::TraversabilityOptions& t = config().traversability;
+    if (!t.driveTerrain) return;
+    std::vector<float> world(3 * (sensorXyzi.size() / 4));
+    for (std::size_t i = 0; i < world.size() / 3; ++i) {
+        double x = 0, y = 0, z = 0;
+        worldSensorPose.composePoint(sensorXyzi[4 * i], sensorXyzi[4 * i + 1], sensorXyzi[4 * i + 2], x, y, z);
+        world[3 * i] = float(x), world[3 * i + 1] = float(y), world[3 * i + 2] = float(z);
+    }
+    const PointCloudView cloud(world.data(), world.size() / 3);
+    const Eigen::Vector3d sensor(worldSensorPose.x(), worldSensorPose.y(), worldSensorPose.z());
+    if (collect_) {
+        std::vector<std::uint8_t> labels = out.result.labels;
+        for (const std::uint32_t i : out.result.belowGround) labels[i] = 2;  // reflections: no evidence
+        collect_->add(gseg::terrainSamples(cloud, labels, collect_->options().cellSize, t.maxRange, sensor));
+    } else if (driveModel_) {
+        out.driveRelabelled = gseg::relabelWithModel(*driveModel_, cloud, out.result);
+    } else {
+        if (!causal_) causal_ = std::make_unique<gseg::DriveTerrain>(t.terrainOptions(), t.maxRange);
+        out.driveRelabelled = causal_->label(cloud, out.result, sensor);
+    }
+}
+
 GroundFilter::Output GroundFilter::filter(const ::mrpt::maps::CPointsMap& map, const std::string& label) {
     std::vector<float> xyzi(4 * map.size(), 0.f);
     const auto* withI = dynamic_cast<const ::mrpt::maps::CPointsMapXYZI*>(&map);
@@ -49,7 +86,8 @@ GroundFilter::Output GroundFilter::filter(const ::mrpt::maps::CPointsMap& map, c
 }
 
 GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& sensorPose,
-                                         const ::mrpt::obs::CObservation* source, const std::string& label) {
+                                         const ::mrpt::obs::CObservation* source, const std::string& label,
+                                         const ::mrpt::poses::CPose3D* robotPose) {
     std::vector<float> levelled = sensorXyzi;
     gm::levelPoints(levelled, sensorPose);
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 16);
@@ -61,6 +99,7 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     out.distToGroundEstimated = seg.distToGroundEstimated;
     out.heightWarning = seg.heightWarning;
     out.nonFinitePoints = seg.nonFinitePoints;
+    if (robotPose) relabelWithDrive(sensorXyzi, *robotPose + sensorPose, out);
 
     // The two halves, in the frame asked for.
     const bool vehicle = outputFrame == OutputFrame::Vehicle;

@@ -32,7 +32,9 @@ struct RawlogSegmenter::Pending {
 };
 
 RawlogSegmenter::RawlogSegmenter(const LoadedConfig& config, RawlogSegmenterOptions options, Emit emit, OnScan onScan)
-    : options_(std::move(options)), emit_(std::move(emit)), onScan_(std::move(onScan)), filter_(config, options_.frame) {}
+    : options_(std::move(options)), emit_(std::move(emit)), onScan_(std::move(onScan)), filter_(config, options_.frame) {
+    if (options_.driveModel) filter_.useDriveModel(options_.driveModel);
+}
 
 RawlogSegmenter::~RawlogSegmenter() = default;
 
@@ -51,7 +53,9 @@ std::vector<::mrpt::obs::CObservation::Ptr> RawlogSegmenter::process(const ::mrp
     gseg::GroundFilter::Output o;
     const auto start = std::chrono::steady_clock::now();
     try {
-        o = filter_.filter(*obs);
+        const std::optional<::mrpt::poses::CPose3D> pose = options_.poseOf ? options_.poseOf(entry, obs->sensorLabel) : std::nullopt;
+        o = pose ? filter_.filter(*obs, *pose) : filter_.filter(*obs);
+        report.withDrive = pose.has_value();
     } catch (const std::exception& e) {  // this scan cannot be segmented: pass it through, say why
         report.skipped = errorReason(e);
         totals_.skipped.push_back(report);
@@ -62,6 +66,9 @@ std::vector<::mrpt::obs::CObservation::Ptr> RawlogSegmenter::process(const ::mrp
     report.points = o.result.labels.size();
     report.ground = o.result.numGround;
     report.nonFinite = o.nonFinitePoints;
+    report.driveRelabelled = o.driveRelabelled;
+    totals_.withDrive += report.withDrive ? 1 : 0;
+    totals_.driveRelabelled += report.driveRelabelled;
     report.distToGround = o.distToGround;
     report.distToGroundEstimated = o.distToGroundEstimated;
     report.heightWarning = o.heightWarning;

@@ -4,8 +4,10 @@
 /// cloud observation out. Registered with MRPT's RTTI as "gseg::GroundFilter", so
 /// `mrpt::rtti::classFactory("gseg::GroundFilter")` creates one (also from the plugin library).
 
+#include <gseg/drive_terrain.hpp>
 #include <gseg/ground_segmenter.hpp>
 #include <gseg/sensor_height.hpp>
+#include <gseg/terrain_model.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 
@@ -51,6 +53,7 @@ public:
         std::string heightWarning;
         std::size_t nonFinitePoints = 0;  ///< input points with a NaN or infinite coordinate
         std::size_t reflections = 0;      ///< points more than belowGroundMargin below the ground (result.belowGround)
+        std::size_t driveRelabelled = 0;  ///< points the drive's terrain model turned ground (filter() with a pose)
         gseg::Result result;      ///< labels (one per input point), counters and timing of the segmentation
     };
 
@@ -71,11 +74,35 @@ public:
     /// Segments a point map given in a levelled frame with the sensor at the origin.
     Output filter(const ::mrpt::maps::CPointsMap& map, const std::string& label = "points");
 
+    /// With the drive's context (#31): segments `obs` as filter(obs) does, then labels ground the
+    /// non-ground points lying on the terrain the drive's model holds (TerrainModel::relabel();
+    /// `result.labels`, the halves and `driveRelabelled` say so). `robotPose`: the vehicle's pose
+    /// in the world frame (the observation's sensorPose is on the vehicle). The model is, by
+    /// default, the causal one of the scans given to this call before (a stream: call it in the
+    /// drive's order; gseg::DriveTerrain keeps the area around the sensor), or the one
+    /// useDriveModel() gave (offline: the whole drive's, not changed by this call). With
+    /// `traversability.driveTerrain: false` in the configuration it is filter(obs).
+    Output filter(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose);
+
+    /// Relabels with `model` (built, e.g. from a whole drive) in filter(obs, pose) instead of the
+    /// causal model; nullptr goes back to the causal one (started afresh).
+    void useDriveModel(std::shared_ptr<const gseg::TerrainModel> model);
+    /// The first pass of the offline form: filter(obs, pose) adds each scan's evidence (its
+    /// single-scan labels) to `model` and relabels nothing; nullptr ends it. The caller builds
+    /// the model and gives it to useDriveModel() for the second pass.
+    void collectDriveModel(gseg::TerrainModel* model);
+
 private:
     Output split(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& sensorPose,
-                 const ::mrpt::obs::CObservation* source, const std::string& label);
+                 const ::mrpt::obs::CObservation* source, const std::string& label,
+                 const ::mrpt::poses::CPose3D* robotPose = nullptr);
+    /// The drive's context on `out.result` (see filter(obs, robotPose)).
+    void relabelWithDrive(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& worldSensorPose, Output& out);
 
     gseg::mrpt::ScanSegmenter segmenter_;
+    std::shared_ptr<const gseg::TerrainModel> driveModel_;  ///< offline: the whole drive's
+    std::unique_ptr<gseg::DriveTerrain> causal_;            ///< a stream's, made at its first scan
+    gseg::TerrainModel* collect_ = nullptr;                 ///< the offline first pass's
 };
 
 /// Name under which MRPT's class factory knows GroundFilter.

@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,12 @@ struct RawlogSegmenterOptions {
     std::vector<std::string> sensors;  ///< segment only these sensorLabels (empty: every LiDAR observation)
     bool replace = false;              ///< drop the segmented scans, keep only their two halves
     gseg::GroundFilter::OutputFrame frame = gseg::GroundFilter::OutputFrame::Sensor;
+    /// The drive's context (#31): the vehicle pose of the scan with this sensorLabel at this rawlog
+    /// entry, where known. A scan with a pose is labelled by GroundFilter::filter(obs, pose): with
+    /// `driveModel` (the whole drive's, offline) or, without one, the causal model of the scans
+    /// before it. Empty: every scan alone.
+    std::function<std::optional<::mrpt::poses::CPose3D>(std::size_t entry, const std::string& label)> poseOf;
+    std::shared_ptr<const gseg::TerrainModel> driveModel;
 };
 
 /// What happened to one scan.
@@ -41,6 +48,8 @@ struct ScanReport {
     bool distToGroundEstimated = false;
     std::string heightWarning; ///< the first scan contradicts a fixed distToGround (GroundFilter::Output)
     double ms = 0;             ///< segmentation time
+    std::size_t driveRelabelled = 0;  ///< points the drive's terrain model turned ground
+    bool withDrive = false;    ///< labelled with the drive's context (it had a pose)
     std::string skipped;       ///< why it could not be segmented ("" if it was)
 };
 
@@ -49,6 +58,7 @@ struct RawlogTotals {
     std::size_t entries = 0;       ///< input entries seen
     std::size_t scans = 0;         ///< scans segmented
     std::size_t points = 0, ground = 0, nonFinite = 0;
+    std::size_t withDrive = 0, driveRelabelled = 0;  ///< scans labelled with the drive's context, points it turned ground
     std::size_t alreadySplit = 0;  ///< scans passed through because their pair was already there
     double ms = 0;                 ///< segmentation time of all scans
     std::vector<ScanReport> skipped;  ///< scans that could not be segmented (passed through)
