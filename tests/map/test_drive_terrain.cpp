@@ -9,6 +9,7 @@
 #include <gseg/eval/map_score.hpp>
 #include <gseg/map/terrain_layers.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/drive_terrain.hpp>
 #include <gseg/terrain_model.hpp>
 
 #include <support/child.hpp>
@@ -223,6 +224,87 @@ TEST(TerrainModel, InvalidOptionsAreRefusedByName) {
     t.set("driveTerrain", "false");
     EXPECT_FALSE(t.driveTerrain);
     EXPECT_EQ(t.get("terrainRadius"), "2");
+}
+
+// ---------------------------------------------------------------------------------------------
+// DriveTerrain: the causal (stream) form on synthetic scans
+
+/// One synthetic scan around a sensor at (sx, 0, 1.8): flat ground at z = 0 sampled every 0.3 m
+/// out to 25 m, and a 1.5 m box at x in [20, 21], y in [4, 5] (its top and faces). The "segmenter"
+/// calls ground only the ground within 12 m. `truth`: 1 ground, 0 box.
+struct StreamScan {
+    std::vector<float> xyz;
+    std::vector<std::uint8_t> labels, truth;
+};
+
+StreamScan streamScan(double sx) {
+    StreamScan s;
+    auto add = [&](double x, double y, double z, bool ground) {
+        s.xyz.insert(s.xyz.end(), {float(x), float(y), float(z)});
+        s.truth.push_back(ground ? 1 : 0);
+        s.labels.push_back(ground && (x - sx) * (x - sx) + y * y < 144 ? 1 : 0);
+    };
+    const auto inBox = [](double x, double y) { return x >= 20 && x <= 21 && y >= 4 && y <= 5; };
+    for (double x = std::floor((sx - 25) / 0.3) * 0.3 + 0.05; x < sx + 25; x += 0.3)
+        for (double y = -24.95; y < 25; y += 0.3)
+            if ((x - sx) * (x - sx) + y * y < 625 && !inBox(x, y)) add(x, y, 0.01 * std::sin(3 * x + 2 * y), true);
+    for (double x = 20; x <= 21.001; x += 0.1)
+        for (double y = 4; y <= 5.001; y += 0.1)
+            for (double z = 0.1; z <= 1.501; z += 0.1)
+                if (z > 1.45 || x < 20.05 || x > 20.95 || y < 4.05 || y > 4.95) add(x, y, z, false);
+    return s;
+}
+
+TEST(DriveTerrain, AStreamTurnsGroundWhatEarlierScansModelledButNeverTheBox) {
+    gseg::DriveTerrain stream(TerrainOptions(), 25);
+    std::size_t turned = 0, missedAfterTwo = 0, turnedAfterTwo = 0;
+    for (int k = 0; k < 12; ++k) {
+        const double sx = 2.0 * k;
+        StreamScan s = streamScan(sx);
+        const std::vector<std::uint8_t> before = s.labels;
+        const std::size_t changed = stream.label(gseg::PointCloudView(s.xyz.data(), s.truth.size()), s.labels, Eigen::Vector3d(sx, 0, 1.8));
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < s.labels.size(); ++i) {
+            if (before[i] == 1) {
+                EXPECT_EQ(s.labels[i], 1) << "ground stays ground";
+            }
+            if (s.labels[i] == before[i]) continue;
+            ++n;
+            ASSERT_EQ(s.truth[i], 1) << "scan " << k << " turned a point of the box at " << s.xyz[3 * i] << ", "
+                                     << s.xyz[3 * i + 1] << ", " << s.xyz[3 * i + 2];
+        }
+        EXPECT_EQ(n, changed);
+        if (k == 0) {
+            EXPECT_EQ(changed, 0u) << "the first scan has no earlier scans";
+        }
+        if (k >= 2) {
+            for (std::size_t i = 0; i < before.size(); ++i) missedAfterTwo += s.truth[i] == 1 && before[i] == 0;
+            turnedAfterTwo += changed;
+        }
+        turned += changed;
+    }
+    // The ground behind the sensor, which earlier scans called ground within 12 m, and the ground
+    // the model grew from it out to 25 m.
+    EXPECT_GT(double(turnedAfterTwo), 0.5 * double(missedAfterTwo)) << turnedAfterTwo << " of " << missedAfterTwo;
+    EXPECT_EQ(stream.scans(), 12u);
+
+    // The rolling model keeps the area around the sensor (within 25 + 2 x 2 m): after 36 m more,
+    // the cells near the start are gone, and the model holds far fewer cells than the whole drive saw.
+    TerrainModel whole;
+    for (int k = 0; k < 30; ++k) {
+        StreamScan s = streamScan(2.0 * k);
+        const gseg::PointCloudView view(s.xyz.data(), s.truth.size());
+        if (k >= 12) stream.label(view, s.labels, Eigen::Vector3d(2.0 * k, 0, 1.8));
+        whole.add(gseg::terrainSamples(view, s.labels, 0.2, 25, Eigen::Vector3d(2.0 * k, 0, 1.8)));
+    }
+    EXPECT_NE(whole.cellAt(0.25, 0.25), nullptr);
+    EXPECT_EQ(stream.model().cellAt(0.25, 0.25), nullptr);
+    EXPECT_NE(stream.model().cellAt(58.25, 0.25), nullptr);
+    EXPECT_LT(double(stream.model().cells()), 0.75 * double(whole.cells())) << stream.model().cells() << " of " << whole.cells();
+    std::vector<std::uint8_t> wrong(3, 0);
+    const std::vector<float> three(9, 0.f);
+    wrong.pop_back();
+    EXPECT_THROW(stream.label(gseg::PointCloudView(three.data(), 3), wrong, Eigen::Vector3d::Zero()), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -450,3 +450,49 @@ def test_help_lists_every_class():
     for name in classes:
         assert name in first, f"{name} missing from the package docstring's Classes"
         assert f"class {name}" in text, f"{name} missing from help(gseg)"
+
+
+def _kitti_drive(seq):
+    """(velodyne .bin paths, label paths, 4 x 4 world-from-velodyne poses) of a KITTI drive folder."""
+    calib = {}
+    for line in (seq / "calib.txt").read_text().splitlines():
+        key, _, values = line.partition(":")
+        calib[key.strip()] = np.array(values.split(), float)
+    tr = np.vstack([calib["Tr"].reshape(3, 4), [0, 0, 0, 1]])
+    poses = [np.vstack([np.array(l.split(), float).reshape(3, 4), [0, 0, 0, 1]])
+             for l in (seq / "poses.txt").read_text().splitlines() if l.strip()]
+    bins = sorted((seq / "velodyne").glob("*.bin"))
+    return bins, [seq / "labels" / (b.stem + ".label") for b in bins], [np.linalg.inv(tr) @ p @ tr for p in poses]
+
+
+def test_segment_with_poses_labels_with_the_earlier_scans_terrain_and_single_scans_stay_as_they_were():
+    seq = SHARED / "data/semantickitti-drives/sequences/09"
+    if not (seq / "poses.txt").exists():
+        pytest.skip(f"no labelled drive at {seq} (the shared data is not beside this checkout)")
+    bins, labels, poses = _kitti_drive(seq)
+    params = gseg.Params(str(SRC / "config/kitti_hdl64.yaml"))
+    stream, alone = gseg.GroundSegmenter(params), gseg.GroundSegmenter(params)
+    off = gseg.GroundSegmenter(gseg.Params(params, traversability={"driveTerrain": False}))
+    gained, recall = 0, {"alone": [], "stream": []}
+    precision = {"alone": [], "stream": []}
+    for k, (b, lab, pose) in enumerate(zip(bins, labels, poses)):
+        points = gseg.read_kitti_bin(str(b))
+        single = alone.segment(points).labels
+        with_drive = stream.segment(points, pose=pose).labels
+        assert np.array_equal(off.segment(points, pose=pose).labels, single), "driveTerrain: false is the scan alone"
+        if k == 0:
+            assert np.array_equal(with_drive, single), "the first scan has no earlier scans"
+        assert np.all(with_drive[single == 1] == 1), "ground stays ground"
+        gained += int(with_drive.sum() - single.sum())
+        truth = gseg.read_kitti_labels(str(lab))
+        for name, pred in (("alone", single), ("stream", with_drive)):
+            s = gseg.evaluate(points, truth, pred)
+            recall[name].append(s["recall"])
+            precision[name].append(s["precision"])
+    assert gained > 1000
+    assert np.mean(recall["stream"]) > np.mean(recall["alone"])
+    # measured 2026-12-06 on drive 09: P 98.86 -> 98.56, R 91.66 -> 92.08, 5,644 points turned
+    # ground (the offline form, the whole drive: 98.47 / 92.91)
+    assert np.mean(precision["stream"]) > np.mean(precision["alone"]) - 0.5
+    with pytest.raises(ValueError, match="pose"):
+        stream.segment(points, pose=np.eye(3))
