@@ -30,6 +30,9 @@ bool cellIndex(double v, double cellSize, std::int32_t& out) {
 struct TerrainModel::Tile {
     std::array<TerrainCell, std::size_t(kTileSize * kTileSize)> cells;
     std::uint32_t used = 0;  ///< cells with evidence
+    /// build()'s working copy of the modelled elevations (NaN: not modelled), dense so that the
+    /// least-squares sums over a candidate's disc read 4 bytes a cell, not a whole TerrainCell.
+    std::array<float, std::size_t(kTileSize * kTileSize)> modelled;
 };
 
 void TerrainOptions::validate() const {
@@ -162,6 +165,7 @@ void TerrainModel::build() {
     struct Candidate {
         std::int32_t ix, iy;
         TerrainCell* cell;
+        float* modelled;  ///< its slot in the tile's working copy
         float z;
     };
     std::vector<Candidate> candidates;
@@ -169,16 +173,18 @@ void TerrainModel::build() {
     const float spreadLimit = float(2 * options_.tolerance);
     for (const auto& [key, tile] : tiles) {
         const std::int32_t tx = std::int32_t(std::uint32_t(key >> 32)), ty = std::int32_t(std::uint32_t(key));
+        tile->modelled.fill(std::numeric_limits<float>::quiet_NaN());
         for (std::int32_t j = 0; j < kTileSize * kTileSize; ++j) {
             TerrainCell& c = tile->cells[std::size_t(j)];
             if (c.lowScans == 0) continue;
             c.state = TerrainCell::None, c.elevation = std::numeric_limits<float>::quiet_NaN();
             if (c.groundScans >= std::uint32_t(options_.minScans) && c.groundCount >= std::uint64_t(options_.minAnchorPoints)) {
                 c.state = TerrainCell::Anchor, c.elevation = float(c.groundSumZ / double(c.groundCount));
+                tile->modelled[std::size_t(j)] = c.elevation;
                 ++anchors_;
             } else if (c.lowScans >= std::uint32_t(options_.minScans) && c.lowMax - c.lowMin <= spreadLimit) {
                 const std::int32_t ix = tx * kTileSize + (j & kTileMask), iy = ty * kTileSize + (j >> kTileBits);
-                candidates.push_back({ix, iy, &c, float(c.lowSum / double(c.lowScans))});
+                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], float(c.lowSum / double(c.lowScans))});
             }
         }
     }
@@ -187,23 +193,45 @@ void TerrainModel::build() {
     const double r2 = (options_.supportRadius / options_.cellSize) * (options_.supportRadius / options_.cellSize) * (1 + 1e-9);
     const double cs = options_.cellSize;
     const double neighbourStep = options_.tolerance + cs * std::tan(options_.maxSlope * 3.14159265358979323846 / 180.0);
-    // Lookups near the last one: the tile is found once per tile, not once per cell.
-    struct Lookup {
+    // The disc of offsets within the radius (the candidate's own cell left out), in the order the
+    // sums run (dy, then dx): the same sums, in the same order, for every candidate.
+    std::vector<std::pair<int, int>> disc;
+    for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx)
+            if (double(dx * dx + dy * dy) <= r2 && (dx || dy)) disc.emplace_back(dx, dy);
+    // The tiles around a candidate's tile, found once per tile (candidates come tile by tile), so
+    // a cell near it is an index, not a hash lookup.
+    const int span = (r + kTileSize - 1) / kTileSize, side = 2 * span + 1;
+    struct Near {
         const TerrainModel& model;
-        std::uint64_t key = ~std::uint64_t(0);
-        const Tile* tile = nullptr;
-        const TerrainCell* operator()(std::int32_t ix, std::int32_t iy) {
-            const std::uint64_t k = tileKey(ix >> kTileBits, iy >> kTileBits);
-            if (k != key) {
-                key = k;
-                const auto it = model.tiles_.find(k);
-                tile = it == model.tiles_.end() ? nullptr : it->second.get();
-            }
-            if (!tile) return nullptr;
-            const TerrainCell* c = &tile->cells[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
-            return c->lowScans == 0 ? nullptr : c;
+        int span, side;
+        std::int32_t tx = 0, ty = 0;
+        bool valid = false;
+        std::vector<const Tile*> tiles;
+        void centre(std::int32_t ix, std::int32_t iy) {
+            const std::int32_t x = ix >> kTileBits, y = iy >> kTileBits;
+            if (valid && x == tx && y == ty) return;
+            tx = x, ty = y, valid = true;
+            tiles.assign(std::size_t(side * side), nullptr);
+            for (int j = -span; j <= span; ++j)
+                for (int i = -span; i <= span; ++i) {
+                    const auto it = model.tiles_.find(tileKey(tx + i, ty + j));
+                    if (it != model.tiles_.end()) tiles[std::size_t((j + span) * side + i + span)] = it->second.get();
+                }
         }
-    } lookup{*this};
+        /// The modelled elevation of cell (ix, iy) within the span of the centre's tile (NaN: none).
+        float operator()(std::int32_t ix, std::int32_t iy) const {
+            const Tile* t = tiles[std::size_t(((iy >> kTileBits) - ty + span) * side + (ix >> kTileBits) - tx + span)];
+            return t ? t->modelled[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))] : std::numeric_limits<float>::quiet_NaN();
+        }
+    } near{*this, span, side, 0, 0, false, {}};
+    // Candidates by cell (index + 1, 0: none), per tile, for the next wave's neighbourhood search.
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> candidateAt;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        auto& tile = candidateAt[tileKey(candidates[k].ix >> kTileBits, candidates[k].iy >> kTileBits)];
+        if (tile.empty()) tile.assign(std::size_t(kTileSize * kTileSize), 0);
+        tile[std::size_t((candidates[k].iy & kTileMask) * kTileSize + (candidates[k].ix & kTileMask))] = std::uint32_t(k + 1);
+    }
     std::vector<std::size_t> pending(candidates.size());
     for (std::size_t k = 0; k < pending.size(); ++k) pending[k] = k;
     std::vector<std::size_t> joined;
@@ -213,18 +241,17 @@ void TerrainModel::build() {
         for (const std::size_t k : pending) {
             const Candidate& cand = candidates[k];
             if (cand.cell->state != TerrainCell::None) continue;
+            near.centre(cand.ix, cand.iy);
             // Least squares z = a + b dx + c dy over the modelled cells within the radius (centred sums).
             double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
             float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-            for (int dy = -r; dy <= r; ++dy)
-                for (int dx = -r; dx <= r; ++dx) {
-                    if (double(dx * dx + dy * dy) > r2 || (dx == 0 && dy == 0)) continue;
-                    const TerrainCell* c = lookup(cand.ix + dx, cand.iy + dy);
-                    if (!c || c->state == TerrainCell::None) continue;
-                    const double x = dx * cs, y = dy * cs, z = c->elevation;
-                    n += 1, sx += x, sy += y, sz += z, sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z;
-                    lo = std::min(lo, c->elevation), hi = std::max(hi, c->elevation);
-                }
+            for (const auto& [dx, dy] : disc) {
+                const float e = near(cand.ix + dx, cand.iy + dy);
+                if (std::isnan(e)) continue;
+                const double x = dx * cs, y = dy * cs, z = e;
+                n += 1, sx += x, sy += y, sz += z, sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z;
+                lo = std::min(lo, e), hi = std::max(hi, e);
+            }
             if (n < options_.minSupport) continue;
             double predicted = sz / n;  // the support's mean where its cells do not span a plane
             const double cxx = sxx - sx * sx / n, cxy = sxy - sx * sy / n, cyy = syy - sy * sy / n;
@@ -241,32 +268,34 @@ void TerrainModel::build() {
             bool level = true;  // and no step to a modelled cell beside it
             for (int dy = -1; dy <= 1 && level; ++dy)
                 for (int dx = -1; dx <= 1 && level; ++dx) {
-                    const TerrainCell* c = (dx || dy) ? lookup(cand.ix + dx, cand.iy + dy) : nullptr;
-                    if (c && c->state != TerrainCell::None)
-                        level = std::abs(double(cand.z) - double(c->elevation)) <= neighbourStep * std::hypot(double(dx), double(dy));
+                    const float e = (dx || dy) ? near(cand.ix + dx, cand.iy + dy) : std::numeric_limits<float>::quiet_NaN();
+                    if (!std::isnan(e)) level = std::abs(double(cand.z) - double(e)) <= neighbourStep * std::hypot(double(dx), double(dy));
                 }
             if (level) joined.push_back(k);
         }
         for (const std::size_t k : joined) {
-            candidates[k].cell->state = TerrainCell::Grown, candidates[k].cell->elevation = candidates[k].z;
+            candidates[k].cell->state = TerrainCell::Grown, candidates[k].cell->elevation = *candidates[k].modelled = candidates[k].z;
             ++grown_;
         }
         // The next wave: the candidates still out within the radius of a cell that joined.
         pending.clear();
         std::fill(queued.begin(), queued.end(), 0);
         if (joined.empty()) break;
-        // Candidates by cell, for the neighbourhood search.
-        std::unordered_map<std::uint64_t, std::size_t> byCell;
-        byCell.reserve(candidates.size());
-        for (std::size_t k = 0; k < candidates.size(); ++k)
-            if (candidates[k].cell->state == TerrainCell::None) byCell.emplace(tileKey(candidates[k].ix, candidates[k].iy), k);
+        std::uint64_t lastKey = ~std::uint64_t(0);
+        const std::vector<std::uint32_t>* lastTile = nullptr;
         for (const std::size_t k : joined)
-            for (int dy = -r; dy <= r; ++dy)
-                for (int dx = -r; dx <= r; ++dx) {
-                    if (double(dx * dx + dy * dy) > r2) continue;
-                    const auto it = byCell.find(tileKey(candidates[k].ix + dx, candidates[k].iy + dy));
-                    if (it != byCell.end() && !queued[it->second]) queued[it->second] = 1, pending.push_back(it->second);
+            for (const auto& [dx, dy] : disc) {
+                const std::int32_t ix = candidates[k].ix + dx, iy = candidates[k].iy + dy;
+                const std::uint64_t key = tileKey(ix >> kTileBits, iy >> kTileBits);
+                if (key != lastKey) {
+                    lastKey = key;
+                    const auto it = candidateAt.find(key);
+                    lastTile = it == candidateAt.end() ? nullptr : &it->second;
                 }
+                if (!lastTile) continue;
+                const std::uint32_t at = (*lastTile)[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
+                if (at && candidates[at - 1].cell->state == TerrainCell::None && !queued[at - 1]) queued[at - 1] = 1, pending.push_back(at - 1);
+            }
         std::sort(pending.begin(), pending.end());
     }
 }
