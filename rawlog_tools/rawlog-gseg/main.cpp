@@ -161,12 +161,17 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
 
     // The drive's context (#31): pass 1 builds the whole drive's terrain model where every scan
     // has a pose; pass 2 (below) labels each scan with it.
+    // A pipe or FIFO can be read only once: its scans are labelled alone, and the summary says why.
     gseg::map::DriveModel drive;
-    if (cli.driveContext) {
+    std::error_code notAFile;
+    if (cli.driveContext && !std::filesystem::is_regular_file(in, notAFile)) {
+        drive.why = "the input is not a regular file and can be read only once; give a file for the drive's context";
+        drive.anyPose = true;  // say so: the user may expect the context
+    } else if (cli.driveContext) {
         gseg::Progress pass1(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name) + ": the drive's terrain (pass 1 of 2)",
                              "scans");
         drive = gseg::map::driveModelOf(in, config, cli.sensors, [&](std::size_t scans, double) { pass1.update(scans, -1, ""); });
-        pass1.finish(drive.scans);
+        if (drive.model) pass1.finish(drive.scans);
         if (drive.model) {
             options.driveModel = drive.model;
             options.poseOf = [&drive](std::size_t entry, const std::string& label) { return drive.poseOf(entry, label); };
@@ -200,7 +205,7 @@ FileResult segmentFile(const Cli& cli, const std::string& in, const std::string&
         std::snprintf(text, sizeof text, ", %zu scans labelled with the drive's terrain model (%zu anchored + %zu grown cells, poses: %s): "
                       "%zu points turned ground", t.withDrive, drive.model->anchors(), drive.model->grown(), drive.poseSource.c_str(), t.driveRelabelled);
         result.message += text;
-    } else if (cli.driveContext && t.scans) {
+    } else if (cli.driveContext && t.scans && drive.anyPose) {  // a rawlog without any pose: single scans, as ever
         result.message += ", single-scan labels (no drive context: " + drive.why + ")";
     }
     if (t.nonFinite) result.message += ", " + std::to_string(t.nonFinite) + " non-finite points labelled non-ground";

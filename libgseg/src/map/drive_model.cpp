@@ -34,12 +34,14 @@ DriveModel driveModelOf(const std::string& rawlog, const gseg::mrpt::LoadedConfi
             const std::string what = e.what();
             if (what.find("pose") == std::string::npos) throw;  // a corrupt rawlog: not a matter of poses
             out.why = what.substr(0, what.find(": give --poses"));  // rawlog-gseg reads the rawlog's own poses
+            out.anyPose = !out.poses.empty();
             out.poses.clear();
             return out;
         }
         if (!job.raw || job.presegmented()) continue;  // rawlog-gseg passes a segmented scan through
         if (!sensors.empty() && std::find(sensors.begin(), sensors.end(), job.raw->sensorLabel) == sensors.end()) continue;
         out.poses[{job.entry, job.raw->sensorLabel}] = job.robotPose;
+        out.anyPose = true;
         try {
             filter.filter(*job.raw, job.robotPose);
             ++out.scans;

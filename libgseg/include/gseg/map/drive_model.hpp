@@ -30,6 +30,7 @@ struct DriveModel {
     std::size_t scans = 0;   ///< scans whose evidence was added
     std::string poseSource;  ///< where the poses came from (ScanStream::poseSource())
     std::string why;         ///< "" or why there is no model (no poses in the rawlog, driveTerrain false)
+    bool anyPose = false;    ///< some scan had a pose (false: a rawlog of single scans, not a drive)
 
     /// The pose of the scan with `label` at rawlog `entry`, where the first pass saw it.
     std::optional<::mrpt::poses::CPose3D> poseOf(std::size_t entry, const std::string& label) const;
