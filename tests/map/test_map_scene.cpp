@@ -162,10 +162,12 @@ TEST(MapScene, PathShowsOnAWholeDriveAndTheLightComesFromAbove) {
             EXPECT_NEAR(v->getVoxel(0, 0).side_length, 3.0, 0.01);
         }
     EXPECT_EQ(marks, 31u);
-    // Lit from above, as read back: a top face (normal +z) gets ambient + diffuse = the legend's colour.
+    // Lit from above, as read back: a top face (normal +z) gets ambient + diffuse = the legend's
+    // colour, and any face at least 80 % of it (ambient).
     const auto& light = scene.getViewport("main")->lightParameters();
     EXPECT_LT(light.direction.z, -0.95f);
     EXPECT_NEAR(light.ambient.R + light.diffuse.R * -light.direction.z, 1.0f, 0.03f);
+    EXPECT_GE(light.ambient.R, 0.8f);
 }
 
 }  // namespace

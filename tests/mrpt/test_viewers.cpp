@@ -308,7 +308,7 @@ TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
     EXPECT_NEAR(v.legendHeight, gseg::mrpt::kSceneLegendLinePx * 6 + gseg::mrpt::kSceneLegendPadPx, 1e-9);
     EXPECT_GE(v.pathMark, 0.4) << "the sensor positions: boxes of at least two voxels";
     EXPECT_NE(v.legend[0].find("traversability map"), std::string::npos) << v.legend[0];
-    EXPECT_NE(v.legend[1].find("traversable"), std::string::npos) << v.legend[1];
+    EXPECT_NE(v.legend[1].find("ground voxels"), std::string::npos) << v.legend[1];
     EXPECT_NE(v.legend[2].find("obstacle"), std::string::npos) << v.legend[2];
     EXPECT_NE(v.legend[3].find("2.5D map"), std::string::npos) << v.legend[3];
     EXPECT_NE(v.legend[4].find("path"), std::string::npos) << v.legend[4];

@@ -29,7 +29,7 @@ namespace gseg::map::detail {
 /// serialised straight into the compressor: no copy of it in memory. `groundUnderObstacles`: the
 /// occupied ground voxels also occupied as obstacles (shown red), so that the legend's ground
 /// count is the console's (every occupied ground voxel, as `_ground.bt` holds them). Lit from
-/// above: a top face shows the legend's colour, side faces are darker. The sensor positions are
+/// above and mostly ambient: every face shows 80 to 100 % of the legend's colour. The sensor positions are
 /// boxes of 1 % of the map's extent (at least two voxels), so the path shows on a whole drive.
 void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
                    const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path,
