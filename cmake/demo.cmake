@@ -56,5 +56,14 @@ if(EXISTS "${kitti}/00/poses.txt")
   run_tool("${BIN}/kitti2rawlog" -w -i "${kitti}/00" -o "${OUT}/seq00.rawlog")
   run_tool("${BIN}/rawlog-octomap" -w -i "${OUT}/seq00.rawlog" -o "${OUT}/seq00" -c "${SRC}/config/kitti_hdl64.yaml")
 endif()
-message(STATUS "Outputs in ${OUT}: *.png (pictures), *.3Dscene (SceneViewer3D of mrpt-apps), *.ply (CloudCompare or "
-               "any point-cloud viewer), *.bt / *.ot (liboctomap tools)")
+# The closing line names every kind of file written, the planner's maps first.
+set(maps "vlp16")
+if(EXISTS "${kitti}/00/poses.txt")
+  set(maps "seq00 (SemanticKITTI 00) and vlp16")
+endif()
+message(STATUS "Outputs in ${OUT}: maps of ${maps}, 17 files each: *_costmap.pgm + *_costmap.yaml (the costmap a planner "
+               "loads: ROS map_server / Nav2), *_layers.tif (the 2.5D layers as a GeoTIFF: gdalinfo, QGIS), "
+               "*_layer_<name>.png (a picture per layer; *_layer_class.png is the costmap, x right and y up as the PGM), "
+               "*_traversability.png (the voxel columns from above), *_ground.bt / *_obstacles.bt / *_traversability.ot "
+               "(OctoMaps: liboctomap tools), *_traversability.ply (CloudCompare), *_traversability.3Dscene "
+               "(SceneViewer3D of mrpt-apps); of each scan *.png, *.ply, *.3Dscene and *.labels")

@@ -5,6 +5,7 @@
 #include <gseg/eval/map_score.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/map/map_colours.hpp>  // backgroundColour(): the page around every map picture
+#include <gseg/map/map_page.hpp>
 #include <gseg/mrpt/picture.hpp>
 
 #include <algorithm>
@@ -285,61 +286,46 @@ OutcomeStyle outcomeStyle(CellOutcome c) {
 }
 
 std::string encodeMapScorePng(const DriveTruth& truth, const CellOutcomes& outcomes, const std::string& title) {
-    using gseg::mrpt::Picture;
     if (outcomes.size() != truth.cells.size()) throw std::invalid_argument("map score picture: one outcome per truth cell needed");
     if (truth.cells.empty()) throw std::runtime_error("no scored cell: no picture to draw");
     long long loX = truth.cells.front().cx, hiX = loX, loY = truth.cells.front().cy, hiY = loY;
     for (const auto& c : truth.cells)
         loX = std::min(loX, c.cx), hiX = std::max(hiX, c.cx), loY = std::min(loY, c.cy), hiY = std::max(hiY, c.cy);
     const long long margin = 5;  // [cells] around the scored ones
-    const long long top = hiX + margin, left = hiY + margin;  // x up, y to the left
-    const long long high = hiX - loX + 1 + 2 * margin, wide = hiY - loY + 1 + 2 * margin, side = std::max(high, wide);
-    const long long cellsPerPixel = (side + 1999) / 2000;
-    const int pixelsPerCell = cellsPerPixel > 1 ? 1 : int(std::clamp(1200 / side, 1LL, 8LL));
-    const int mapW = int((wide + cellsPerPixel - 1) / cellsPerPixel) * pixelsPerCell;
-    const int mapH = int((high + cellsPerPixel - 1) / cellsPerPixel) * pixelsPerCell;
-    constexpr int kTitleBand = 56, kMargin = 12, kMinWidth = 760;
-    std::vector<gseg::mrpt::LegendEntry> legend;
-    for (int o = 0; o < kCellOutcomes; ++o) {
-        const OutcomeStyle st = outcomeStyle(CellOutcome(o));
-        legend.push_back({{st.r, st.g, st.b}, st.text});
+    MapPageOptions o;
+    o.maxSide = 2000, o.enlargeTo = 1200, o.maxEnlarge = 8;
+    for (int k = 0; k < kCellOutcomes; ++k) {
+        const OutcomeStyle st = outcomeStyle(CellOutcome(k));
+        o.legend.push_back({{st.r, st.g, st.b}, st.text});
     }
-    legend.push_back({{}, "page: cells not scored (no truth)", false});
-    legend.push_back({{}, gseg::mrpt::kTopViewOrientation, false});
-    legend.push_back({{}, "(KITTI drives: x = forward at the first scan)", false});
-    const int width = std::max(mapW + 2 * kMargin, kMinWidth);
-    const int height = kTitleBand + mapH + kMargin + Picture::legendHeight(legend.size()) + kMargin;
-    Picture pic(width, height, backgroundColour());
-    const int mapLeft = (width - mapW) / 2, mapTop = kTitleBand;
+    o.legend.push_back({{}, "page: cells not scored (no truth)", false});
+    o.legend.push_back({{}, "(KITTI drives: x = forward at the first scan)", false});
+    const MapPage probe = mapPage(loX - margin, loY - margin, hiX + margin, hiY + margin, truth.grid.resolution, o);
+    char sub[160];
+    std::snprintf(sub, sizeof sub, "%zu scored cells of %.2f m%s", truth.cells.size(), truth.grid.resolution,
+                  probe.cellsPerPixel > 1 ? (", " + std::to_string(probe.cellsPerPixel) + " x " + std::to_string(probe.cellsPerPixel) +
+                                             " cells a pixel (the most severe shown)").c_str()
+                                          : "");
+    o.title = {title, sub};
+    const MapPage page = mapPage(loX - margin, loY - margin, hiX + margin, hiY + margin, truth.grid.resolution, o);
     // A block shows the outcome of its cells that is worst for a planner (the highest enum value
     // among the obstacle outcomes first): the order of CellOutcome is the order of severity.
-    std::vector<int> block(std::size_t(mapW / pixelsPerCell) * std::size_t(mapH / pixelsPerCell), -1);
-    const int blocksWide = mapW / pixelsPerCell;
+    std::vector<int> block(std::size_t(page.blocksWide()) * std::size_t(page.blocksHigh()), -1);
     for (std::size_t i = 0; i < truth.cells.size(); ++i) {
-        const long long col = (left - truth.cells[i].cy) / cellsPerPixel, row = (top - truth.cells[i].cx) / cellsPerPixel;
-        int& b = block[std::size_t(row) * std::size_t(blocksWide) + std::size_t(col)];
+        int col = 0, row = 0;
+        if (!page.blockOf(truth.cells[i].cx, truth.cells[i].cy, col, row)) continue;
+        int& b = block[std::size_t(row) * std::size_t(page.blocksWide()) + std::size_t(col)];
         b = std::max(b, int(outcomes[i]));
     }
-    for (int row = 0; row < mapH / pixelsPerCell; ++row)
-        for (int col = 0; col < blocksWide; ++col) {
-            const int b = block[std::size_t(row) * std::size_t(blocksWide) + std::size_t(col)];
-            if (b < 0) continue;
-            const OutcomeStyle st = outcomeStyle(CellOutcome(b));
-            pic.fill(mapLeft + col * pixelsPerCell, mapTop + row * pixelsPerCell, mapLeft + (col + 1) * pixelsPerCell - 1,
-                     mapTop + (row + 1) * pixelsPerCell - 1, {st.r, st.g, st.b});
+    std::vector<gseg::mrpt::Colour> colours(block.size(), backgroundColour());
+    for (std::size_t i = 0; i < block.size(); ++i)
+        if (block[i] >= 0) {
+            const OutcomeStyle st = outcomeStyle(CellOutcome(block[i]));
+            colours[i] = {st.r, st.g, st.b};
         }
-    char sub[128];
-    std::snprintf(sub, sizeof sub, "%zu scored cells of %.2f m%s", truth.cells.size(), truth.grid.resolution,
-                  cellsPerPixel > 1 ? (", " + std::to_string(cellsPerPixel) + " x " + std::to_string(cellsPerPixel) +
-                                       " cells a pixel (the most severe shown)").c_str()
-                                    : "");
-    pic.title(title, sub);
-    const int legendTop = mapTop + mapH + kMargin;
-    pic.legend(kMargin, legendTop, legend);
-    const int ax = width - 70, ay = legendTop + 70;
-    pic.arrow(ax, ay, 0, -48, "x");
-    pic.arrow(ax, ay, -48, 0, "y");
-    pic.scaleBar(width - kMargin - 4, legendTop + 124, double(pixelsPerCell) / (double(cellsPerPixel) * truth.grid.resolution), 200);
+    gseg::mrpt::Picture pic = pageCanvas(page);
+    paintBlocks(pic, page, colours);
+    drawPageFrame(pic, page);
     return pic.png();
 }
 

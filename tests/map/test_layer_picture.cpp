@@ -1,5 +1,5 @@
 // The picture of one map layer (gseg/map/layer_picture.hpp): its size, every text inside the
-// canvas (long titles too), colours at known cells, x up and y to the left, unknown cells in
+// canvas (long titles too), colours at known cells, x right and y up (as the costmap), unknown cells in
 // their own colour.
 #include <gseg/map/layer_picture.hpp>
 #include <gseg/map/map_colours.hpp>
@@ -91,8 +91,8 @@ TEST(LayerPicture, SizeMatchesTheLayoutAndEveryTextFits) {
             SCOPED_TRACE(std::string(layer) + " " + std::to_string(size.first) + " x " + std::to_string(size.second));
             const LayerPictureLayout l = gseg::map::layerPictureLayout(g, layer);
             expectTextsFit(l);
-            EXPECT_GE(l.mapWidth, size.second);  // y across
-            EXPECT_GE(l.mapHeight, size.first);  // x down
+            EXPECT_GE(l.mapWidth, size.first);    // x across
+            EXPECT_GE(l.mapHeight, size.second);  // y down
             const mrpt::img::CImage img = decode(gseg::map::encodeLayerPng(g, layer), "size");
             EXPECT_EQ(int(img.getWidth()), l.width);
             EXPECT_EQ(int(img.getHeight()), l.height);
@@ -118,25 +118,26 @@ TEST(LayerPicture, LongTitlesAndMeaningsAreWrappedInsideTheCanvas) {
     expectTextsFit(gseg::map::layerPictureLayout(g, "elevation", o));
 }
 
-TEST(LayerPicture, ColoursAtKnownCellsWithXUpAndYLeft) {
+TEST(LayerPicture, ColoursAtKnownCellsWithXRightAndYUpAsTheCostmap) {
     const LayerGrid g = rampGrid(30, 12);
     const LayerPictureLayout l = gseg::map::layerPictureLayout(g, "class");
     ASSERT_GT(l.pixelsPerCell, 1);
     const mrpt::img::CImage img = decode(gseg::map::encodeLayerPng(g, "class"), "class");
     const int c = l.pixelsPerCell / 2;
     int col = 0, row = 0;
-    // Class 1 at small x (bottom of the map), class 2 at large x (top), unknown at cy 0 (right).
+    // Class 1 at small x (left of the map), class 2 at large x (right), unknown at cy 0 (bottom):
+    // the costmap PGM's orientation (column = x, row 0 = the largest y).
     ASSERT_TRUE(l.toPixel(0, 5, col, row));
     EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Traversable)));
-    EXPECT_EQ(row, l.mapTop + l.mapHeight - l.pixelsPerCell);  // x = smallest: the bottom row
+    EXPECT_EQ(col, l.mapLeft);  // x = smallest: the left column
     ASSERT_TRUE(l.toPixel(29, 5, col, row));
     EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Obstacle)));
-    EXPECT_EQ(row, l.mapTop);  // x = largest: the top row
+    EXPECT_EQ(col, l.mapLeft + l.mapWidth - l.pixelsPerCell);  // x = largest: the right column
     ASSERT_TRUE(l.toPixel(29, 0, col, row));
     EXPECT_TRUE(sameColour(at(img, col + c, row + c), gseg::map::colourOf(gseg::map::ColumnClass::Unknown)));
-    EXPECT_EQ(col, l.mapLeft + l.mapWidth - l.pixelsPerCell);  // y = smallest: the right column
+    EXPECT_EQ(row, l.mapTop + l.mapHeight - l.pixelsPerCell);  // y = smallest: the bottom row
     ASSERT_TRUE(l.toPixel(10, 11, col, row));
-    EXPECT_EQ(col, l.mapLeft);  // y = largest: the left column
+    EXPECT_EQ(row, l.mapTop);  // y = largest: the top row
     EXPECT_FALSE(l.toPixel(30, 0, col, row));
     EXPECT_EQ(l.barHeight, 0);  // classes: a legend, no colour bar
 
@@ -251,17 +252,18 @@ TEST(LayerPicture, LargeGridsAreReducedShowingTheLargestValue) {
     LayerGrid g(5000, 300, 0.2, 0, 0);
     auto& step = g.add("step", "m", "largest height jump to a neighbour");
     std::fill(step.values.begin(), step.values.end(), 0.0f);
-    step.values[g.index(4999, 299)] = 1.0f;  // one high cell in the top-left block
+    step.values[g.index(4999, 299)] = 1.0f;  // one high cell in the top-right block (largest x and y)
     gseg::map::LayerPictureOptions o;
     o.maxSide = 1000;
     const LayerPictureLayout l = gseg::map::layerPictureLayout(g, "step", o);
     EXPECT_EQ(l.cellsPerPixel, 5);
-    EXPECT_EQ(l.mapHeight, 1000);
-    EXPECT_EQ(l.mapWidth, 60);
+    EXPECT_EQ(l.mapWidth, 1000);
+    EXPECT_EQ(l.mapHeight, 60);
     expectTextsFit(l);
     const mrpt::img::CImage img = decode(gseg::map::encodeLayerPng(g, "step", o), "reduced");
-    EXPECT_TRUE(sameColour(at(img, l.mapLeft, l.mapTop), gseg::map::viridis(1)));
-    EXPECT_TRUE(sameColour(at(img, l.mapLeft + 1, l.mapTop), gseg::map::viridis(0)));
+    EXPECT_TRUE(sameColour(at(img, l.mapLeft + l.mapWidth - 1, l.mapTop), gseg::map::viridis(1)));
+    EXPECT_TRUE(sameColour(at(img, l.mapLeft + l.mapWidth - 2, l.mapTop), gseg::map::viridis(0)));
+    EXPECT_TRUE(sameColour(at(img, l.mapLeft + l.mapWidth - 1, l.mapTop + 1), gseg::map::viridis(0)));
 }
 
 TEST(LayerPicture, AllUnknownAndConstantLayersDraw) {

@@ -138,4 +138,36 @@ TEST(MapScene, SceneFileHoldsTheMeshAndMrptReadsItBack) {
     EXPECT_FALSE(without.getByClass<mrpt::opengl::CSetOfTriangles>());
 }
 
+TEST(MapScene, PathShowsOnAWholeDriveAndTheLightComesFromAbove) {
+    // A 300 m drive: the boxes at the sensor positions are 1 % of the extent (3 m), not 0.4 m
+    // specks; on a small map at least two voxels.
+    EXPECT_DOUBLE_EQ(gseg::map::detail::pathMarkSize(300.0, 0.2), 3.0);
+    EXPECT_DOUBLE_EQ(gseg::map::detail::pathMarkSize(10.0, 0.2), 0.4);
+    EXPECT_DOUBLE_EQ(gseg::map::detail::pathMarkSize(5000.0, 0.2), 5.0);
+    const std::string path = (gseg::test::freshDir("map_scene", "drive") / "map.3Dscene").string();
+    {
+        gseg::io::AtomicFile file(path);
+        std::vector<Eigen::Vector3d> drive;
+        for (int k = 0; k <= 300; k += 10) drive.emplace_back(double(k), 0, 1.7);
+        gseg::map::detail::writeMapScene(file, {0.1f, 0.1f, 0.1f, 299.9f, 0.1f, 0.1f}, {1, 0}, 0.2, drive, nullptr, 0);
+        file.commit();
+    }
+    mrpt::opengl::COpenGLScene scene;
+    ASSERT_TRUE(scene.loadFromFile(path));
+    std::size_t marks = 0;
+    for (const auto& o : *scene.getViewport("main"))
+        if (const auto v = std::dynamic_pointer_cast<mrpt::opengl::COctoMapVoxels>(o); v && v->getName() == "sensor positions, blue") {
+            marks = v->getVoxelCount(0);
+            ASSERT_GT(marks, 0u);
+            EXPECT_NEAR(v->getVoxel(0, 0).side_length, 3.0, 0.01);
+        }
+    EXPECT_EQ(marks, 31u);
+    // Lit from above, as read back: a top face (normal +z) gets ambient + diffuse = the legend's
+    // colour, and any face at least 80 % of it (ambient).
+    const auto& light = scene.getViewport("main")->lightParameters();
+    EXPECT_LT(light.direction.z, -0.95f);
+    EXPECT_NEAR(light.ambient.R + light.diffuse.R * -light.direction.z, 1.0f, 0.03f);
+    EXPECT_GE(light.ambient.R, 0.8f);
+}
+
 }  // namespace

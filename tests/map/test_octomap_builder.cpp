@@ -9,6 +9,7 @@
 #include <gseg/map/world_scan.hpp>
 #include <support/child.hpp>
 #include <support/lidar_sim.hpp>
+#include <support/map_files.hpp>
 #include <support/scenes.hpp>
 #include <support/paths.hpp>
 
@@ -206,19 +207,19 @@ TEST(OctomapBuilder, TopDownGridAndPngHaveTheExpectedClasses) {
     std::filesystem::remove_all(dir);
 }
 
-TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
-    // The convention of the scan pictures: world x up (smaller rows), y to the left (smaller columns).
+TEST(OctomapBuilder, PictureHasXRightYUpAndUnknownApartFromThePage) {
+    // The costmap PGM's convention (map_server, RViz): world x to the right, y up (smaller rows).
     const auto& m = theDrive();
     const auto grid = m.topDown();
     const auto l = gseg::map::pictureLayout(grid, m.path());
     int c5 = 0, r5 = 0, c25 = 0, r25 = 0, cLeft = 0, rLeft = 0, cRight = 0, rRight = 0;
     ASSERT_TRUE(l.toPixel(5, 0, c5, r5) && l.toPixel(25, 0, c25, r25));
     ASSERT_TRUE(l.toPixel(10, 3, cLeft, rLeft) && l.toPixel(10, -3, cRight, rRight));
-    EXPECT_LT(r25, r5);          // further forward: higher up
-    EXPECT_EQ(c25, c5);
-    EXPECT_LT(cLeft, cRight);    // left (+y): further left
-    EXPECT_EQ(rLeft, rRight);
-    EXPECT_NEAR(double(r5 - r25), 20.0 * l.pixelsPerMetre(), l.pixelsPerCell);
+    EXPECT_GT(c25, c5);          // further along x: further right
+    EXPECT_EQ(r25, r5);
+    EXPECT_LT(rLeft, rRight);    // +y: higher up
+    EXPECT_EQ(cLeft, cRight);
+    EXPECT_NEAR(double(c25 - c5), 20.0 * l.pixelsPerMetre(), l.pixelsPerCell);
     // The map sits inside the page, between a title band and a legend band.
     EXPECT_GT(l.mapTop, 40);
     EXPECT_GT(l.height - (l.mapTop + l.mapHeight), 100);
@@ -235,6 +236,8 @@ TEST(OctomapBuilder, PictureHasXUpYLeftAndUnknownApartFromThePage) {
         return std::lround(255 * R(row, col)) == c.r && std::lround(255 * G(row, col)) == c.g && std::lround(255 * B(row, col)) == c.b;
     };
     EXPECT_TRUE(is(l.mapTop - 2, l.mapLeft + l.mapWidth / 2, page));  // just above the map: the page
+    // One map truth: the class layer's picture is the costmap PGM, cell for cell, unturned.
+    EXPECT_TRUE(gseg::test::classPictureShowsCostmap(dir + "/o_layer_class.png", dir + "/o_costmap.pgm"));
     int c = 0, r = 0;
     ASSERT_TRUE(l.toPixel(20.0, -20.0, c, r));  // behind the wall: never seen
     EXPECT_TRUE(is(r, c, unknown));
@@ -515,7 +518,8 @@ TEST(OctomapBuilder, TopDownPictureOfASmallMapIsEnlarged) {
     EXPECT_EQ(layout.mapHeight, 8 * int(layout.cellsHigh));
     int c0 = 0, r0 = 0, c1 = 0, r1 = 0;
     ASSERT_TRUE(layout.toPixel(0.1, 0.1, c0, r0) && layout.toPixel(0.3, 0.1, c1, r1));
-    EXPECT_EQ(r0 - r1, 8);  // one cell further along x: 8 pixels up
+    EXPECT_EQ(c1 - c0, 8);  // one cell further along x: 8 pixels to the right
+    EXPECT_EQ(r1, r0);
 }
 
 TEST(OctomapBuilder, TopDownGridIndexesNegativeCellsAndTileBorders) {

@@ -16,6 +16,7 @@
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/opengl/COctoMapVoxels.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/COpenGLViewport.h>
 #include <mrpt/opengl/CText.h>
@@ -56,7 +57,7 @@ LabelledScan seededScan(std::size_t n) {
 }
 
 /// A small map: a ground plane around the origin and a wall at x = 6, seen from two sensor positions.
-std::string writeSmallMap(const fs::path& dir) {
+std::string writeSmallMap(const fs::path& dir, gseg::map::MapStats* stats = nullptr) {
     std::vector<float> ground, wall;
     for (float x = -8; x <= 8; x += 0.1f)
         for (float y = -8; y <= 8; y += 0.1f) ground.insert(ground.end(), {x, y, -1.7f});
@@ -68,6 +69,7 @@ std::string writeSmallMap(const fs::path& dir) {
                        Eigen::Vector3d(x, 0, 0));
     const std::string prefix = (dir / "map").string();
     map.write(prefix);
+    if (stats) *stats = map.stats();
     return prefix;
 }
 
@@ -226,6 +228,8 @@ namespace {
 
 struct SceneView {
     bool followCamera = false;
+    double legendWidth = 0, legendHeight = 0;  ///< [px] the legend viewport's size
+    double pathMark = 0;                       ///< [m] the boxes at the sensor positions
     float pointing[3] = {0, 0, 0};
     float zoom = 0;
     std::vector<std::string> legend;  ///< the legend viewport's texts, in order
@@ -239,9 +243,15 @@ SceneView readScene(const std::string& path) {
     const auto& cam = scene.getViewport("main")->getCamera();
     v.pointing[0] = cam.getPointingAtX(), v.pointing[1] = cam.getPointingAtY(), v.pointing[2] = cam.getPointingAtZ();
     v.zoom = cam.getZoomDistance();
-    if (const auto legend = scene.getViewport("legend"))
+    if (const auto legend = scene.getViewport("legend")) {
+        double x = 0, y = 0;
+        legend->getViewportPosition(x, y, v.legendWidth, v.legendHeight);
         for (const auto& o : *legend)
             if (const auto text = std::dynamic_pointer_cast<mrpt::opengl::CText>(o)) v.legend.push_back(text->getString());
+    }
+    for (const auto& o : *scene.getViewport("main"))
+        if (const auto marks = std::dynamic_pointer_cast<mrpt::opengl::COctoMapVoxels>(o); marks && marks->getName() == "sensor positions, blue")
+            if (marks->getVoxelCount(0) > 0) v.pathMark = marks->getVoxel(0, 0).side_length;
     return v;
 }
 
@@ -282,12 +292,23 @@ TEST(ViewerScene, ScanSceneCarriesItsLegendAndFramesEveryPoint) {
 
 TEST(ViewerScene, MapSceneCarriesItsLegendAndFramesTheWholeMap) {
     const fs::path dir = gseg::test::freshDir("viewers", "map_scene");
-    const std::string prefix = writeSmallMap(dir);
+    gseg::map::MapStats stats;
+    const std::string prefix = writeSmallMap(dir, &stats);
     const SceneView v = readScene(prefix + "_traversability.3Dscene");
     EXPECT_TRUE(v.followCamera);
     ASSERT_EQ(v.legend.size(), 6u);
+    // The counts are the console's (rawlog-octomap's "voxels (0.20 m): N ground, M obstacle").
+    EXPECT_EQ(v.legend[1].rfind("ground voxels: " + std::to_string(stats.groundVoxels), 0), 0u) << v.legend[1];
+    EXPECT_EQ(v.legend[2], "obstacle voxels: " + std::to_string(stats.obstacleVoxels));
+    // The legend's box is sized to its longest line, not to the window.
+    std::size_t chars = 0;
+    for (const auto& t : v.legend) chars = std::max(chars, t.size());
+    EXPECT_GT(v.legendWidth, 1.0) << "a width in pixels";
+    EXPECT_LE(v.legendWidth, gseg::mrpt::kSceneLegendCharPx * double(chars) + 2 * gseg::mrpt::kSceneLegendPadPx);
+    EXPECT_NEAR(v.legendHeight, gseg::mrpt::kSceneLegendLinePx * 6 + gseg::mrpt::kSceneLegendPadPx, 1e-9);
+    EXPECT_GE(v.pathMark, 0.4) << "the sensor positions: boxes of at least two voxels";
     EXPECT_NE(v.legend[0].find("traversability map"), std::string::npos) << v.legend[0];
-    EXPECT_NE(v.legend[1].find("traversable"), std::string::npos) << v.legend[1];
+    EXPECT_NE(v.legend[1].find("ground voxels"), std::string::npos) << v.legend[1];
     EXPECT_NE(v.legend[2].find("obstacle"), std::string::npos) << v.legend[2];
     EXPECT_NE(v.legend[3].find("2.5D map"), std::string::npos) << v.legend[3];
     EXPECT_NE(v.legend[4].find("path"), std::string::npos) << v.legend[4];

@@ -337,6 +337,8 @@ std::vector<UsageCase> usageCases() {
          "missing required option -i/--input"},
         {"kitti2rawlog", gseg::test::tool("kitti2rawlog"), "-input seq", "--input", "-i seq",
          "missing required option -o/--output", "--poses", "--poses needs a value (FILE)"},
+        {"gseg-observations2map", gseg::test::tool("gseg-observations2map"), "--confg c.ini", "--config", "-c c.ini -i x",
+         "missing required option -o/--output", "-c", "-c/--config needs a value (CONFIG.ini)"},
     };
     for (const Tool& t : tools) {
         const std::string misspelt = t.misspelt.substr(0, t.misspelt.find(' '));

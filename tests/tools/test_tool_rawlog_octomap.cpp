@@ -6,6 +6,7 @@
 #include <gseg/map/traversability_map.hpp>
 #include <support/child.hpp>
 #include <support/lidar_sim.hpp>
+#include <support/map_files.hpp>
 #include <support/sim_drive.hpp>
 #include <support/paths.hpp>
 
@@ -22,6 +23,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -125,6 +127,8 @@ TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
     EXPECT_NE(r.out.find(std::to_string(occupiedCells) + " occupied ("), std::string::npos) << r.out;
     EXPECT_NE(r.out.find(std::to_string(unknown) + " unknown cells\n"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("voxel columns (_traversability.png, not the costmap): "), std::string::npos) << r.out;
+    // The class layer's picture is the costmap, cell for cell, in the PGM's orientation.
+    EXPECT_TRUE(gseg::test::classPictureShowsCostmap(dir + "/m_layer_class.png", dir + "/m_costmap.pgm"));
     // Every file is written, named in "wrote" lines; the writing has a line of its own while it lasts.
     const auto files = gseg::map::TraversabilityMap::outputPaths(dir + "/m");
     EXPECT_EQ(files.size(), 17u);
@@ -213,6 +217,21 @@ TEST(RawlogOctomap, KittiSequence00ThroughKitti2rawlog) {
         std::nth_element(dz.begin(), dz.begin() + long(dz.size() / 2), dz.end());
         EXPECT_NEAR(dz[dz.size() / 2], -1.73, 0.2) << "median ground height near frame " << k;
     }
+    fs::remove_all(dir);
+}
+
+TEST(RawlogOctomap, Drive00ClassPictureIsTheCostmapCellForCell) {
+    // One map truth (#33) on real data: the ten labelled scans of SemanticKITTI drive 00.
+    const std::string poses = gseg::test::sharedData("semantickitti-drives/sequences/00/poses.txt");
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti-drives/sequences/00/poses.txt");
+    const std::string dir = tempDir("drive00");
+    ToolRun r = runTool("kitti2rawlog", "-i " + fs::path(poses).parent_path().string() + " -o " + dir + "/d.rawlog", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = runTool("rawlog-octomap", "-i " + dir + "/d.rawlog -o " + dir + "/d -c " + std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto verdict = gseg::test::classPictureShowsCostmap(dir + "/d_layer_class.png", dir + "/d_costmap.pgm");
+    EXPECT_TRUE(verdict);
+    std::cout << "drive 00: " << verdict.message() << "\n";
     fs::remove_all(dir);
 }
 

@@ -1,8 +1,10 @@
-// The picture of one layer of a LayerGrid: map area (x up, y to the left), colour bar or class
-// legend, unknown cells named, scale bar, axes, a title wrapped to the canvas.
+// The picture of one layer of a LayerGrid on the map page (gseg/map/map_page.hpp: x right, y up,
+// as the costmap PGM): colour bar or class legend, unknown cells named, scale bar, axes, a title
+// wrapped to the canvas.
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/map/layer_picture.hpp>
 #include <gseg/map/map_colours.hpp>
+#include <gseg/map/map_page.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -18,11 +20,8 @@ using gseg::mrpt::Colour;
 using gseg::mrpt::LegendEntry;
 using gseg::mrpt::Picture;
 
-constexpr int kMargin = 12, kMinWidth = 760;  // [px]
 constexpr int kEnlargeTo = 640;               // [px] longer side of a small grid
 constexpr int kBarWidth = 20, kBarHeight = 256;  // [px] the colour bar
-constexpr int kAxesBlock = 240;               // [px] right of the legend band: axes and scale bar
-constexpr int kAxesBandHeight = 140;          // [px] height they need
 const Colour kOtherClass{255, 255, 255};      // a class value other than 1 and 2
 const Colour kPlusInfinity{255, 255, 255}, kMinusInfinity{0, 0, 0};
 constexpr double kLowPercentile = 2, kHighPercentile = 98;  // [%] the colour bar's range when not given
@@ -39,22 +38,6 @@ std::string valueLabel(double v, double span, const std::string& unit) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
     return buf + unitSuffix(unit);
-}
-
-/// `text` in lines of at most `width` characters, broken at spaces where it can be.
-std::vector<std::string> wrap(const std::string& text, std::size_t width) {
-    std::vector<std::string> lines;
-    std::string rest = text;
-    width = std::max<std::size_t>(width, 8);
-    while (rest.size() > width) {
-        std::size_t cut = rest.rfind(' ', width);
-        if (cut == std::string::npos || cut < width / 2) cut = width;  // a long word: broken
-        lines.push_back(rest.substr(0, cut));
-        rest = rest.substr(cut);
-        if (!rest.empty() && rest[0] == ' ') rest.erase(0, 1);
-    }
-    lines.push_back(rest);
-    return lines;
 }
 
 const LayerGrid::Layer& checkedLayer(const LayerGrid& grid, const std::string& name, const LayerPictureOptions& o) {
@@ -106,20 +89,20 @@ std::vector<LegendEntry> legendEntries(const LayerPictureLayout& l, const LayerG
     if (!l.classes && l.negativeInfinite) e.push_back({kMinusInfinity, "-inf: no limit below"});
     e.push_back({colourOf(ColumnClass::Unknown), "unknown (NaN): no data for " + layer.name});
     e.push_back({{}, "the darker page around the map: outside the grid", false});
-    e.push_back({{}, "top view: x up, y (left) to the left", false});
     return e;
 }
 
 /// The value each map pixel block shows: the largest of its cells (NaN if all are NaN), row-major
 /// over the blocks of the map area.
-std::vector<float> blockValues(const LayerGrid& grid, const LayerGrid::Layer& layer, const LayerPictureLayout& l) {
-    const int s = l.cellsPerPixel, across = l.mapWidth / l.pixelsPerCell, down = l.mapHeight / l.pixelsPerCell;
-    std::vector<float> v(std::size_t(across) * std::size_t(down), std::numeric_limits<float>::quiet_NaN());
+std::vector<float> blockValues(const LayerGrid& grid, const LayerGrid::Layer& layer, const MapPage& page) {
+    const int across = page.blocksWide();
+    std::vector<float> v(std::size_t(across) * std::size_t(page.blocksHigh()), std::numeric_limits<float>::quiet_NaN());
     for (int cy = 0; cy < grid.height(); ++cy)
         for (int cx = 0; cx < grid.width(); ++cx) {
             const float value = layer.values[grid.index(cx, cy)];
-            if (std::isnan(value)) continue;
-            float& b = v[std::size_t((grid.width() - 1 - cx) / s) * std::size_t(across) + std::size_t((grid.height() - 1 - cy) / s)];
+            int col = 0, row = 0;
+            if (std::isnan(value) || !page.blockOf(cx, cy, col, row)) continue;
+            float& b = v[std::size_t(row) * std::size_t(across) + std::size_t(col)];
             if (std::isnan(b) || value > b) b = value;
         }
     return v;
@@ -151,13 +134,7 @@ Colour viridis(double t) {
     return {mix(0), mix(1), mix(2)};
 }
 
-bool LayerPictureLayout::toPixel(int cx, int cy, int& col, int& row) const {
-    if (cx < 0 || cy < 0 || cx >= gridWidth || cy >= gridHeight) return false;
-    const int across = gridHeight - 1 - cy, down = gridWidth - 1 - cx;
-    col = mapLeft + across / cellsPerPixel * pixelsPerCell;
-    row = mapTop + down / cellsPerPixel * pixelsPerCell;
-    return true;
-}
+bool LayerPictureLayout::toPixel(int cx, int cy, int& col, int& row) const { return page.cellPixel(cx, cy, col, row); }
 
 LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& name, const LayerPictureOptions& o) {
     const LayerGrid::Layer& layer = checkedLayer(grid, name, o);
@@ -181,13 +158,6 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
     l.clippedLow = known && lo < l.low, l.clippedHigh = known && hi > l.high;
     const bool bar = !l.classes && (known || !std::isnan(o.min) || !std::isnan(o.max));  // no bar for a layer without data
     if (bar) l.barHeight = kBarHeight;  // placed below
-    // The map area: x up (grid.width() cells down), y to the left (grid.height() cells across).
-    const std::uint64_t side = std::uint64_t(std::max(grid.width(), grid.height()));
-    l.cellsPerPixel = int((side + std::uint64_t(o.maxSide) - 1) / std::uint64_t(o.maxSide));
-    if (l.cellsPerPixel == 1) l.pixelsPerCell = std::clamp(int(std::uint64_t(kEnlargeTo) / side), 1, 16);
-    const int s = l.cellsPerPixel;
-    l.mapWidth = (grid.height() + s - 1) / s * l.pixelsPerCell;
-    l.mapHeight = (grid.width() + s - 1) / s * l.pixelsPerCell;
     // The colour bar's labels, right of the bar.
     const double span = l.high - l.low;
     std::vector<std::string> barLabels;
@@ -201,23 +171,18 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
     }
     std::size_t barChars = 0;
     for (const auto& t : barLabels) barChars = std::max(barChars, t.size());
-    const int barBlock = !bar ? 0 : 24 + kBarWidth + 12 + int(barChars) * Picture::kCharWidth;
     bool otherClasses = false;
     if (l.classes)
         for (float v : layer.values)
             if (!std::isnan(v) && std::lround(v) != 1 && std::lround(v) != 2) otherClasses = true;
-    const std::vector<LegendEntry> legend = legendEntries(l, layer, otherClasses);
-    std::size_t legendChars = 0;
-    for (const auto& e : legend) legendChars = std::max(legendChars, e.text.size() + (e.swatch ? 3 : 0));
-    l.width = std::max({kMinWidth, kMargin + l.mapWidth + barBlock + kMargin,
-                        kMargin + 30 + int(legendChars) * Picture::kCharWidth + 20 + kAxesBlock});
-    // The title, wrapped to the width.
-    const std::size_t chars = std::size_t((l.width - 20) / Picture::kCharWidth);
-    std::vector<std::string> titleLines = wrap("gseg map layer: " + name + unitSuffix(layer.unit.empty() ? "" : "[" + layer.unit + "]") +
-                                                   (o.title.empty() ? std::string() : ": " + o.title),
-                                               chars);
-    if (!layer.meaning.empty())
-        for (auto& t : wrap(layer.meaning, chars)) titleLines.push_back(t);
+    // The title: the layer, its meaning, its figures.
+    MapPageOptions page;
+    page.maxSide = o.maxSide, page.enlargeTo = kEnlargeTo, page.maxEnlarge = 16;
+    if (bar) page.sideWidth = kBarWidth + 12 + int(barChars) * Picture::kCharWidth, page.sideHeight = 28 + kBarHeight + (barLabels.size() > 4 ? 34 : 8);
+    page.legend = legendEntries(l, layer, otherClasses);
+    page.title.push_back("gseg map layer: " + name + unitSuffix(layer.unit.empty() ? "" : "[" + layer.unit + "]") +
+                         (o.title.empty() ? std::string() : ": " + o.title));
+    if (!layer.meaning.empty()) page.title.push_back(layer.meaning);
     char figures[256];
     std::snprintf(figures, sizeof figures, "%.2f m cells, %d x %d (x by y), %zu known", grid.resolution(), grid.width(), grid.height(),
                   known + l.positiveInfinite + l.negativeInfinite);
@@ -232,66 +197,53 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
         values = ": " + std::to_string(counts[0]) + " traversable, " + std::to_string(counts[1]) + " not traversable" +
                  (counts[2] ? ", " + std::to_string(counts[2]) + " other" : "");
     }
-    for (auto& t : wrap(figures + values, chars)) titleLines.push_back(t);
-    if (s > 1)
-        for (auto& t : wrap(std::to_string(s) + " x " + std::to_string(s) + " cells a pixel (the largest value shown)", chars))
-            titleLines.push_back(t);
-    for (std::size_t i = 0; i < titleLines.size(); ++i) l.texts.push_back({10, 8 + int(i) * Picture::kLineHeight, titleLines[i]});
-    const int titleBand = 8 + int(titleLines.size()) * Picture::kLineHeight + 8;
-    l.mapLeft = kMargin;
-    l.mapTop = titleBand;
-    int band = l.mapHeight;
+    page.title.push_back(figures + values);
+    // The map area: x right (grid.width() cells across), y up (grid.height() cells down), as the costmap PGM.
+    const MapPage probe = mapPage(0, 0, grid.width() - 1, grid.height() - 1, grid.resolution(), page);
+    if (probe.cellsPerPixel > 1)
+        page.title.push_back(std::to_string(probe.cellsPerPixel) + " x " + std::to_string(probe.cellsPerPixel) + " cells a pixel (the largest value shown)");
+    l.page = mapPage(0, 0, grid.width() - 1, grid.height() - 1, grid.resolution(), page);
+    const MapPage& p = l.page;
+    l.width = p.width, l.height = p.height;
+    l.mapLeft = p.mapLeft, l.mapTop = p.mapTop, l.mapWidth = p.mapWidth, l.mapHeight = p.mapHeight;
+    l.pixelsPerCell = p.pixelsPerCell, l.cellsPerPixel = p.cellsPerPixel;
+    l.legendTop = p.legendTop;
+    for (std::size_t i = 0; i < p.titleLines.size(); ++i) l.texts.push_back({10, 8 + int(i) * Picture::kLineHeight, p.titleLines[i]});
     if (bar) {
-        l.barLeft = l.mapLeft + l.mapWidth + 24;
+        l.barLeft = p.sideLeft;
         l.barTop = l.mapTop + 28;  // the layer's name above it
         const int tx = l.barLeft + kBarWidth + 12;  // clear of the ticks
-        l.texts.push_back({l.barLeft, l.mapTop, barLabels[0]});
-        l.texts.back().x = std::min(l.barLeft, l.width - kMargin - int(barLabels[0].size()) * Picture::kCharWidth);
+        l.texts.push_back({std::min(l.barLeft, l.width - MapPage::kMargin - int(barLabels[0].size()) * Picture::kCharWidth), l.mapTop, barLabels[0]});
         l.texts.push_back({tx, l.barTop - 7, barLabels[1]});
         l.texts.push_back({tx, l.barTop + kBarHeight / 2 - 7, barLabels[2]});
         l.texts.push_back({tx, l.barTop + kBarHeight - 8, barLabels[3]});
         if (barLabels.size() > 4) l.texts.push_back({tx, l.barTop + kBarHeight + 14, barLabels[4]});
-        band = std::max(band, 28 + kBarHeight + (barLabels.size() > 4 ? 34 : 8));
     }
-    const int legendTop = l.mapTop + band + kMargin;
-    int y = legendTop;
-    for (const auto& e : legend) {
-        l.texts.push_back({kMargin + (e.swatch ? 24 : 0), y, e.text});
+    int y = l.legendTop;
+    for (const auto& e : p.legend) {
+        l.texts.push_back({MapPage::kMargin + (e.swatch ? 24 : 0), y, e.text});
         y += Picture::kLineHeight;
     }
-    l.legendTop = legendTop;
-    l.height = legendTop + std::max(Picture::legendHeight(legend.size()), kAxesBandHeight) + kMargin;
     return l;
 }
 
 std::string encodeLayerPng(const LayerGrid& grid, const std::string& name, const LayerPictureOptions& o) {
     const LayerPictureLayout l = layerPictureLayout(grid, name, o);
     const LayerGrid::Layer& layer = grid.layer(name);
-    Picture pic(l.width, l.height, backgroundColour());
-    const std::vector<float> blocks = blockValues(grid, layer, l);
-    const int across = l.mapWidth / l.pixelsPerCell, p = l.pixelsPerCell;
-    for (int row = 0; row < l.mapHeight; ++row)
-        for (int col = 0; col < l.mapWidth; ++col)
-            pic.pixel(l.mapLeft + col, l.mapTop + row, colourFor(blocks[std::size_t(row / p) * std::size_t(across) + std::size_t(col / p)], l));
+    Picture pic = pageCanvas(l.page);
+    const std::vector<float> values = blockValues(grid, layer, l.page);
+    std::vector<Colour> blocks(values.size());
+    for (std::size_t i = 0; i < values.size(); ++i) blocks[i] = colourFor(values[i], l);
+    paintBlocks(pic, l.page, blocks);
     if (l.barHeight > 0) {
         for (int r = 0; r < l.barHeight; ++r)
             pic.fill(l.barLeft, l.barTop + r, l.barLeft + kBarWidth - 1, l.barTop + r, viridis(1.0 - double(r) / (l.barHeight - 1)));
         for (int r : {0, l.barHeight / 2, l.barHeight - 1}) pic.fill(l.barLeft + kBarWidth, l.barTop + r, l.barLeft + kBarWidth + 4, l.barTop + r, pic.textColour());
     }
-    // Texts: the title's first line in bold, the rest as laid out; the legend draws its own lines
-    // (the same text at the same places) with their swatches.
-    bool otherClasses = false;
-    for (const auto& t : l.texts)
-        if (t.text == "another class value") otherClasses = true;
-    const std::vector<LegendEntry> legend = legendEntries(l, layer, otherClasses);
-    pic.title(l.texts[0].text);
-    for (std::size_t i = 1; i + legend.size() < l.texts.size(); ++i) pic.text(l.texts[i].x, l.texts[i].y, l.texts[i].text);
-    pic.legend(kMargin, l.legendTop, legend);
-    // Axes and scale bar at the right of the legend band.
-    const int ax = l.width - 70, ay = l.legendTop + 70;
-    pic.arrow(ax, ay, 0, -48, "x");
-    pic.arrow(ax, ay, -48, 0, "y");
-    pic.scaleBar(l.width - kMargin - 4, l.legendTop + 124, l.pixelsPerMetre(grid.resolution()), 200);
+    // The bar's texts (after the title's lines, before the legend's); the page draws the rest.
+    const std::size_t first = l.page.titleLines.size(), last = l.texts.size() - l.page.legend.size();
+    for (std::size_t i = first; i < last; ++i) pic.text(l.texts[i].x, l.texts[i].y, l.texts[i].text);
+    drawPageFrame(pic, l.page);
     return pic.png();
 }
 

@@ -64,9 +64,13 @@ std::shared_ptr<::mrpt::opengl::CSetOfTriangles> elevationMesh(const LayerGrid& 
     return mesh;
 }
 
+double pathMarkSize(double extent, double resolution) {
+    return std::max(2 * resolution, std::min(5.0, 0.01 * extent));
+}
+
 void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
                    const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path,
-                   const LayerGrid* layers) {
+                   const LayerGrid* layers, std::size_t groundUnderObstacles) {
     namespace gl = ::mrpt::opengl;
     auto voxels = gl::COctoMapVoxels::Create();
     voxels->setName("gseg traversability map: ground voxels green, obstacle voxels red");
@@ -86,34 +90,7 @@ void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
         voxels->push_back_Voxel(labels[i] ? 0 : 1, gl::COctoMapVoxels::TVoxel({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]},
                                                                                   resolution, ::mrpt::img::TColor(c.r, c.g, c.b)));
     }
-    gl::COpenGLScene scene;
-    scene.insert(voxels);
-    auto line = gl::CSetOfLines::Create();
-    line->setName("driven path (sensor positions), blue");
-    line->setColor_u8(40, 120, 255);
-    line->setLineWidth(3);
-    for (std::size_t i = 1; i < path.size(); ++i)
-        line->appendLine(path[i - 1].x(), path[i - 1].y(), path[i - 1].z(), path[i].x(), path[i].y(), path[i].z());
-    scene.insert(line);
-    // Lines are one pixel wide in most OpenGL core profiles: blue boxes at the sensor positions
-    // make the path visible from afar.
-    auto marks = gl::COctoMapVoxels::Create();
-    marks->setName("sensor positions, blue");
-    marks->resizeVoxelSets(1);
-    marks->showGridLines(false);
-    marks->enableLights(true);
-    marks->enableCubeTransparency(false);
-    marks->cullFaces(::mrpt::opengl::TCullFace::BACK);
-    for (const auto& p : path)
-        marks->push_back_Voxel(0, gl::COctoMapVoxels::TVoxel({float(p.x()), float(p.y()), float(p.z())}, 2 * resolution,
-                                                             ::mrpt::img::TColor(40, 120, 255)));
-    scene.insert(marks);
-    auto axes = gl::stock_objects::CornerXYZ(2.0f);
-    axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
-    if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
-    scene.insert(axes);
-    if (layers && layers->find("elevation")) scene.insert(elevationMesh(*layers));
-    // The legend and a camera framing the voxels and the path (the shared scene helper).
+    // The box of the voxels and the path: the camera frames it, the path marks scale with it.
     float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     bool any = false;
     const auto grow = [&](float x, float y, float z) {
@@ -123,14 +100,58 @@ void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
     };
     for (std::size_t i = 0; i < labels.size(); ++i) grow(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
     for (const auto& p : path) grow(float(p.x()), float(p.y()), float(p.z()));
+    gl::COpenGLScene scene;
+    // Light from above (almost straight down) and mostly ambient, so that every face of a voxel
+    // shows 80 to 100 % of the legend's colour: with MRPT's default light (35 deg, ambient 0.2) the
+    // faces SceneViewer3D 2.5.8 draws of the voxels seen from above (with back-face culling, the
+    // bottom faces: COctoMapVoxels winds them the other way) came out at 40 % (measured on a
+    // screenshot of drive 00: (24, 72, 30) for the legend's (60, 180, 75)).
+    auto& light = scene.getViewport("main")->lightParameters();
+    light.direction = {-0.1f, -0.2f, -0.9747f};
+    light.ambient = {0.8f, 0.8f, 0.8f, 1.0f};
+    light.diffuse = {0.2f, 0.2f, 0.2f, 1.0f};
+    light.specular = {0.0f, 0.0f, 0.0f, 1.0f};
+    scene.insert(voxels);
+    auto line = gl::CSetOfLines::Create();
+    line->setName("driven path (sensor positions), blue");
+    line->setColor_u8(40, 120, 255);
+    line->setLineWidth(3);
+    for (std::size_t i = 1; i < path.size(); ++i)
+        line->appendLine(path[i - 1].x(), path[i - 1].y(), path[i - 1].z(), path[i].x(), path[i].y(), path[i].z());
+    scene.insert(line);
+    // Lines are one pixel wide in most OpenGL core profiles: blue boxes at the sensor positions,
+    // 1 % of the map's extent, make the path visible on a whole drive.
+    const float extent = any ? std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) : 0.f;
+    const double mark = pathMarkSize(extent, resolution);
+    auto marks = gl::COctoMapVoxels::Create();
+    marks->setName("sensor positions, blue");
+    marks->resizeVoxelSets(1);
+    marks->showGridLines(false);
+    marks->enableLights(true);
+    marks->enableCubeTransparency(false);
+    marks->cullFaces(::mrpt::opengl::TCullFace::BACK);
+    for (const auto& p : path)
+        marks->push_back_Voxel(0, gl::COctoMapVoxels::TVoxel({float(p.x()), float(p.y()), float(p.z())}, mark,
+                                                             ::mrpt::img::TColor(40, 120, 255)));
+    scene.insert(marks);
+    auto axes = gl::stock_objects::CornerXYZ(2.0f);
+    axes->setName("start of the path: x (red), y (green), z (blue), 2 m");
+    if (!path.empty()) axes->setLocation(path[0].x(), path[0].y(), path[0].z());
+    scene.insert(axes);
+    if (layers && layers->find("elevation")) scene.insert(elevationMesh(*layers));
     char title[96];
     std::snprintf(title, sizeof title, "gseg traversability map, %.2f m voxels", resolution);
     std::vector<gseg::mrpt::SceneLegendLine> legend;
-    legend.push_back({colours[1], "traversable: ground voxels (" + std::to_string(ground) + ")"});
-    legend.push_back({colours[0], "obstacle voxels (" + std::to_string(labels.size() - ground) + ")"});
+    // The counts the console prints ("voxels (0.20 m): N ground, M obstacle"): a ground voxel under
+    // an obstacle voxel is shown red, and the legend says how many.
+    legend.push_back({colours[1], "ground voxels: " + std::to_string(ground + groundUnderObstacles) +
+                                      (groundUnderObstacles ? " (" + std::to_string(groundUnderObstacles) + " under obstacles, shown red)" : "")});
+    legend.push_back({colours[0], "obstacle voxels: " + std::to_string(labels.size() - ground)});
     if (layers && layers->find("elevation"))
         legend.push_back({Rgb{170, 170, 170}, "2.5D map: a tile per cell at its ground elevation, green traversable, red not"});
-    legend.push_back({Rgb{40, 120, 255}, "driven path: a box at each sensor position (" + std::to_string(path.size()) + ")"});
+    char pathLine[128];
+    std::snprintf(pathLine, sizeof pathLine, "driven path: a %.1f m box at each of %zu sensor positions", mark, path.size());
+    legend.push_back({Rgb{40, 120, 255}, pathLine});
     legend.push_back({Rgb{200, 200, 200}, "axes at the start: x red, y green, z up blue, 2 m"});
     gseg::mrpt::addLegendAndCamera(scene, title, legend, lo, hi);
     gseg::mrpt::writeGzipObject(file, scene);

@@ -26,10 +26,18 @@ namespace gseg::map::detail {
 /// Writes the .3Dscene into `file` (gzip; not committed here): voxel centres `xyz` (3 floats each) with `labels` (1 ground, 0 obstacle) as coloured
 /// boxes of edge `resolution`, the path as a blue line with a box at each sensor position, axes at
 /// its start, and, given `layers` with an `elevation` layer, its elevationMesh(). The scene is
-/// serialised straight into the compressor: no copy of it in memory.
+/// serialised straight into the compressor: no copy of it in memory. `groundUnderObstacles`: the
+/// occupied ground voxels also occupied as obstacles (shown red), so that the legend's ground
+/// count is the console's (every occupied ground voxel, as `_ground.bt` holds them). Lit from
+/// above and mostly ambient: every face shows 80 to 100 % of the legend's colour. The sensor positions are
+/// boxes of 1 % of the map's extent (at least two voxels), so the path shows on a whole drive.
 void writeMapScene(gseg::io::AtomicFile& file, const std::vector<float>& xyz,
                    const std::vector<std::uint8_t>& labels, double resolution, const std::vector<Eigen::Vector3d>& path,
-                   const LayerGrid* layers = nullptr);
+                   const LayerGrid* layers = nullptr, std::size_t groundUnderObstacles = 0);
+
+/// [m] The edge of the boxes at the sensor positions for a map whose box spans `extent` metres on
+/// its longest side: 1 % of it, at least 2 voxels, at most 5 m.
+double pathMarkSize(double extent, double resolution);
 
 /// The 2.5D map for MRPT's viewers (SceneViewer3D): every cell of `layers` with a finite
 /// `elevation` a square tile of the cell's size at that height (map frame, metres), two triangles

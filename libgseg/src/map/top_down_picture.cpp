@@ -1,5 +1,5 @@
-// The top-down picture: its layout and the PNG (drawn with the shared picture conventions of
-// gseg/mrpt/picture.hpp: x up, y to the left, as the scan pictures).
+// The top-down picture: its layout and the PNG, on the map page of every map picture
+// (gseg/map/map_page.hpp: x right, y up, as the costmap PGM).
 #include <gseg/map/top_down_picture.hpp>
 
 #include <gseg/io/atomic_file.hpp>
@@ -15,9 +15,6 @@
 namespace gseg::map {
 namespace {
 
-constexpr int kTitleBand = 56, kMargin = 12, kMinWidth = 760;  // [px] around the map
-constexpr int kEnlargeTo = 640;                                   // [px] longer side of a small map
-
 const gseg::mrpt::Colour kPath{40, 120, 255}, kStart{255, 255, 255};
 
 /// The legend under the map.
@@ -27,17 +24,18 @@ std::vector<gseg::mrpt::LegendEntry> legendEntries() {
             {colourOf(ColumnClass::Unknown), "unknown: not seen"},
             {kPath, "driven path; arrowhead: direction of travel"},
             {kStart, "start of the path"},
-            {{}, "top view: x up, y (left) to the left", false},
+            {{}, "voxel columns: the costmap is _costmap.pgm / _layer_class.png", false},
             {{}, "(kitti2rawlog drives: x = forward at the start)", false}};
 }
 
-/// Class of every map pixel (the most blocking class of the cells it covers), row-major.
-std::vector<std::uint8_t> mapPixels(const TopDownGrid& grid, const PictureLayout& l) {
-    const int w = l.mapWidth / l.pixelsPerCell, h = l.mapHeight / l.pixelsPerCell;
-    std::vector<std::uint8_t> px(std::size_t(w) * std::size_t(h), std::uint8_t(ColumnClass::Unknown));
+/// Class of every map block (the most blocking class of the cells it covers), row-major.
+std::vector<std::uint8_t> mapBlocks(const TopDownGrid& grid, const PictureLayout& l) {
+    const int w = l.blocksWide();
+    std::vector<std::uint8_t> px(std::size_t(w) * std::size_t(l.blocksHigh()), std::uint8_t(ColumnClass::Unknown));
     grid.forEachCell([&](std::int64_t ix, std::int64_t iy, ColumnClass c) {
-        const std::size_t col = std::size_t((l.leftCell - iy) / l.cellsPerPixel), row = std::size_t((l.topCell - ix) / l.cellsPerPixel);
-        std::uint8_t& p = px[row * std::size_t(w) + col];
+        int col = 0, row = 0;
+        if (!l.blockOf(ix, iy, col, row)) return;
+        std::uint8_t& p = px[std::size_t(row) * std::size_t(w) + std::size_t(col)];
         p = std::max(p, std::uint8_t(c));  // Obstacle > Traversable > Unknown
     });
     return px;
@@ -70,15 +68,23 @@ void drawPath(gseg::mrpt::Picture& pic, const std::vector<Eigen::Vector3d>& path
 }  // namespace
 
 bool PictureLayout::toPixel(double x, double y, int& col, int& row) const {
-    const std::int64_t across = leftCell - std::int64_t(std::floor(y / cell)), down = topCell - std::int64_t(std::floor(x / cell));
-    if (across < 0 || down < 0) return false;
-    const std::int64_t c = across / cellsPerPixel * pixelsPerCell, r = down / cellsPerPixel * pixelsPerCell;
-    if (c >= mapWidth || r >= mapHeight) return false;
-    col = mapLeft + int(c), row = mapTop + int(r);
-    return true;
+    return cellPixel(std::int64_t(std::floor(x / cell)), std::int64_t(std::floor(y / cell)), col, row);
 }
 
-PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& path, int maxSide) {
+namespace {
+
+std::string scaleLine(double cell, int cellsPerPixel) {
+    char scale[160];
+    std::snprintf(scale, sizeof scale, "%.2f m cells%s", cell,
+                  cellsPerPixel > 1 ? (", " + std::to_string(cellsPerPixel) + " x " + std::to_string(cellsPerPixel) +
+                                       " cells a pixel (the most blocking class shown)").c_str()
+                                    : "");
+    return scale;
+}
+
+}  // namespace
+
+PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& path, int maxSide, const std::string& title) {
     PictureLayout l;
     l.cell = grid.cell();
     bool any = !grid.empty();
@@ -91,46 +97,26 @@ PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Ve
     }
     if (!any) return l;
     const int margin = 5;  // cells around the content
-    l.topCell = hi[0] + margin;   // x up
-    l.leftCell = hi[1] + margin;  // y to the left
-    l.cellsHigh = std::uint64_t(hi[0] - lo[0] + 1 + 2 * margin);
-    l.cellsWide = std::uint64_t(hi[1] - lo[1] + 1 + 2 * margin);
-    const std::uint64_t side = std::max(l.cellsWide, l.cellsHigh);
-    l.cellsPerPixel = int((side + std::uint64_t(maxSide) - 1) / std::uint64_t(maxSide));
-    if (l.cellsPerPixel == 1) l.pixelsPerCell = std::clamp(int(std::uint64_t(kEnlargeTo) / side), 1, 8);
-    const auto s = std::uint64_t(l.cellsPerPixel);
-    l.mapWidth = int((l.cellsWide + s - 1) / s) * l.pixelsPerCell;
-    l.mapHeight = int((l.cellsHigh + s - 1) / s) * l.pixelsPerCell;
-    l.width = std::max(l.mapWidth + 2 * kMargin, kMinWidth);
-    l.mapLeft = (l.width - l.mapWidth) / 2;
-    l.mapTop = kTitleBand;
-    l.height = kTitleBand + l.mapHeight + kMargin + gseg::mrpt::Picture::legendHeight(legendEntries().size()) + kMargin;
+    MapPageOptions o;
+    o.maxSide = maxSide;
+    o.legend = legendEntries();
+    // The title's second line depends on the reduction: the page first, then the title.
+    const MapPage probe = mapPage(lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin, grid.cell(), o);
+    o.title = {"gseg traversability map" + (title.empty() ? std::string() : ": " + title), scaleLine(grid.cell(), probe.cellsPerPixel)};
+    static_cast<MapPage&>(l) = mapPage(lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin, grid.cell(), o);
     return l;
 }
 
 std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, const std::string& title) {
-    const PictureLayout l = pictureLayout(grid, drivenPath);
+    const PictureLayout l = pictureLayout(grid, drivenPath, 4096, title);
     if (l.width <= 0) throw std::runtime_error("empty map: no picture to draw");
-    gseg::mrpt::Picture pic(l.width, l.height, backgroundColour());
-    const std::vector<std::uint8_t> px = mapPixels(grid, l);
-    const int w = l.mapWidth / l.pixelsPerCell, p = l.pixelsPerCell;
-    for (int row = 0; row < l.mapHeight; ++row)
-        for (int col = 0; col < l.mapWidth; ++col)
-            pic.pixel(l.mapLeft + col, l.mapTop + row, colourOf(ColumnClass(px[std::size_t(row / p) * std::size_t(w) + std::size_t(col / p)])));
+    gseg::mrpt::Picture pic = pageCanvas(l);
+    const std::vector<std::uint8_t> blocks = mapBlocks(grid, l);
+    std::vector<gseg::mrpt::Colour> colours(blocks.size());
+    for (std::size_t i = 0; i < blocks.size(); ++i) colours[i] = colourOf(ColumnClass(blocks[i]));
+    paintBlocks(pic, l, colours);
     drawPath(pic, drivenPath, l);
-    char scale[96];
-    std::snprintf(scale, sizeof scale, "%.2f m cells%s", l.cell,
-                  l.cellsPerPixel > 1 ? (", " + std::to_string(l.cellsPerPixel) + " x " + std::to_string(l.cellsPerPixel) +
-                                         " cells a pixel (the most blocking class shown)").c_str()
-                                      : "");
-    pic.title("gseg traversability map" + (title.empty() ? std::string() : ": " + title), scale);
-    const int legendTop = l.mapTop + l.mapHeight + kMargin;
-    pic.legend(kMargin, legendTop, legendEntries());
-    // Axes and scale at the right of the legend band.
-    const int ax = l.width - 70, ay = legendTop + 70;
-    pic.arrow(ax, ay, 0, -48, "x");
-    pic.arrow(ax, ay, -48, 0, "y");
-    pic.scaleBar(l.width - kMargin - 4, legendTop + 124, l.pixelsPerMetre(), 200);
+    drawPageFrame(pic, l);
     return pic.png();
 }
 

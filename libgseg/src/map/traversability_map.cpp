@@ -67,6 +67,7 @@ void forEachShownVoxel(const detail::BrickMap& voxels, float occupied, F&& f) {
 struct OccupiedVoxels {
     std::vector<float> xyz;
     std::vector<std::uint8_t> labels;
+    std::size_t groundUnderObstacles = 0;  ///< occupied ground voxels shown as obstacles (the rule above)
 };
 
 OccupiedVoxels occupiedVoxels(const detail::BrickMap& voxels, const detail::MapTree& configured) {
@@ -76,6 +77,9 @@ OccupiedVoxels occupiedVoxels(const detail::BrickMap& voxels, const detail::MapT
     });
     std::sort(codes.begin(), codes.end());  // the files must not depend on the order the bricks were made in
     OccupiedVoxels v;
+    voxels.forEachVoxel(kGround, [&](std::uint64_t code, float g) {
+        v.groundUnderObstacles += g >= configured.getOccupancyThresLog() && voxels.occupied(kObstacles, code);
+    });
     v.xyz.reserve(3 * codes.size());
     v.labels.reserve(codes.size());
     for (const auto& [code, label] : codes) {
@@ -308,7 +312,7 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
     const LayerGrid grid = layers();
-    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid);
+    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid, v.groundUnderObstacles);
     const gseg::io::RosMap costmap = costmapOf(grid);
     writeCostmap(files, costmap);
     countCostmapCells(costmap, costmapCells_);

@@ -44,28 +44,36 @@ void addLegendAndCamera(::mrpt::opengl::COpenGLScene& scene, const std::string& 
     cam.setElevationDegrees(50.f);
     scene.enableFollowCamera(true);
 
-    // The legend: its own viewport at the top left (dark, so that every class colour reads on it),
-    // a fixed camera looking down at text lines 1 unit apart, so the lines keep their place and
-    // size on screen. At 4:3 and wider windows the lines start near the viewport's left edge.
+    // The legend: its own viewport at the bottom left, sized in pixels to its text (lines of
+    // kLinePx, about kCharPx a character of the 16 px font) whatever the window's size, dark so
+    // that every class colour reads on it; a fixed camera looking down at text lines one unit
+    // apart, scaled so that a unit is kLinePx pixels.
+    std::vector<SceneLegendLine> lines;
+    lines.push_back({Colour{255, 255, 255}, title});
+    lines.insert(lines.end(), legend.begin(), legend.end());
+    std::size_t chars = 0;
+    for (const auto& l : lines) chars = std::max(chars, l.text.size());
+    const double widthPx = kSceneLegendCharPx * double(chars) + 2 * kSceneLegendPadPx;
+    const double heightPx = kSceneLegendLinePx * double(lines.size()) + kSceneLegendPadPx;
     auto view = scene.createViewport("legend");
-    view->setViewportPosition(0.0, 0.78, 0.62, 0.22);
+    view->setViewportPosition(0.0, 0.0, widthPx, heightPx);
     view->setTransparent(false);
     view->setCustomBackgroundColor(::mrpt::img::TColorf(0.08f, 0.08f, 0.1f));
     view->setBorderSize(1);
     gl::CCamera& fixed = view->getCamera();
-    fixed.setPointingAt(0, 0, 0);
+    fixed.setProjectiveFOVdeg(kFovDeg);
+    const double unitsHigh = heightPx / kSceneLegendLinePx, unitsWide = widthPx / kSceneLegendLinePx;
+    fixed.setPointingAt(float(0.5 * unitsWide), float(-0.5 * unitsHigh), 0.f);
     fixed.setAzimuthDegrees(-90.f);
     fixed.setElevationDegrees(89.f);  // straight down leaves the view's up direction undefined
-    fixed.setZoomDistance(12.f);      // the 30 deg field of view spans y from -3.2 to 3.2
-    std::vector<SceneLegendLine> lines;
-    lines.push_back({Colour{255, 255, 255}, title});
-    lines.insert(lines.end(), legend.begin(), legend.end());
+    fixed.setZoomDistance(float(unitsHigh / (2 * std::tan(0.5 * kFovDeg * 3.14159265 / 180))));  // the view spans unitsHigh
+    const double pad = kSceneLegendPadPx / kSceneLegendLinePx;
     for (std::size_t i = 0; i < lines.size(); ++i) {
         auto text = gl::CText::Create(lines[i].text);
         text->setName("legend: " + lines[i].text);
         text->setFont("sans", 16);
         text->setColor_u8(lines[i].colour.r, lines[i].colour.g, lines[i].colour.b);
-        text->setLocation(-10.0, 2.2 - 1.0 * double(i), 0.0);
+        text->setLocation(pad, -double(i + 1) + 0.2, 0.0);
         view->insert(text);
     }
 }

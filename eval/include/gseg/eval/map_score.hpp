@@ -162,8 +162,8 @@ const LayerGrid::Layer& elevationLayer(const LayerGrid& layers);
 /// layer or no cell compares.
 ElevationError elevationError(const LayerGrid& layers, const DriveTruth& truth);
 
-/// The top-down picture of the scored cells (one colour per CellOutcome, in the legend; x up, y
-/// left; scale bar and axes), as PNG bytes. `title` is the first line.
+/// The top-down picture of the scored cells (one colour per CellOutcome, in the legend; on the
+/// map page of gseg/map/map_page.hpp: x right, y up as the costmap PGM; scale bar and axes), as PNG bytes. `title` is the first line.
 std::string encodeMapScorePng(const DriveTruth& truth, const CellOutcomes& outcomes, const std::string& title);
 /// Colour of an outcome in the picture, and its legend text.
 struct OutcomeStyle {

@@ -1,8 +1,9 @@
 #pragma once
 /// \file layer_picture.hpp
 /// A picture of one layer of a LayerGrid (gseg/map/layer_grid.hpp) as a PNG, drawn with gseg's
-/// picture conventions (gseg/mrpt/picture.hpp) and oriented as the map's other pictures
-/// (pictureLayout() in top_down_picture.hpp): map-frame x up, y to the left, with x / y arrows.
+/// picture conventions (gseg/mrpt/picture.hpp) on the page of every map picture
+/// (gseg/map/map_page.hpp): map-frame x to the right, y up, with x / y arrows, as the costmap PGM
+/// (the `class` layer's picture and `PREFIX_costmap.pgm` agree cell for cell).
 ///
 /// Colours: a continuous layer (`elevation`, `slope`, ...) through the viridis colour map
 /// (matplotlib's perceptually uniform map, dark blue at the low end, yellow at the high end),
@@ -19,6 +20,7 @@
 /// title is wrapped onto more lines.
 
 #include <gseg/map/layer_grid.hpp>
+#include <gseg/map/map_page.hpp>
 #include <gseg/mrpt/picture.hpp>
 
 #include <limits>
@@ -44,7 +46,7 @@ struct LayerPictureLayout {
     };
     int width = 0, height = 0;        ///< [pixels] the whole picture
     int mapLeft = 0, mapTop = 0;      ///< [pixels] top-left corner of the map area
-    int mapWidth = 0, mapHeight = 0;  ///< [pixels] the map area: grid.height() cells across (y), grid.width() down (x)
+    int mapWidth = 0, mapHeight = 0;  ///< [pixels] the map area: grid.width() cells across (x), grid.height() down (y)
     int pixelsPerCell = 1;            ///< > 1: a small grid, enlarged
     int cellsPerPixel = 1;            ///< > 1: a large grid, reduced
     bool classes = false;             ///< the `class` layer: class colours, no colour bar
@@ -54,7 +56,8 @@ struct LayerPictureLayout {
     int barLeft = 0, barTop = 0, barHeight = 0;  ///< [pixels] the colour bar (high at the top); barHeight 0: none
     int legendTop = 0;                ///< [pixels] top of the legend band (legend left, axes and scale bar right)
     int gridWidth = 0, gridHeight = 0;  ///< [cells] of the grid drawn
-    std::vector<Text> texts;          ///< every text of the picture (the first one or two: the title)
+    std::vector<Text> texts;          ///< every text of the picture (the title's lines first, the legend's last)
+    MapPage page;                     ///< the page (the fields above are its)
 
     /// Top-left pixel of the block showing cell (cx, cy) of the grid; false outside it.
     bool toPixel(int cx, int cy, int& col, int& row) const;

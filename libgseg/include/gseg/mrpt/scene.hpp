@@ -29,13 +29,17 @@ struct SceneLegendLine {
 };
 
 /// What SceneViewer3D (mrpt-apps 2.5.8) shows at first open, for every `.3Dscene` gseg writes
-/// (scans and maps): adds to `scene` a viewport named "legend" over the top-left corner of the
-/// main view (dark, its own fixed camera, so it stays readable whatever the user does with the
-/// main view) holding `title` in white and one line per entry of `legend` in its colour (bitmap
-/// text, CText; at most 5 lines in all, each up to about 90 characters); and sets the main viewport's camera to frame the axis-aligned box
+/// (scans and maps): adds to `scene` a viewport named "legend" over the bottom-left corner of the
+/// main view, sized in pixels to its text (kSceneLegendCharPx a character of its longest line,
+/// kSceneLegendLinePx a line, whatever the window's size; dark, its own fixed camera, so it stays
+/// readable whatever the user does with the main view) holding `title` in white and one line per
+/// entry of `legend` in its colour (bitmap text, CText); and sets the main viewport's camera to frame the axis-aligned box
 /// [lo, hi] (metres, the scene's frame: the content's bounding box) whole, seen from behind and
 /// above (azimuth -135 deg, elevation 50 deg), with followCamera on, which SceneViewer3D reads
 /// from the file instead of keeping its default close-up camera.
+inline constexpr double kSceneLegendCharPx = 6.5; ///< [px] a character of the legend's 16 px font (measured in SceneViewer3D: 5.7 on average)
+inline constexpr double kSceneLegendLinePx = 22;  ///< [px] a line of the legend
+inline constexpr double kSceneLegendPadPx = 10;   ///< [px] around the legend's text
 void addLegendAndCamera(::mrpt::opengl::COpenGLScene& scene, const std::string& title,
                         const std::vector<SceneLegendLine>& legend, const float lo[3], const float hi[3]);
 
