@@ -8,6 +8,7 @@
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/ordered_pipeline.hpp>
+#include <gseg/text.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -130,7 +131,7 @@ std::vector<std::vector<Sample>> timeAll(const std::vector<Input>& inputs, int r
                                    return true;
                                },
                                [](std::size_t, bool&) {}, {n, n});
-    wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    wallS = gseg::secondsSince(start);
     std::vector<std::vector<Sample>> perScan(inputs.size());
     for (const auto& thread : byThread)
         for (std::size_t i = 0; i < inputs.size(); ++i) perScan[i].insert(perScan[i].end(), thread[i].begin(), thread[i].end());

@@ -20,6 +20,7 @@
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/progress.hpp>
+#include <gseg/text.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -36,28 +37,19 @@
 namespace rawlog_octomap {
 namespace {
 
-double parseNumber(const std::string& flag, const std::string& v) {
-    std::size_t used = 0;
-    double d = 0;
-    try {
-        d = std::stod(v, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != v.size() || !(d > 0) || !std::isfinite(d)) throw std::invalid_argument(flag + " needs a number > 0, got '" + v + "'");
-    return d;
+/// A number > 0 given as `flag` (gseg::parseNumber); throws std::invalid_argument naming `flag`.
+double positiveNumber(const std::string& flag, const std::string& v) {
+    const std::optional<double> d = gseg::parseNumber<double>(v);
+    if (!d || !(*d > 0) || !std::isfinite(*d)) throw std::invalid_argument(flag + " needs a number > 0, got '" + v + "'");
+    return *d;
 }
 
+/// A whole number from 0 to `max` given as `flag`; throws std::invalid_argument naming `flag`.
 unsigned parseCount(const std::string& flag, const std::string& v, unsigned max) {
-    std::size_t used = 0;
-    long n = -1;
-    try {
-        n = std::stol(v, &used);
-    } catch (const std::exception&) {
-    }
-    if (used != v.size() || n < 0 || n > long(max))
+    const std::optional<long> n = gseg::parseNumber<long>(v);
+    if (!n || *n < 0 || *n > long(max))
         throw std::invalid_argument(flag + " needs a whole number from 0 to " + std::to_string(max) + ", got '" + v + "'");
-    return unsigned(n);
+    return unsigned(*n);
 }
 
 /// Parses the command line into `c` (TCLAP, the same on every MPI rank; only `printing` prints).
@@ -112,7 +104,7 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         c.input = input.getValue(), c.prefix = prefix.getValue(), c.config = config.getValue();
         c.poses.poses = poses.getValue(), c.poses.calib = calib.getValue(), c.poses.origin = origin.getValue();
         auto number = [](TCLAP::ValueArg<std::string>& a, double& to) {
-            if (a.isSet()) to = parseNumber("--" + a.getName(), a.getValue());
+            if (a.isSet()) to = positiveNumber("--" + a.getName(), a.getValue());
         };
         number(tolerance, c.poses.poseTolerance);
         // The configuration file's traversability options, then the command line's.
@@ -143,10 +135,6 @@ double peakResidentMb() {
     rusage u{};
     ::getrusage(RUSAGE_SELF, &u);
     return double(u.ru_maxrss) / 1024.0;
-}
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void printReport(const RunReport& r, double resolution) {
@@ -388,9 +376,9 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         std::fprintf(gseg::tools::progressOut(), "rawlog-octomap: writing %zu map files (%s_*) ...\n",
                      gseg::map::TraversabilityMap::outputPaths(cli.prefix).size(), cli.prefix.c_str());
     report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix); });
-    report.times.writing = secondsSince(t0);
+    report.times.writing = gseg::secondsSince(t0);
     report.stats = map.stats();
-    report.wallSeconds = secondsSince(start);
+    report.wallSeconds = gseg::secondsSince(start);
     report.peakMb = peakResidentMb();
     return report;
 }
