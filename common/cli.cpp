@@ -30,6 +30,31 @@ void vprint(std::FILE* out, const char* format, std::va_list args) {
 
 }  // namespace
 
+std::string currentError() {
+    try {
+        throw;
+    } catch (const std::exception& e) {
+        return gseg::mrpt::errorReason(e);
+    } catch (...) {
+        return "unknown error";
+    }
+}
+
+int exitCodeOf(InvalidArgument meaning) {
+    try {
+        throw;
+    } catch (const std::invalid_argument&) {
+        return meaning == InvalidArgument::BadUsage ? kBadUsage : kBadInput;
+    } catch (...) {
+        return kBadInput;
+    }
+}
+
+int reportError(const std::string& tool, InvalidArgument meaning) {
+    std::fprintf(stderr, "%s: %s\n", tool.c_str(), currentError().c_str());
+    return exitCodeOf(meaning);
+}
+
 Verbosity verbosity() { return g_verbosity; }
 void setVerbosity(Verbosity v) { g_verbosity = v; }
 

@@ -236,9 +236,8 @@ int runBench(int argc, char** argv) {
         return line.usageError("--threads-per-scan must be between 1 and 256");
     try {
         return run(scans, config, repeat, threads, perScan.getValue());
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg bench: %s\n", ::gseg::mrpt::errorReason(e).c_str());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg bench", tools::InvalidArgument::BadInput);
     }
 }
 

@@ -428,10 +428,8 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         if (ranks.root()) checkEvalOutputs(cli, setup, frames);  // rank 0 writes the reports
         if (ranks.root() && !cli.predDir.empty()) fs::create_directories(cli.predDir);
         if (ranks.root() && !setup.pictureDir.empty()) fs::create_directories(setup.pictureDir);
-    } catch (const std::invalid_argument& e) {  // bad usage: an output that cannot be written
-        error = e.what(), code = tools::kBadUsage;
-    } catch (const std::exception& e) {
-        error = e.what();
+    } catch (...) {  // std::invalid_argument: bad usage (an output that cannot be written)
+        error = tools::currentError(), code = tools::exitCodeOf(tools::InvalidArgument::BadUsage);
     }
     if (const std::string first = ranks.firstError(error); !first.empty()) {
         std::fprintf(stderr, "gseg eval: %s\n", first.c_str());
@@ -568,9 +566,8 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
         return line.usageError("--ring-step and --point-step take 1..64");
     try {
         return run(cli, ranks);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg eval: %s\n", e.what());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg eval", tools::InvalidArgument::BadInput);
     }
 }
 

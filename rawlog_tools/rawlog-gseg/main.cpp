@@ -151,9 +151,9 @@ std::string unmatchedSensor(const std::vector<std::string>& sensors, const std::
 
 /// Segments the rawlog `in` into `outPath`: what rawlog-gseg does to one input, whole. `name`: the
 /// input in the progress lines of a batch ("" for one input). Throws naming the entry on a bad
-/// input, leaving nothing at `outPath`.
-FileResult segmentFile(const Cli& cli, const std::string& in, const std::string& outPath, const std::string& name) {
-    const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(cli.config);
+/// input, leaving nothing at `outPath`. `config`: -c (or the default), loaded once per run.
+FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, const std::string& in,
+                       const std::string& outPath, const std::string& name) {
     gseg::mrpt::RawlogSegmenterOptions options;
     options.sensors = cli.sensors;
     options.replace = cli.replace;
@@ -293,23 +293,22 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
     bool batch = false;
     std::string error;
     int code = kDone;
+    gseg::mrpt::LoadedConfig config;
     try {
         if (cli.frame != "sensor" && cli.frame != "vehicle") throw std::invalid_argument("--frame must be sensor or vehicle");
         jobs = plan(cli, batch);
         if (ranks.root()) checkOutputs(cli, jobs, batch);
         try {
-            if (!cli.config.empty()) gseg::mrpt::loadConfig(cli.config);  // a bad config fails once, not per input
+            config = gseg::mrpt::loadConfigOrDefault(cli.config);  // once: a bad config fails once, not per input
         } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
             throw std::runtime_error(e.what());
         }
         if (ranks.root() && !cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
-                                gseg::mrpt::toYaml(gseg::mrpt::loadConfig(cli.config)).c_str());
+                                gseg::mrpt::toYaml(config).c_str());
         if (batch && ranks.root()) fs::create_directories(cli.out);
-    } catch (const std::invalid_argument& e) {
-        error = e.what(), code = kBadUsage;
-    } catch (const std::exception& e) {
-        error = gseg::mrpt::errorReason(e), code = kBadInput;
+    } catch (...) {
+        error = gseg::tools::currentError(), code = gseg::tools::exitCodeOf(gseg::tools::InvalidArgument::BadUsage);
     }
     if (const std::string first = ranks.firstError(error); !first.empty()) {
         std::fprintf(stderr, "rawlog-gseg: %s\n", first.c_str());
@@ -322,7 +321,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
         for (const std::size_t i : mine) {
             FileResult r;
             try {
-                r = segmentFile(cli, jobs[i].first, jobs[i].second, batch ? jobs[i].first : "");
+                r = segmentFile(cli, config, jobs[i].first, jobs[i].second, batch ? jobs[i].first : "");
             } catch (const std::exception& e) {
                 r.code = kBadInput, r.message = gseg::mrpt::errorReason(e);
             }
@@ -386,9 +385,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
         return runBatch(cli, ranks);
-    } catch (const std::exception& e) {  // not an input's failure (those are reported per input)
-        std::fprintf(stderr, "rawlog-gseg: %s\n", gseg::mrpt::errorReason(e).c_str());
-        return kBadInput;
+    } catch (...) {  // not an input's failure (those are reported per input)
+        return gseg::tools::reportError("rawlog-gseg", gseg::tools::InvalidArgument::BadInput);
     }
 }
 

@@ -107,13 +107,14 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
             if (a.isSet()) to = positiveNumber("--" + a.getName(), a.getValue());
         };
         number(tolerance, c.poses.poseTolerance);
-        // The configuration file's traversability options, then the command line's.
-        if (!c.config.empty()) try {
-                c.options = gseg::mrpt::loadConfig(c.config).traversability;
-            } catch (const std::runtime_error& e) {
-                if (printing) std::cerr << "rawlog-octomap: " << e.what() << "\n";
-                return 1;
-            }
+        // The configuration (loaded once per run), its traversability options, then the command line's.
+        try {
+            c.loaded = gseg::mrpt::loadConfigOrDefault(c.config);
+        } catch (const std::runtime_error& e) {
+            if (printing) std::cerr << "rawlog-octomap: " << e.what() << "\n";
+            return 1;
+        }
+        c.options = c.loaded.traversability;
         number(resolution, c.options.resolution);
         number(maxRange, c.options.maxRange);
         number(clearance, c.options.clearance);
@@ -314,7 +315,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(cli.prefix)) outputs.push_back({"-o", path});
     gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
-    const gseg::mrpt::LoadedConfig cfg = gseg::mrpt::loadConfigOrDefault(cli.config);
+    const gseg::mrpt::LoadedConfig& cfg = cli.loaded;
     ScanStream stream(cli.poses);
     gseg::map::MapBuilder builder(cfg, cli.options);
 
@@ -406,7 +407,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     try {
         if (!cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
-                                gseg::mrpt::toYaml(gseg::mrpt::loadConfig(cli.config)).c_str());
+                                gseg::mrpt::toYaml(cli.loaded).c_str());
         if (cli.benchRounds > 0) {
             runBench(cli);
             return 0;
@@ -418,12 +419,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
             return gseg::tools::kPartlyDone;
         }
         return gseg::tools::kDone;
-    } catch (const std::invalid_argument& e) {
-        std::cerr << "rawlog-octomap: " << e.what() << "\n";
-        return gseg::tools::kBadUsage;
-    } catch (const std::exception& e) {
-        std::cerr << "rawlog-octomap: " << gseg::mrpt::errorReason(e) << "\n";
-        return gseg::tools::kBadInput;
+    } catch (...) {
+        return gseg::tools::reportError("rawlog-octomap", gseg::tools::InvalidArgument::BadUsage);
     }
 }
 

@@ -176,8 +176,7 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
     std::vector<ScanWorker> workers;
     std::string setupError;
     try {
-        const gseg::mrpt::LoadedConfig cfg = gseg::mrpt::loadConfigOrDefault(cli.config);
-        for (unsigned i = 0; i < threads; ++i) workers.emplace_back(cfg, cli.options);
+        for (unsigned i = 0; i < threads; ++i) workers.emplace_back(cli.loaded, cli.options);
     } catch (const std::exception& e) {
         setupError = gseg::mrpt::errorReason(e);
     }
