@@ -210,7 +210,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
         const std::vector<FrameResult> results = evaluateAll(frames, mine, setup, threads);
         std::vector<std::string> bytes;
         for (const std::size_t i : mine) {
-            tools::ByteWriter out;
+            io::ByteWriter out;
             writeRow(out, results[i].row);
             bytes.push_back(out.str(results[i].skipped).str(results[i].heightNote).bytes());
         }
@@ -219,7 +219,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
     const std::vector<std::string> all = tools::shareItems(ranks, tools::fileSizes(scans), evaluateMine, &owner);
     std::vector<FrameResult> results(all.size());
     for (std::size_t i = 0; i < all.size(); ++i) {
-        tools::ByteReader in(all[i]);
+        io::ByteReader in(all[i]);
         results[i].row = readRow(in);
         results[i].skipped = in.str(), results[i].heightNote = in.str();
     }

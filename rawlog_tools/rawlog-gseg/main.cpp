@@ -12,11 +12,11 @@
 // per input under its file name. Each input is done by segmentFile(), exactly as a run on it
 // alone; a failing input is named, leaves no output, and the others go on (exit 1). Under
 // mpirun/srun the inputs are split over the ranks by size, and rank 0 reports on all of them.
-#include "common/bytes.hpp"
 #include "common/cli.hpp"
 #include "common/ranks.hpp"
 
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/bytes.hpp>
 #include <gseg/map/drive_model.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
@@ -325,7 +325,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
             } catch (const std::exception& e) {
                 r.code = kBadInput, r.message = gseg::mrpt::errorReason(e);
             }
-            gseg::tools::ByteWriter out;
+            gseg::io::ByteWriter out;
             out.u64(std::uint64_t(r.code)).str(r.message).u64(r.skipped.size());
             for (const std::string& line : r.skipped) out.str(line);
             out.u64(r.warnings.size());
@@ -339,7 +339,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
     const std::vector<std::string> all = gseg::tools::shareItems(ranks, gseg::tools::fileSizes(inputs), segmentMine, &owner);
     std::vector<FileResult> results;
     for (const std::string& one : all) {
-        gseg::tools::ByteReader in(one);
+        gseg::io::ByteReader in(one);
         FileResult& r = results.emplace_back();
         r.code = int(in.u64()), r.message = in.str();
         for (std::uint64_t n = in.u64(); n > 0; --n) r.skipped.push_back(in.str());
