@@ -13,6 +13,7 @@
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
+#include <gseg/text.hpp>
 #include <gseg/version.hpp>
 
 #include <pybind11/numpy.h>
@@ -209,18 +210,8 @@ gseg::mrpt::LoadedConfig configFromDict(const py::dict& d) {
 py::object valueOf(const std::string& text) {
     if (text == "true") return py::bool_(true);
     if (text == "false") return py::bool_(false);
-    try {
-        std::size_t used = 0;
-        const long long i = std::stoll(text, &used);
-        if (used == text.size()) return py::int_(i);
-    } catch (...) {
-    }
-    try {
-        std::size_t used = 0;
-        const double f = std::stod(text, &used);
-        if (used == text.size()) return py::float_(f);
-    } catch (...) {
-    }
+    if (const auto i = gseg::parseNumber<long long>(text)) return py::int_(*i);
+    if (const auto f = gseg::parseNumber<double>(text)) return py::float_(*f);
     return py::str(text);
 }
 

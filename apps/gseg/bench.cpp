@@ -8,6 +8,7 @@
 #include <gseg/mrpt/scan_source.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/ordered_pipeline.hpp>
+#include <gseg/text.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -130,7 +131,7 @@ std::vector<std::vector<Sample>> timeAll(const std::vector<Input>& inputs, int r
                                    return true;
                                },
                                [](std::size_t, bool&) {}, {n, n});
-    wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    wallS = gseg::secondsSince(start);
     std::vector<std::vector<Sample>> perScan(inputs.size());
     for (const auto& thread : byThread)
         for (std::size_t i = 0; i < inputs.size(); ++i) perScan[i].insert(perScan[i].end(), thread[i].begin(), thread[i].end());
@@ -235,9 +236,8 @@ int runBench(int argc, char** argv) {
         return line.usageError("--threads-per-scan must be between 1 and 256");
     try {
         return run(scans, config, repeat, threads, perScan.getValue());
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg bench: %s\n", ::gseg::mrpt::errorReason(e).c_str());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg bench", tools::InvalidArgument::BadInput);
     }
 }
 

@@ -210,7 +210,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
         const std::vector<FrameResult> results = evaluateAll(frames, mine, setup, threads);
         std::vector<std::string> bytes;
         for (const std::size_t i : mine) {
-            tools::ByteWriter out;
+            io::ByteWriter out;
             writeRow(out, results[i].row);
             bytes.push_back(out.str(results[i].skipped).str(results[i].heightNote).bytes());
         }
@@ -219,7 +219,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
     const std::vector<std::string> all = tools::shareItems(ranks, tools::fileSizes(scans), evaluateMine, &owner);
     std::vector<FrameResult> results(all.size());
     for (std::size_t i = 0; i < all.size(); ++i) {
-        tools::ByteReader in(all[i]);
+        io::ByteReader in(all[i]);
         results[i].row = readRow(in);
         results[i].skipped = in.str(), results[i].heightNote = in.str();
     }
@@ -428,10 +428,8 @@ int run(const Cli& cli, tools::Ranks& ranks) {
         if (ranks.root()) checkEvalOutputs(cli, setup, frames);  // rank 0 writes the reports
         if (ranks.root() && !cli.predDir.empty()) fs::create_directories(cli.predDir);
         if (ranks.root() && !setup.pictureDir.empty()) fs::create_directories(setup.pictureDir);
-    } catch (const std::invalid_argument& e) {  // bad usage: an output that cannot be written
-        error = e.what(), code = tools::kBadUsage;
-    } catch (const std::exception& e) {
-        error = e.what();
+    } catch (...) {  // std::invalid_argument: bad usage (an output that cannot be written)
+        error = tools::currentError(), code = tools::exitCodeOf(tools::InvalidArgument::BadUsage);
     }
     if (const std::string first = ranks.firstError(error); !first.empty()) {
         std::fprintf(stderr, "gseg eval: %s\n", first.c_str());
@@ -568,9 +566,8 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
         return line.usageError("--ring-step and --point-step take 1..64");
     try {
         return run(cli, ranks);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg eval: %s\n", e.what());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg eval", tools::InvalidArgument::BadInput);
     }
 }
 

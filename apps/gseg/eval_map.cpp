@@ -201,18 +201,13 @@ int runEvalMap(int argc, char** argv) {
         if (!cli.report.empty())
             for (const std::string& p : reportPaths(cli.report)) outputs.push_back({"--report", p});
         io::checkOutputs({{"map", cli.map}, {"drive", cli.drive}, {"--elevation", cli.elevation}}, outputs, {cli.overwrite, true});
-    } catch (const std::invalid_argument& e) {
-        std::fprintf(stderr, "gseg eval-map: %s\n", e.what());
-        return tools::kBadUsage;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg eval-map: %s\n", e.what());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg eval-map", tools::InvalidArgument::BadUsage);
     }
     try {
         return run(cli);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg eval-map: %s\n", e.what());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg eval-map", tools::InvalidArgument::BadInput);
     }
 }
 

@@ -63,18 +63,18 @@ SequenceSummary summariseOne(const std::string& name, const std::vector<const Fr
 
 namespace {
 
-void writeCounts(tools::ByteWriter& out, const Counts& c) { out.u64(c.tp).u64(c.fp).u64(c.fn).u64(c.tn); }
-Counts readCounts(tools::ByteReader& in) {
+void writeCounts(io::ByteWriter& out, const Counts& c) { out.u64(c.tp).u64(c.fp).u64(c.fn).u64(c.tn); }
+Counts readCounts(io::ByteReader& in) {
     Counts c;
     c.tp = in.u64(), c.fp = in.u64(), c.fn = in.u64(), c.tn = in.u64();
     return c;
 }
 
-void writeClasses(tools::ByteWriter& out, const std::map<std::uint32_t, std::uint64_t>& m) {
+void writeClasses(io::ByteWriter& out, const std::map<std::uint32_t, std::uint64_t>& m) {
     out.u64(m.size());
     for (const auto& [id, n] : m) out.u64(id).u64(n);
 }
-std::map<std::uint32_t, std::uint64_t> readClasses(tools::ByteReader& in) {
+std::map<std::uint32_t, std::uint64_t> readClasses(io::ByteReader& in) {
     std::map<std::uint32_t, std::uint64_t> m;
     for (std::uint64_t k = in.u64(); k > 0; --k) {
         const auto id = std::uint32_t(in.u64());
@@ -84,17 +84,17 @@ std::map<std::uint32_t, std::uint64_t> readClasses(tools::ByteReader& in) {
 }
 
 template <std::size_t N>
-void writeBins(tools::ByteWriter& out, const std::array<std::uint64_t, N>& a) {
+void writeBins(io::ByteWriter& out, const std::array<std::uint64_t, N>& a) {
     for (const std::uint64_t v : a) out.u64(v);
 }
 template <std::size_t N>
-void readBins(tools::ByteReader& in, std::array<std::uint64_t, N>& a) {
+void readBins(io::ByteReader& in, std::array<std::uint64_t, N>& a) {
     for (std::uint64_t& v : a) v = in.u64();
 }
 
 }  // namespace
 
-void writeRow(tools::ByteWriter& out, const FrameRow& row) {
+void writeRow(io::ByteWriter& out, const FrameRow& row) {
     out.str(row.sequence).str(row.name).u64(row.points).f64(row.ms);
     const FrameScore& s = row.score;
     out.u64(s.points);
@@ -106,7 +106,7 @@ void writeRow(tools::ByteWriter& out, const FrameRow& row) {
     out.u64(b.falseGround).u64(b.missedGround).u64(b.trueGround);
 }
 
-FrameRow readRow(tools::ByteReader& in) {
+FrameRow readRow(io::ByteReader& in) {
     FrameRow row;
     row.sequence = in.str(), row.name = in.str();
     row.points = std::size_t(in.u64());

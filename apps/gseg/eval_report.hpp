@@ -3,10 +3,9 @@
 /// `gseg eval`: aggregation of scored frames per sequence and the report texts (CSV, Markdown,
 /// printed summary). Core-only (no MRPT), so the tests compile it with hand-made scores.
 
-#include "common/bytes.hpp"
-
 #include <gseg/eval/breakdown.hpp>
 #include <gseg/eval/metrics.hpp>
+#include <gseg/io/bytes.hpp>
 
 #include <array>
 #include <cstddef>
@@ -27,8 +26,8 @@ struct FrameRow {
 
 /// A scored frame as bytes and back, exactly (the reports of a run spread over MPI ranks equal a
 /// serial run's). readRow() throws std::runtime_error on a short message.
-void writeRow(tools::ByteWriter& out, const FrameRow& row);
-FrameRow readRow(tools::ByteReader& in);
+void writeRow(io::ByteWriter& out, const FrameRow& row);
+FrameRow readRow(io::ByteReader& in);
 
 /// One sequence. Precision / recall / F1 are in %, averaged over frames as GSB does (per-frame
 /// ratios, then their mean; frames where a ratio is undefined are left out of that mean).

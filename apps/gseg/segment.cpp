@@ -124,15 +124,13 @@ int runSegment(int argc, char** argv) {
                          {{"--labels-out", cli.labelsOut}, {"--ply-out", cli.plyOut}, {"--png-out", cli.pngOut},
                           {"--scene-out", cli.sceneOut}},
                          {line.overwrite(), false});
-    } catch (const std::invalid_argument& e) {
-        std::fprintf(stderr, "gseg segment: %s\n", e.what());
-        return tools::kBadUsage;
+    } catch (const std::invalid_argument&) {
+        return tools::reportError("gseg segment", tools::InvalidArgument::BadUsage);
     }
     try {
         return run(cli);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "gseg segment: %s\n", mrpt::errorReason(e).c_str());
-        return tools::kBadInput;
+    } catch (...) {
+        return tools::reportError("gseg segment", tools::InvalidArgument::BadInput);
     }
 }
 

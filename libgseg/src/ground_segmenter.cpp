@@ -249,7 +249,23 @@ struct PhaseSettings {
     }
 };
 
-/// One phase of GSeg3D over the points `input`; replaces the contents of `ground` with the indices it calls ground.
+/// What a phase reads: the points it works on, with what the step before it already knows of them.
+struct PhaseInput {
+    const std::vector<std::uint32_t>& points;  ///< indices into the cloud
+    const std::uint32_t* columns;              ///< each point's column (detail::Workspace::columns)
+    const Eigen::Vector3f* xyz = nullptr;      ///< optional: the points' coordinates in this order (Phase II: Phase I's)
+    const float* z = nullptr;                  ///< optional: their z likewise (Phase I: as the columns gathered them)
+};
+
+/// What a phase writes.
+struct PhaseOutput {
+    std::vector<std::uint32_t>& ground;                    ///< replaced by the indices the phase calls ground
+    PhaseReport& report;                                   ///< the phase's counters, times and (optionally) cells
+    std::vector<std::uint32_t>* groundColumns = nullptr;  ///< optional: the ground points' columns likewise
+    std::vector<Eigen::Vector3f>* groundPoints = nullptr;  ///< optional: their coordinates likewise (for Phase II)
+};
+
+/// One phase of GSeg3D over the points `in.points`; replaces the contents of `out.ground` with the indices it calls ground.
 ///
 /// Which steps are the paper's (Lodhi and Hertzberg, ICRCV 2025), which the authors' public
 /// implementation's (dfki-ric/ground_segmentation, where the paper is vague) and which our own:
@@ -276,20 +292,16 @@ class Phase {
 public:
     Phase(const Params& p, const PhaseSettings& settings) : p_(p), set_(settings), slope_(p) {}
 
-    /// `inputPoints` (optional): the points of `input` in its order; `inputZ` (optional): their z
-    /// likewise (Phase I: as the columns' numbering gathered them); `groundPoints` (optional)
-    /// receives the points of `ground` likewise (Phase I hands them to Phase II).
-    void run(const PointCloudView& cloud, const std::vector<std::uint32_t>& input, const std::uint32_t* inputColumns,
-             const Eigen::Vector3f* inputPoints, const float* inputZ, std::vector<std::uint32_t>& ground,
-             std::vector<std::uint32_t>* groundColumns, std::vector<Eigen::Vector3f>* groundPoints,
-             detail::Workspace& ws, PhaseReport& report, bool keepCells) {
-        report.inputPoints = input.size();
+    /// The phase's steps over `in`, into `out`; `keepCells`: every cell's diagnostics in out.report.
+    void run(const PointCloudView& cloud, const PhaseInput& in, const PhaseOutput& out, detail::Workspace& ws, bool keepCells) {
+        PhaseReport& report = out.report;
+        report.inputPoints = in.points.size();
         auto t = Clock::now();
         // Step 1: grid representation. The vertical grid is aligned on the expected ground under the
         // robot, so that the ground and what sits a little above it (curbs, sidewalks) share a cell
         // instead of straddling a border wherever the sensor height happens to put one.
         ws.grid = &ws.phaseGrids[set_.number - 1];
-        ws.grid->build(cloud, input, ws.columns, inputColumns, set_.cellSizeZ, originZ(), inputPoints, inputZ);
+        ws.grid->build(cloud, in.points, ws.columns, in.columns, set_.cellSizeZ, originZ(), in.xyz, in.z);
         report.ms.grid = msSince(t);
         classifyCells(ws);  // Step 2: local eigen classification
         report.ms.classification = msSince(t);
@@ -299,7 +311,7 @@ public:
         report.ms.refinement = msSince(t);
         expand(ws);  // Step 4: ground region expansion with per-cell checks
         report.ms.expansion = msSince(t);
-        collect(ws, ground, groundColumns, groundPoints, report, keepCells);
+        collect(ws, out.ground, out.groundColumns, out.groundPoints, report, keepCells);
         report.ms.refinement += msSince(t);
     }
 
@@ -706,33 +718,11 @@ Result GroundSegmenter::segment(const PointCloudView& cloud, double distToGround
     return run(cloud, p, keepCellDiagnostics);
 }
 
-Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, bool keepCellDiagnostics) {
-    const auto start = Clock::now();
-    checkCloud(cloud);
-    detail::Workspace& ws = *ws_;
-    Result r;
+namespace {
 
-    // Points with a NaN or infinite coordinate (no return) take no part; they are non-ground.
-    ws.input.resize(cloud.size());
-    ws.input.resize(finiteIndices(cloud, ws.input.data()));
-    r.numNonFinite = cloud.size() - ws.input.size();
-    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
-
-    // Phase I: tall cells over the whole cloud, no height gate.
-    Phase(params, PhaseSettings::first(params))
-        .run(cloud, ws.input, ws.inputColumns.data(), nullptr, ws.columns.z().data(), ws.phase1Ground, &ws.phase1GroundColumns,
-             &ws.phase1GroundPoints, ws, r.phase1, keepCellDiagnostics);
-    // Phase II: thin cells over Phase I's ground, with the height gate.
-    Phase(params, PhaseSettings::second(params))
-        .run(cloud, ws.phase1Ground, ws.phase1GroundColumns.data(), ws.phase1GroundPoints.data(), nullptr, ws.phase2Ground,
-             nullptr, nullptr, ws, r.phase2, keepCellDiagnostics);
-
-    r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
-    for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
-    r.numGround = ws.phase2Ground.size();
-    r.numNonGround = cloud.size() - r.numGround;
-    // Ours, not the paper's: reflections far below the ground (below_ground.hpp), the ground's
-    // columns taken from Phase II's grid, still in the workspace (a ground cell holds its inliers).
+/// Ours: the lowest ground of each ground cell of the last phase into ws.groundColumns, for
+/// flagBelowGround (Phase II's grid is still in the workspace; a ground cell holds its inliers).
+void collectGroundColumns(detail::Workspace& ws) {
     ws.groundColumns.clear();
     // (Pointers at hand; a cell whose every point is an inlier takes no look at the flags.)
     const auto& cells = ws.grid->cells();
@@ -748,6 +738,39 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
                 lowest = inlier[k] ? std::min(lowest, pts[k].z()) : lowest;
         ws.groundColumns.push_back({cells[c].ix, cells[c].iy, lowest});
     }
+}
+
+}  // namespace
+
+Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, bool keepCellDiagnostics) {
+    const auto start = Clock::now();
+    checkCloud(cloud);
+    detail::Workspace& ws = *ws_;
+    Result r;
+
+    // Points with a NaN or infinite coordinate (no return) take no part; they are non-ground.
+    ws.input.resize(cloud.size());
+    ws.input.resize(finiteIndices(cloud, ws.input.data()));
+    r.numNonFinite = cloud.size() - ws.input.size();
+    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
+
+    // Phase I: tall cells over the whole cloud, no height gate.
+    PhaseInput all{ws.input, ws.inputColumns.data()};
+    all.z = ws.columns.z().data();
+    PhaseOutput firstGround{ws.phase1Ground, r.phase1};
+    firstGround.groundColumns = &ws.phase1GroundColumns, firstGround.groundPoints = &ws.phase1GroundPoints;
+    Phase(params, PhaseSettings::first(params)).run(cloud, all, firstGround, ws, keepCellDiagnostics);
+    // Phase II: thin cells over Phase I's ground, with the height gate.
+    PhaseInput firstGroundIn{ws.phase1Ground, ws.phase1GroundColumns.data()};
+    firstGroundIn.xyz = ws.phase1GroundPoints.data();
+    Phase(params, PhaseSettings::second(params)).run(cloud, firstGroundIn, PhaseOutput{ws.phase2Ground, r.phase2}, ws, keepCellDiagnostics);
+
+    r.labels.assign(cloud.size(), std::uint8_t(Label::NonGround));
+    for (std::uint32_t i : ws.phase2Ground) r.labels[i] = std::uint8_t(Label::Ground);
+    r.numGround = ws.phase2Ground.size();
+    r.numNonGround = cloud.size() - r.numGround;
+    // Ours, not the paper's: reflections far below the ground (below_ground.hpp).
+    collectGroundColumns(ws);
     r.belowGround = flagBelowGround(cloud, ws.input, r.labels, ws.groundColumns, params, ws.belowGround);
     r.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return r;

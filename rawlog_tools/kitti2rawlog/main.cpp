@@ -325,11 +325,7 @@ int main(int argc, char** argv) {
     try {
         run(cli);
         return kDone;
-    } catch (const std::invalid_argument& e) {
-        std::cerr << "kitti2rawlog: " << e.what() << "\n";
-        return kBadUsage;
-    } catch (const std::exception& e) {
-        std::cerr << "kitti2rawlog: " << gseg::mrpt::errorReason(e) << "\n";
-        return kBadInput;
+    } catch (...) {
+        return gseg::tools::reportError("kitti2rawlog", gseg::tools::InvalidArgument::BadUsage);
     }
 }

@@ -12,11 +12,11 @@
 // per input under its file name. Each input is done by segmentFile(), exactly as a run on it
 // alone; a failing input is named, leaves no output, and the others go on (exit 1). Under
 // mpirun/srun the inputs are split over the ranks by size, and rank 0 reports on all of them.
-#include "common/bytes.hpp"
 #include "common/cli.hpp"
 #include "common/ranks.hpp"
 
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/bytes.hpp>
 #include <gseg/map/drive_model.hpp>
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
@@ -151,9 +151,9 @@ std::string unmatchedSensor(const std::vector<std::string>& sensors, const std::
 
 /// Segments the rawlog `in` into `outPath`: what rawlog-gseg does to one input, whole. `name`: the
 /// input in the progress lines of a batch ("" for one input). Throws naming the entry on a bad
-/// input, leaving nothing at `outPath`.
-FileResult segmentFile(const Cli& cli, const std::string& in, const std::string& outPath, const std::string& name) {
-    const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(cli.config);
+/// input, leaving nothing at `outPath`. `config`: -c (or the default), loaded once per run.
+FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, const std::string& in,
+                       const std::string& outPath, const std::string& name) {
     gseg::mrpt::RawlogSegmenterOptions options;
     options.sensors = cli.sensors;
     options.replace = cli.replace;
@@ -298,23 +298,22 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
     bool batch = false;
     std::string error;
     int code = kDone;
+    gseg::mrpt::LoadedConfig config;
     try {
         if (cli.frame != "sensor" && cli.frame != "vehicle") throw std::invalid_argument("--frame must be sensor or vehicle");
         jobs = plan(cli, batch);
         if (ranks.root()) checkOutputs(cli, jobs, batch);
         try {
-            if (!cli.config.empty()) gseg::mrpt::loadConfig(cli.config);  // a bad config fails once, not per input
+            config = gseg::mrpt::loadConfigOrDefault(cli.config);  // once: a bad config fails once, not per input
         } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
             throw std::runtime_error(e.what());
         }
         if (ranks.root() && !cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
-                                gseg::mrpt::toYaml(gseg::mrpt::loadConfig(cli.config)).c_str());
+                                gseg::mrpt::toYaml(config).c_str());
         if (batch && ranks.root()) fs::create_directories(cli.out);
-    } catch (const std::invalid_argument& e) {
-        error = e.what(), code = kBadUsage;
-    } catch (const std::exception& e) {
-        error = gseg::mrpt::errorReason(e), code = kBadInput;
+    } catch (...) {
+        error = gseg::tools::currentError(), code = gseg::tools::exitCodeOf(gseg::tools::InvalidArgument::BadUsage);
     }
     if (const std::string first = ranks.firstError(error); !first.empty()) {
         std::fprintf(stderr, "rawlog-gseg: %s\n", first.c_str());
@@ -327,11 +326,11 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
         for (const std::size_t i : mine) {
             FileResult r;
             try {
-                r = segmentFile(cli, jobs[i].first, jobs[i].second, batch ? jobs[i].first : "");
+                r = segmentFile(cli, config, jobs[i].first, jobs[i].second, batch ? jobs[i].first : "");
             } catch (const std::exception& e) {
                 r.code = kBadInput, r.message = gseg::mrpt::errorReason(e);
             }
-            gseg::tools::ByteWriter out;
+            gseg::io::ByteWriter out;
             out.u64(std::uint64_t(r.code)).str(r.message).u64(r.skipped.size());
             for (const std::string& line : r.skipped) out.str(line);
             out.u64(r.warnings.size());
@@ -345,7 +344,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
     const std::vector<std::string> all = gseg::tools::shareItems(ranks, gseg::tools::fileSizes(inputs), segmentMine, &owner);
     std::vector<FileResult> results;
     for (const std::string& one : all) {
-        gseg::tools::ByteReader in(one);
+        gseg::io::ByteReader in(one);
         FileResult& r = results.emplace_back();
         r.code = int(in.u64()), r.message = in.str();
         for (std::uint64_t n = in.u64(); n > 0; --n) r.skipped.push_back(in.str());
@@ -391,9 +390,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
         return runBatch(cli, ranks);
-    } catch (const std::exception& e) {  // not an input's failure (those are reported per input)
-        std::fprintf(stderr, "rawlog-gseg: %s\n", gseg::mrpt::errorReason(e).c_str());
-        return kBadInput;
+    } catch (...) {  // not an input's failure (those are reported per input)
+        return gseg::tools::reportError("rawlog-gseg", gseg::tools::InvalidArgument::BadInput);
     }
 }
 

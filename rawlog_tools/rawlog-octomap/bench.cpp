@@ -13,7 +13,7 @@
 #include <gseg/io/atomic_file.hpp>
 
 #include <gseg/map/world_scan.hpp>
-#include <gseg/io/atomic_file.hpp>
+#include <gseg/text.hpp>
 
 #include <octomap/OcTree.h>
 
@@ -53,8 +53,6 @@ private:
     int saved_;
 };
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
 struct AnchorTimes {
     double total = 0, insert = 0;
     std::size_t scans = 0, points = 0;
@@ -81,7 +79,7 @@ AnchorTimes plainOctomap(const Cli& cli, const std::string& bt) {
         const auto t0 = Clock::now();
         tree.insertPointCloud(cloud, octomap::point3d(float(origin.x()), float(origin.y()), float(origin.z())),
                               cli.options.maxRange, false, true);
-        a.insert += since(t0);
+        a.insert += gseg::secondsSince(t0);
         ++a.scans, a.points += cloud.size();
     }
     bool written = false;
@@ -90,7 +88,7 @@ AnchorTimes plainOctomap(const Cli& cli, const std::string& bt) {
         written = tree.writeBinary(bt);
     }
     if (!written) throw std::runtime_error(bt + ": cannot write");
-    a.total = since(start);
+    a.total = gseg::secondsSince(start);
     return a;
 }
 

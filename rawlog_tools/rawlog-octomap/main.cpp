@@ -20,6 +20,7 @@
 #include <gseg/mrpt/errors.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/progress.hpp>
+#include <gseg/text.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -36,28 +37,19 @@
 namespace rawlog_octomap {
 namespace {
 
-double parseNumber(const std::string& flag, const std::string& v) {
-    std::size_t used = 0;
-    double d = 0;
-    try {
-        d = std::stod(v, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != v.size() || !(d > 0) || !std::isfinite(d)) throw std::invalid_argument(flag + " needs a number > 0, got '" + v + "'");
-    return d;
+/// A number > 0 given as `flag` (gseg::parseNumber); throws std::invalid_argument naming `flag`.
+double positiveNumber(const std::string& flag, const std::string& v) {
+    const std::optional<double> d = gseg::parseNumber<double>(v);
+    if (!d || !(*d > 0) || !std::isfinite(*d)) throw std::invalid_argument(flag + " needs a number > 0, got '" + v + "'");
+    return *d;
 }
 
+/// A whole number from 0 to `max` given as `flag`; throws std::invalid_argument naming `flag`.
 unsigned parseCount(const std::string& flag, const std::string& v, unsigned max) {
-    std::size_t used = 0;
-    long n = -1;
-    try {
-        n = std::stol(v, &used);
-    } catch (const std::exception&) {
-    }
-    if (used != v.size() || n < 0 || n > long(max))
+    const std::optional<long> n = gseg::parseNumber<long>(v);
+    if (!n || *n < 0 || *n > long(max))
         throw std::invalid_argument(flag + " needs a whole number from 0 to " + std::to_string(max) + ", got '" + v + "'");
-    return unsigned(n);
+    return unsigned(*n);
 }
 
 /// Parses the command line into `c` (TCLAP, the same on every MPI rank; only `printing` prints).
@@ -112,16 +104,17 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         c.input = input.getValue(), c.prefix = prefix.getValue(), c.config = config.getValue();
         c.poses.poses = poses.getValue(), c.poses.calib = calib.getValue(), c.poses.origin = origin.getValue();
         auto number = [](TCLAP::ValueArg<std::string>& a, double& to) {
-            if (a.isSet()) to = parseNumber("--" + a.getName(), a.getValue());
+            if (a.isSet()) to = positiveNumber("--" + a.getName(), a.getValue());
         };
         number(tolerance, c.poses.poseTolerance);
-        // The configuration file's traversability options, then the command line's.
-        if (!c.config.empty()) try {
-                c.options = gseg::mrpt::loadConfig(c.config).traversability;
-            } catch (const std::runtime_error& e) {
-                if (printing) std::cerr << "rawlog-octomap: " << e.what() << "\n";
-                return 1;
-            }
+        // The configuration (loaded once per run), its traversability options, then the command line's.
+        try {
+            c.loaded = gseg::mrpt::loadConfigOrDefault(c.config);
+        } catch (const std::runtime_error& e) {
+            if (printing) std::cerr << "rawlog-octomap: " << e.what() << "\n";
+            return 1;
+        }
+        c.options = c.loaded.traversability;
         number(resolution, c.options.resolution);
         number(maxRange, c.options.maxRange);
         number(clearance, c.options.clearance);
@@ -143,10 +136,6 @@ double peakResidentMb() {
     rusage u{};
     ::getrusage(RUSAGE_SELF, &u);
     return double(u.ru_maxrss) / 1024.0;
-}
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void printReport(const RunReport& r, double resolution) {
@@ -326,7 +315,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(cli.prefix)) outputs.push_back({"-o", path});
     gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
-    const gseg::mrpt::LoadedConfig cfg = gseg::mrpt::loadConfigOrDefault(cli.config);
+    const gseg::mrpt::LoadedConfig& cfg = cli.loaded;
     ScanStream stream(cli.poses);
     gseg::map::MapBuilder builder(cfg, cli.options);
 
@@ -388,9 +377,9 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         std::fprintf(gseg::tools::progressOut(), "rawlog-octomap: writing %zu map files (%s_*) ...\n",
                      gseg::map::TraversabilityMap::outputPaths(cli.prefix).size(), cli.prefix.c_str());
     report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix); });
-    report.times.writing = secondsSince(t0);
+    report.times.writing = gseg::secondsSince(t0);
     report.stats = map.stats();
-    report.wallSeconds = secondsSince(start);
+    report.wallSeconds = gseg::secondsSince(start);
     report.peakMb = peakResidentMb();
     return report;
 }
@@ -418,7 +407,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     try {
         if (!cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
-                                gseg::mrpt::toYaml(gseg::mrpt::loadConfig(cli.config)).c_str());
+                                gseg::mrpt::toYaml(cli.loaded).c_str());
         if (cli.benchRounds > 0) {
             runBench(cli);
             return 0;
@@ -430,12 +419,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
             return gseg::tools::kPartlyDone;
         }
         return gseg::tools::kDone;
-    } catch (const std::invalid_argument& e) {
-        std::cerr << "rawlog-octomap: " << e.what() << "\n";
-        return gseg::tools::kBadUsage;
-    } catch (const std::exception& e) {
-        std::cerr << "rawlog-octomap: " << gseg::mrpt::errorReason(e) << "\n";
-        return gseg::tools::kBadInput;
+    } catch (...) {
+        return gseg::tools::reportError("rawlog-octomap", gseg::tools::InvalidArgument::BadUsage);
     }
 }
 

@@ -5,6 +5,7 @@
 // MPI transport (remote_workers.hpp).
 
 #include <gseg/map/map_builder.hpp>
+#include <gseg/mrpt/config.hpp>
 
 #include <optional>
 #include <string>
@@ -21,6 +22,7 @@ using gseg::map::ScanWorker;
 
 struct Cli {
     std::string input, prefix, config;
+    gseg::mrpt::LoadedConfig loaded = gseg::mrpt::defaultConfig();  ///< -c (or the default), loaded once per run
     PoseConfig poses;
     gseg::map::TraversabilityOptions options;
     unsigned threads = 0;  ///< worker threads (0: everything on one thread)

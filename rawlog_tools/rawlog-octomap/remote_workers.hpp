@@ -18,14 +18,7 @@
 
 namespace rawlog_octomap {
 
-/// A scan and its result as bytes. decodeResult() throws std::runtime_error with the worker's
-/// message when the bytes say the scan failed. Exact: the other rank's observations and poses
-/// have the same values as rank 0's (so the same points and the same voxels).
-std::string encodeJob(const ScanJob& job);
-ScanJob decodeJob(const std::string& bytes);
-std::string encodeResult(const ScanResult& result);
-std::string encodeError(const std::string& message);
-ScanResult decodeResult(const std::string& bytes);
+/// The bytes between the ranks are gseg/map/scan_message.hpp's.
 
 /// Rank 0's side: one slot per worker thread of every other rank.
 class RemoteWorkers {

@@ -15,6 +15,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <tuple>
 #include <vector>
 
 namespace {
@@ -39,11 +40,14 @@ bool acceptRule(std::uint32_t c) { return c % 3 != 0; }
 // Four ways (#21): as it is; with a centroid absurdly far away (the sparse column search); with
 // every neighbour list searched beforehand on a pool of three threads; with the neighbours of odd
 // candidates searched only once they are accepted (needsNeighbours).
-TEST(RegionGrowingReference, NeighboursAndReachedCellsEqualAnExhaustiveSearch) {
-    gseg::ForkJoinPool pool(3);
-    for (std::uint32_t run = 0; run < 80; ++run) {
-        const std::uint32_t seed = 1 + run % 20;
-        const int mode = int(run / 20);  // 0 plain, 1 far centroid, 2 pool, 3 lazy
+/// (mode, seed): mode 0 plain, 1 far centroid, 2 pool, 3 lazy.
+class RegionGrowingReference : public ::testing::TestWithParam<std::tuple<int, std::uint32_t>> {};
+
+TEST_P(RegionGrowingReference, NeighboursAndReachedCellsEqualAnExhaustiveSearch) {
+    static gseg::ForkJoinPool pool(3);
+    const int mode = std::get<0>(GetParam());
+    const std::uint32_t seed = std::get<1>(GetParam());
+    {
         std::mt19937 rng(seed);
         std::vector<Eigen::Vector3f> c = randomCentroids(rng, 300 + 20 * seed);
         if (mode == 1) c.emplace_back(1e7f, -1e7f, -1.73f);
@@ -102,11 +106,17 @@ TEST(RegionGrowingReference, NeighboursAndReachedCellsEqualAnExhaustiveSearch) {
     }
 }
 
-TEST(PlaneFitReference, TheInliersAreThoseOfTheBestPlaneThroughAnyThreePoints) {
+INSTANTIATE_TEST_SUITE_P(ModesAndSeeds, RegionGrowingReference,
+                         ::testing::Combine(::testing::Values(0, 1, 2, 3), ::testing::Range(std::uint32_t(1), std::uint32_t(21))));
+
+class PlaneFitReference : public ::testing::TestWithParam<std::uint64_t> {};
+
+TEST_P(PlaneFitReference, TheInliersAreThoseOfTheBestPlaneThroughAnyThreePoints) {
     gseg::Params params;
     params.ransacMaxIterations = 1000;
     const double threshold = params.groundInlierThreshold;
-    for (std::uint64_t seed = 1; seed <= 60; ++seed) {
+    const std::uint64_t seed = GetParam();
+    {
         std::mt19937 rng{std::uint32_t(seed)};
         std::uniform_real_distribution<float> u(-1.f, 1.f), noise(-0.03f, 0.03f), tilt(-0.08f, 0.08f);
         const float a = tilt(rng), b = tilt(rng), c0 = -1.7f;  // z = a x + b y + c0 (up to 6.5 deg)
@@ -144,3 +154,5 @@ TEST(PlaneFitReference, TheInliersAreThoseOfTheBestPlaneThroughAnyThreePoints) {
         EXPECT_LT(gseg::planeSlopeDegrees(r.normal), 10.0) << "seed " << seed;
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(Seeds, PlaneFitReference, ::testing::Range(std::uint64_t(1), std::uint64_t(61)));

@@ -8,11 +8,14 @@
 #include <gseg/plane_fit.hpp>
 #include <gseg/region_growing.hpp>
 #include <gseg/sensor_height.hpp>
+#include <gseg/text.hpp>
 #include <support/lidar_sim.hpp>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -20,6 +23,51 @@
 #include <mutex>
 #include <stdexcept>
 #include <random>
+
+// --- text helpers (gseg/text.hpp) --------------------------------------------------------------
+
+TEST(Text, TrimStartsEndsLowercaseTable) {
+    EXPECT_EQ(gseg::trim("  a b \t\r\n"), "a b");
+    EXPECT_EQ(gseg::trim(" \t "), "");
+    EXPECT_EQ(gseg::trim(""), "");
+    EXPECT_EQ(gseg::trim("\ra\r", " \t"), "\ra\r");  // only the blanks asked for
+    EXPECT_TRUE(gseg::endsWith("scan.rawlog", ".rawlog"));
+    EXPECT_FALSE(gseg::endsWith("log", ".rawlog"));
+    EXPECT_TRUE(gseg::endsWith("x", ""));
+    EXPECT_TRUE(gseg::startsWith("Message: x", "Message:"));
+    EXPECT_FALSE(gseg::startsWith("Mess", "Message:"));
+    EXPECT_EQ(gseg::lowercase("Scan.RAWLOG.Gz"), "scan.rawlog.gz");
+}
+
+TEST(Text, ParseNumberReadsAllOfTheTextOrNothing) {
+    struct Row {
+        const char* text;
+        bool ok;
+        double value;
+    };
+    for (const Row& r : {Row{"1.5", true, 1.5}, Row{" -2e3 \t", true, -2000}, Row{"0", true, 0}, Row{"", false, 0},
+                         Row{" ", false, 0}, Row{"1.5x", false, 0}, Row{"x1", false, 0}, Row{"1 2", false, 0},
+                         Row{"1e999", false, 0}, Row{"0x10", false, 0}}) {
+        const std::optional<double> v = gseg::parseNumber<double>(r.text);
+        EXPECT_EQ(v.has_value(), r.ok) << "'" << r.text << "'";
+        if (r.ok && v) {
+            EXPECT_EQ(*v, r.value) << "'" << r.text << "'";
+        }
+    }
+    EXPECT_TRUE(std::isinf(*gseg::parseNumber<double>("inf")));
+    EXPECT_EQ(gseg::parseNumber<int>("42"), 42);
+    EXPECT_FALSE(gseg::parseNumber<int>("4.2"));
+    EXPECT_FALSE(gseg::parseNumber<unsigned>("-1"));
+    EXPECT_FALSE(gseg::parseNumber<int>("99999999999"));  // out of range
+}
+
+TEST(Text, SecondsSinceIsNotNegativeAndGrows) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double a = gseg::secondsSince(t0), b = gseg::secondsSince(t0);
+    EXPECT_GE(a, 0.0);
+    EXPECT_GE(b, a);
+    EXPECT_LT(b, 60.0);
+}
 
 // --- grid --------------------------------------------------------------------------------------
 

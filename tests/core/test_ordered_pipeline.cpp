@@ -64,17 +64,21 @@ Outcome run(unsigned workers, int n, int workFailsAt = -1, int produceFailsAt = 
     return r;
 }
 
-TEST(OrderedPipeline, ResultsAreConsumedInItemOrderWithAnyNumberOfWorkers) {
-    for (unsigned workers : {0u, 1u, 2u, 5u}) {
-        const Outcome r = run(workers, 200);
-        ASSERT_EQ(r.indices.size(), 200u) << workers;
-        for (std::size_t i = 0; i < 200; ++i) {
-            EXPECT_EQ(r.indices[i], i) << workers;
-            EXPECT_EQ(r.values[i], long(i * i)) << workers;
-        }
-        EXPECT_TRUE(r.error.empty()) << r.error;
+/// The number of worker threads (0: everything on the calling thread).
+class OrderedPipelineWorkers : public ::testing::TestWithParam<unsigned> {};
+
+TEST_P(OrderedPipelineWorkers, ResultsAreConsumedInItemOrder) {
+    const unsigned workers = GetParam();
+    const Outcome r = run(workers, 200);
+    ASSERT_EQ(r.indices.size(), 200u) << workers;
+    for (std::size_t i = 0; i < 200; ++i) {
+        EXPECT_EQ(r.indices[i], i) << workers;
+        EXPECT_EQ(r.values[i], long(i * i)) << workers;
     }
+    EXPECT_TRUE(r.error.empty()) << r.error;
 }
+
+INSTANTIATE_TEST_SUITE_P(AnyNumber, OrderedPipelineWorkers, ::testing::Values(0u, 1u, 2u, 5u));
 
 TEST(OrderedPipeline, NoMoreThanCapacityItemsAreInFlight) {
     for (std::size_t capacity : {1u, 3u, 8u}) {
@@ -85,7 +89,7 @@ TEST(OrderedPipeline, NoMoreThanCapacityItemsAreInFlight) {
     }
 }
 
-TEST(OrderedPipeline, TheErrorOfTheEarliestItemWinsAndEverythingBeforeItIsConsumed) {
+TEST_P(OrderedPipelineWorkers, TheErrorOfTheEarliestItemWinsAndEverythingBeforeItIsConsumed) {
     struct Case {
         int work, produce, consume;
         const char* error;
@@ -93,12 +97,12 @@ TEST(OrderedPipeline, TheErrorOfTheEarliestItemWinsAndEverythingBeforeItIsConsum
     };
     const Case cases[] = {{5, -1, -1, "work 5", 5},  {9, 7, -1, "produce 7", 7}, {5, 30, -1, "work 5", 5},
                           {-1, 12, -1, "produce 12", 12}, {-1, -1, 3, "consume 3", 3}, {8, -1, 3, "consume 3", 3}};
-    for (unsigned workers : {0u, 2u, 4u})
-        for (const auto& c : cases) {
-            const Outcome r = run(workers, 50, c.work, c.produce, c.consume);
-            EXPECT_EQ(r.error, c.error) << workers << " workers";
-            EXPECT_EQ(r.indices.size(), c.consumed) << c.error << ", " << workers << " workers";
-        }
+    const unsigned workers = GetParam();
+    for (const auto& c : cases) {
+        const Outcome r = run(workers, 50, c.work, c.produce, c.consume);
+        EXPECT_EQ(r.error, c.error) << workers << " workers";
+        EXPECT_EQ(r.indices.size(), c.consumed) << c.error << ", " << workers << " workers";
+    }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Readers and writers of the core io/ layer on hostile input: PLY and KITTI from memory, atomic
 // outputs on a full disk, interrupted runs, and outputs that are inputs.
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/bytes.hpp>
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
 #include <support/child.hpp>
@@ -13,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -42,6 +44,73 @@ const std::string kXyz = "property float x\nproperty float y\nproperty float z\n
 fs::path freshDir(const std::string& name) { return gseg::test::freshDir("io", name); }
 
 }  // namespace
+
+// --- bytes (gseg/io/bytes.hpp): the one byte coding of the wire formats ----------------------
+
+using gseg::io::ByteReader;
+using gseg::io::ByteWriter;
+
+TEST(Bytes, ValuesRoundTripBitForBit) {
+    ByteWriter out;
+    const double values[] = {0.1 + 0.2, -0.0, std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::infinity()};
+    out.u64(0).u64(std::numeric_limits<std::uint64_t>::max()).str(std::string("a\0b", 3)).str("");
+    for (double v : values) out.f64(v);
+    out.f64(std::nan(""));
+    EXPECT_EQ(out.bytes().size(), 8u * 2 + (8 + 3) + 8 + 8 * 5);
+    EXPECT_EQ(out.bytes()[8], '\xff') << "little-endian";
+    ByteReader in(out.bytes());
+    EXPECT_EQ(in.u64(), 0u);
+    EXPECT_EQ(in.u64(), std::numeric_limits<std::uint64_t>::max());
+    EXPECT_EQ(in.str(), std::string("a\0b", 3));
+    EXPECT_EQ(in.str(), "");
+    for (double v : values) {
+        const double back = in.f64();
+        EXPECT_EQ(std::signbit(back), std::signbit(v));
+        EXPECT_EQ(back, v);
+    }
+    EXPECT_TRUE(std::isnan(in.f64()));
+    EXPECT_TRUE(in.done());
+    EXPECT_THROW(in.u64(), std::runtime_error);
+}
+
+TEST(Bytes, AShortOrLyingMessageThrows) {
+    ByteWriter out;
+    out.u64(1000);  // a string length with no string after it
+    ByteReader in(out.bytes());
+    EXPECT_THROW(in.str(), std::runtime_error);
+    const std::string three = "abc";
+    ByteReader shortOne(three);
+    EXPECT_THROW(shortOne.u64(), std::runtime_error);
+}
+
+TEST(Bytes, VarintsAndFloatsRoundTripAndAShortOrOverlongVarintThrowsNamingTheBytes) {
+    ByteWriter out;
+    const std::uint64_t values[] = {0, 1, 127, 128, 300, 1ULL << 35, std::numeric_limits<std::uint64_t>::max()};
+    for (std::uint64_t v : values) out.varint(v);
+    out.f32(-0.0f).f32(std::numeric_limits<float>::denorm_min()).u32(0xA1B2C3D4u).raw("GSU3", 4);
+    EXPECT_EQ(out.bytes().substr(0, 5), std::string("\x00\x01\x7f\x80\x01", 5)) << "LEB128, low 7 bits first";
+    ByteReader in(out.bytes());
+    for (std::uint64_t v : values) EXPECT_EQ(in.varint(), v);
+    EXPECT_TRUE(std::signbit(in.f32()));
+    EXPECT_EQ(in.f32(), std::numeric_limits<float>::denorm_min());
+    EXPECT_EQ(in.u32(), 0xA1B2C3D4u);
+    EXPECT_EQ(in.remaining(), 4u);
+    const std::string endless(11, '\x80'), cut("\x80", 1);
+    ByteReader overlong(endless, "scan update");
+    try {
+        overlong.varint();
+        ADD_FAILURE() << "a varint of more than 64 bits must throw";
+    } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "scan update: malformed number");
+    }
+    ByteReader shortOne(cut, "scan update");
+    try {
+        shortOne.varint();
+        ADD_FAILURE() << "a cut varint must throw";
+    } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "scan update: truncated");
+    }
+}
 
 // --- PLY: memory follows what the file can hold ------------------------------------------------
 

@@ -3,6 +3,7 @@
 // order), MapBuilder (ordered integration: the same maps with any number of workers, local or
 // remote, and through insert(), the plugin's route). On a simulated drive (tests/support/lidar_sim).
 #include <gseg/map/map_builder.hpp>
+#include <gseg/map/scan_message.hpp>
 
 #include <support/child.hpp>
 #include <support/sim_drive.hpp>
@@ -194,6 +195,41 @@ TEST(MapBuilder, RemoteWorkersShareTheScansAndGiveTheSameMaps) {
     EXPECT_TRUE(buildWith(rawlog, fixedHeight(), how, &builder) == local);
     EXPECT_EQ(builder->tally().scansByRank, (std::vector<std::size_t>{0, std::size_t(kScans)}));
     EXPECT_EQ(order, (std::vector<std::size_t>{0, 1, 2, 3, 4, 5}));
+}
+
+TEST(MapBuilder, ScansAndResultsThroughTheWireFormatGiveTheSameMaps) {
+    // What rawlog-octomap's MPI ranks send (gseg/map/scan_message.hpp): a scan to a worker, its
+    // result back, each as bytes; the maps are those of one process, byte for byte.
+    const std::string rawlog = writeDrive("wire", {true});
+    const std::string local = buildWith(rawlog, autoHeight(), BuildOptions());
+    ScanWorker elsewhere(autoHeight(), {});
+    BuildOptions how;
+    how.threads = 0, how.remoteWorkers = 1, how.ranks = 2;
+    how.remoteWork = [&](unsigned, const ScanJob& job) {
+        const ScanJob there = gseg::map::decodeScanJob(gseg::map::encodeScanJob(job));
+        EXPECT_EQ(there.describe(), job.describe());
+        EXPECT_EQ(there.presegmented(), job.presegmented());
+        ScanResult r = elsewhere(there);
+        r.rank = 1;
+        const ScanResult back = gseg::map::decodeScanResult(gseg::map::encodeScanResult(r));
+        EXPECT_TRUE(back.update == r.update);
+        EXPECT_EQ(back.heightNote, r.heightNote);
+        EXPECT_EQ(back.rank, 1);
+        return back;
+    };
+    EXPECT_TRUE(buildWith(rawlog, autoHeight(), how) == local);
+}
+
+TEST(MapBuilder, AScanErrorOrAGarbledMessageThroughTheWireFormatThrows) {
+    try {
+        gseg::map::decodeScanResult(gseg::map::encodeScanError("scan 3: no points"));
+        ADD_FAILURE() << "an error reply must throw";
+    } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "scan 3: no points");
+    }
+    EXPECT_THROW(gseg::map::decodeScanResult(std::string(8, '\x07')), std::runtime_error);
+    const std::string job = gseg::map::encodeScanJob(ScanJob());
+    EXPECT_THROW(gseg::map::decodeScanJob(job.substr(0, job.size() - 1)), std::runtime_error);
 }
 
 TEST(MapBuilder, AnErrorOfOneScanIsRethrownAndTheScansBeforeItAreIntegrated) {

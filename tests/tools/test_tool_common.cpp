@@ -1,5 +1,5 @@
 // What every tool shares (#11 item 4): the progress reporter (gseg/progress.hpp), the output
-// checks (gseg::io::checkOutputs) and, run on every tool, the options of apps/common/cli.hpp:
+// checks (gseg::io::checkOutputs) and, run on every tool, the options of common/cli.hpp:
 // --version, --help, --quiet, -w/--overwrite, and an unwritable output refused before any work.
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/progress.hpp>

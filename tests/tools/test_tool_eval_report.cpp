@@ -130,9 +130,9 @@ TEST(EvalReport, RowsSurviveTheBytesBetweenRanksExactly) {
     rows[1].breakdown.falseByHeight[3] = 4, rows[1].breakdown.falseByRange[4] = 2, rows[1].breakdown.missedByRange[0] = 9;
     rows[1].breakdown.falseGround = 12, rows[1].breakdown.missedGround = 123456789012345ull, rows[1].breakdown.trueGround = 1;
     rows[2].score.points = 4, rows[2].score.byRange[9].tn = 99;
-    gseg::tools::ByteWriter out;
+    gseg::io::ByteWriter out;
     for (const FrameRow& r : rows) gseg::app::writeRow(out, r);
-    gseg::tools::ByteReader in(out.bytes());
+    gseg::io::ByteReader in(out.bytes());
     std::vector<FrameRow> back;
     while (!in.done()) back.push_back(gseg::app::readRow(in));
     ASSERT_EQ(back.size(), rows.size());
@@ -145,7 +145,7 @@ TEST(EvalReport, RowsSurviveTheBytesBetweenRanksExactly) {
     EXPECT_EQ(gseg::app::breakdownCsv(back, seqsBack), gseg::app::breakdownCsv(rows, seqs));
     // A message cut short is an error, not a made-up frame.
     const std::string cut = out.bytes().substr(0, out.bytes().size() - 3);
-    gseg::tools::ByteReader short_(cut);
+    gseg::io::ByteReader short_(cut);
     EXPECT_THROW(for (int i = 0; i < 3; ++i) gseg::app::readRow(short_), std::runtime_error);
 }
 

@@ -2,7 +2,6 @@
 // the messages, and the ranks of a tool started without a launcher (one process, MPI untouched).
 // Under mpirun (#18 point 3): a rank that stops answering ends the job, named, within
 // --mpi-timeout, leaving no output.
-#include "common/bytes.hpp"
 #include "common/ranks.hpp"
 
 #include <support/child.hpp>
@@ -94,39 +93,6 @@ TEST(ShareItems, OneProcessDoesEveryItemAndGetsThemBackByIndex) {
     EXPECT_THROW(gseg::tools::shareItems(ranks, {1, 2}, throws), std::runtime_error);
     auto short_ = [](const std::vector<std::size_t>&) { return std::vector<std::string>{"only one"}; };
     EXPECT_THROW(gseg::tools::shareItems(ranks, {1, 2}, short_), std::runtime_error) << "one result per item";
-}
-
-TEST(Bytes, ValuesRoundTripBitForBit) {
-    gseg::tools::ByteWriter out;
-    const double values[] = {0.1 + 0.2, -0.0, std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::infinity()};
-    out.u64(0).u64(std::numeric_limits<std::uint64_t>::max()).str(std::string("a\0b", 3)).str("");
-    for (double v : values) out.f64(v);
-    out.f64(std::nan(""));
-    EXPECT_EQ(out.bytes().size(), 8u * 2 + (8 + 3) + 8 + 8 * 5);
-    EXPECT_EQ(out.bytes()[8], '\xff') << "little-endian";
-    gseg::tools::ByteReader in(out.bytes());
-    EXPECT_EQ(in.u64(), 0u);
-    EXPECT_EQ(in.u64(), std::numeric_limits<std::uint64_t>::max());
-    EXPECT_EQ(in.str(), std::string("a\0b", 3));
-    EXPECT_EQ(in.str(), "");
-    for (double v : values) {
-        const double back = in.f64();
-        EXPECT_EQ(std::signbit(back), std::signbit(v));
-        EXPECT_EQ(back, v);
-    }
-    EXPECT_TRUE(std::isnan(in.f64()));
-    EXPECT_TRUE(in.done());
-    EXPECT_THROW(in.u64(), std::runtime_error);
-}
-
-TEST(Bytes, AShortOrLyingMessageThrows) {
-    gseg::tools::ByteWriter out;
-    out.u64(1000);  // a string length with no string after it
-    gseg::tools::ByteReader in(out.bytes());
-    EXPECT_THROW(in.str(), std::runtime_error);
-    const std::string three = "abc";
-    gseg::tools::ByteReader shortOne(three);
-    EXPECT_THROW(shortOne.u64(), std::runtime_error);
 }
 
 TEST(Ranks, WithoutALauncherTheToolIsOneProcess) {

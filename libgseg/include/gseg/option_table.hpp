@@ -5,14 +5,14 @@
 /// gseg::SensorHeightOptions and gseg::map::TraversabilityOptions are set through one each, so every
 /// configuration route (YAML, INI, the MRPT plugin) accepts the same keys and values.
 
-#include <charconv>
+#include <gseg/text.hpp>
+
 #include <cstdint>
 #include <limits>
 #include <locale>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -52,7 +52,7 @@ public:
     const std::vector<std::string>& names() const { return names_; }  ///< in table order
 
     /// Throws std::invalid_argument on an unknown key or a value that is not one of the field's
-    /// type (numbers as std::from_chars reads them, surrounding blanks allowed; bools true/false/1/0).
+    /// type (numbers as gseg::parseNumber reads them, surrounding blanks allowed; bools true/false/1/0).
     void set(S& s, const std::string& key, const std::string& value) const {
         std::visit([&](auto member) { s.*member = parse<std::remove_reference_t<decltype(s.*member)>>(key, value); },
                    find(key).field);
@@ -82,19 +82,17 @@ private:
 
     template <typename T>
     T parse(const std::string& key, const std::string& text) const {
-        const std::size_t b = text.find_first_not_of(" \t"), e = text.find_last_not_of(" \t");
-        const std::string t = b == std::string::npos ? "" : text.substr(b, e - b + 1);
         if constexpr (std::is_same_v<T, bool>) {
+            const std::string t = trim(text);
             if (t == "true" || t == "1") return true;
             if (t == "false" || t == "0") return false;
             throw std::invalid_argument(what_ + " '" + key + "': cannot read '" + text + "' as true or false");
         } else {
-            T v{};
-            const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-            if (t.empty() || ec != std::errc() || ptr != t.data() + t.size())
+            const std::optional<T> v = parseNumber<T>(text);
+            if (!v)
                 throw std::invalid_argument(what_ + " '" + key + "': cannot read '" + text + "' as a " +
                                             (std::is_floating_point_v<T> ? "number" : "whole number"));
-            return v;
+            return *v;
         }
     }
 

@@ -1,6 +1,7 @@
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>  // readFileBytes, regularFileSize
 #include <gseg/io/ros_map.hpp>
+#include <gseg/text.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -17,13 +18,6 @@ namespace gseg::io {
 
 namespace {
 
-std::string trim(const std::string& s) {
-    std::size_t b = 0, e = s.size();
-    while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
-    while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
-    return s.substr(b, e - b);
-}
-
 std::string unquote(const std::string& s) {
     if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) return s.substr(1, s.size() - 2);
     return s;
@@ -35,15 +29,9 @@ std::string unquote(const std::string& s) {
 
 double number(const std::string& file, int line, const std::string& key, const std::string& text) {
     const std::string t = trim(text);
-    std::size_t used = 0;
-    double v = 0;
-    try {
-        v = std::stod(t, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (t.empty() || used != t.size() || !std::isfinite(v)) fail(file, line, key + ": '" + t + "' is not a finite number");
-    return v;
+    const std::optional<double> v = parseNumber<double>(t);
+    if (!v || !std::isfinite(*v)) fail(file, line, key + ": '" + t + "' is not a finite number");
+    return *v;
 }
 
 std::string folderOf(const std::string& path) {

@@ -3,6 +3,7 @@
 #include <gseg/ordered_pipeline.hpp>
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/observation_points.hpp>
+#include <gseg/text.hpp>
 
 #include <mrpt/obs/CObservation.h>
 
@@ -12,13 +13,6 @@
 #include <stdexcept>
 
 namespace gseg::map {
-namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
 
 PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
     read += o.read, segmentation += o.segmentation, transform += o.transform;

@@ -2,6 +2,7 @@
 
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/observation_points.hpp>
+#include <gseg/text.hpp>
 
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
@@ -76,7 +77,7 @@ void ScanStream::fill(std::size_t n) {
         }
         visit(reader_.index(), obj);
     }
-    readSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    readSeconds_ += secondsSince(t0);
 }
 
 const std::deque<ScanJob>& ScanStream::prefetch(std::size_t n) {

@@ -1,5 +1,7 @@
 #include <gseg/map/scan_update.hpp>
 
+#include <gseg/io/bytes.hpp>
+
 #include "voxel_keys.hpp"
 
 #include <octomap/OcTree.h>
@@ -161,59 +163,28 @@ private:
     }
 };
 
-// ---- byte encoding ----
+// ---- byte encoding (gseg/io/bytes.hpp) ----
 
-void putVarint(std::string& out, std::uint64_t v) {
-    while (v >= 0x80) out.push_back(char(std::uint8_t(v) | 0x80)), v >>= 7;
-    out.push_back(char(v));
-}
-
-void putRaw64(std::string& out, std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) out.push_back(char(std::uint8_t(v >> (8 * i))));
-}
-
+/// Reads the lists of a scan update; errors say "scan update: ...".
 class Reader {
 public:
-    Reader(const std::string& s, std::size_t start) : s_(s), pos_(start) {}
-    std::uint64_t varint() {
-        std::uint64_t v = 0;
-        for (int shift = 0; shift < 64; shift += 7) {
-            const std::uint8_t b = byte();
-            v |= std::uint64_t(b & 0x7f) << shift;
-            if (!(b & 0x80)) return v;
-        }
-        throw std::runtime_error("scan update: malformed number");
-    }
-    std::uint64_t raw64() {
-        std::uint64_t v = 0;
-        for (int i = 0; i < 8; ++i) v |= std::uint64_t(byte()) << (8 * i);
-        return v;
-    }
+    Reader(const std::string& s, std::size_t start) : in_(s, "scan update", start) {}
+    std::uint64_t varint() { return in_.varint(); }
+    std::uint64_t raw64() { return in_.u64(); }
+    double real64() { return in_.f64(); }
+    float real32() { return in_.f32(); }
+    bool atEnd() const { return in_.done(); }
     std::vector<std::uint64_t> codes() {
         const std::uint64_t n = varint();
-        if (n > s_.size() - pos_) throw std::runtime_error("scan update: list longer than the data");
+        if (n > in_.remaining()) throw std::runtime_error("scan update: list longer than the data");
         std::vector<std::uint64_t> out(n);
         std::uint64_t prev = 0;
         for (auto& c : out) prev = c = prev + varint();
         return out;
     }
-    bool atEnd() const { return pos_ == s_.size(); }
-    double real64() {
-        const std::uint64_t bits = raw64();
-        double v = 0;
-        std::memcpy(&v, &bits, sizeof v);
-        return v;
-    }
-    float real32() {
-        std::uint32_t bits = 0;
-        for (int i = 0; i < 4; ++i) bits |= std::uint32_t(byte()) << (8 * i);
-        float v = 0;
-        std::memcpy(&v, &bits, sizeof v);
-        return v;
-    }
     std::vector<GroundCellSample> groundCells() {
         const std::uint64_t n = varint();
-        if (n > (s_.size() - pos_) / 42) throw std::runtime_error("scan update: list longer than the data");
+        if (n > in_.remaining() / 42) throw std::runtime_error("scan update: list longer than the data");
         std::vector<GroundCellSample> out(n);
         std::uint64_t prev = 0;
         for (auto& c : out) {
@@ -230,7 +201,7 @@ public:
 
     std::vector<gseg::TerrainSample> terrainSamples() {
         const std::uint64_t n = varint();
-        if (n > (s_.size() - pos_) / 25) throw std::runtime_error("scan update: list longer than the data");
+        if (n > in_.remaining() / 25) throw std::runtime_error("scan update: list longer than the data");
         std::vector<gseg::TerrainSample> out(n);
         for (auto& t : out) {
             const std::uint64_t cell = raw64();
@@ -244,26 +215,10 @@ public:
     }
 
 private:
-    const std::string& s_;
-    std::size_t pos_;
-    std::uint8_t byte() {
-        if (pos_ >= s_.size()) throw std::runtime_error("scan update: truncated");
-        return std::uint8_t(s_[pos_++]);
-    }
+    io::ByteReader in_;
 };
 
 const char kMagic[] = "GSU3", kMagicV2[] = "GSU2", kMagicV1[] = "GSU1";
-
-void putDouble(std::string& out, double v) {
-    std::uint64_t bits = 0;
-    std::memcpy(&bits, &v, sizeof bits);
-    putRaw64(out, bits);
-}
-void putFloat(std::string& out, float v) {
-    std::uint32_t bits = 0;
-    std::memcpy(&bits, &v, sizeof bits);
-    for (int i = 0; i < 4; ++i) out.push_back(char(std::uint8_t(bits >> (8 * i))));
-}
 
 }  // namespace
 
@@ -298,32 +253,29 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
 }
 
 std::string serializeScanUpdate(const ScanUpdate& u) {
-    std::string out(kMagic, 4);
-    for (int a = 0; a < 3; ++a) {
-        std::uint64_t bits = 0;
-        std::memcpy(&bits, &u.origin[a], sizeof bits);
-        putRaw64(out, bits);
-    }
-    for (std::uint64_t v : {u.groundPoints, u.obstaclePoints, u.rays, u.pointsSkipped}) putVarint(out, v);
+    io::ByteWriter out;
+    out.raw(kMagic, 4);
+    for (int a = 0; a < 3; ++a) out.f64(u.origin[a]);
+    for (std::uint64_t v : {u.groundPoints, u.obstaclePoints, u.rays, u.pointsSkipped}) out.varint(v);
     for (const auto* list : {&u.free, &u.groundHits, &u.obstacleHits}) {
-        putVarint(out, list->size());
+        out.varint(list->size());
         std::uint64_t prev = 0;
-        for (std::uint64_t c : *list) putVarint(out, c - prev), prev = c;
+        for (std::uint64_t c : *list) out.varint(c - prev), prev = c;
     }
-    putVarint(out, u.groundCells.size());
+    out.varint(u.groundCells.size());
     std::uint64_t prev = 0;
     for (const GroundCellSample& c : u.groundCells) {
-        putVarint(out, c.cell - prev), prev = c.cell;
-        putVarint(out, c.count);
-        putDouble(out, c.sumZ), putDouble(out, c.sumZ2), putDouble(out, c.sumX), putDouble(out, c.sumY), putFloat(out, c.minZ), putFloat(out, c.maxZ);
+        out.varint(c.cell - prev), prev = c.cell;
+        out.varint(c.count);
+        out.f64(c.sumZ).f64(c.sumZ2).f64(c.sumX).f64(c.sumY).f32(c.minZ).f32(c.maxZ);
     }
-    putVarint(out, u.terrain.size());
+    out.varint(u.terrain.size());
     for (const gseg::TerrainSample& t : u.terrain) {
-        putRaw64(out, (std::uint64_t(std::uint32_t(t.ix)) << 32) | std::uint32_t(t.iy));
-        putVarint(out, t.groundCount);
-        putDouble(out, t.groundSumZ), putFloat(out, t.lowZ), putFloat(out, t.highZ);
+        out.u64((std::uint64_t(std::uint32_t(t.ix)) << 32) | std::uint32_t(t.iy));
+        out.varint(t.groundCount);
+        out.f64(t.groundSumZ).f32(t.lowZ).f32(t.highZ);
     }
-    return out;
+    return out.take();
 }
 
 ScanUpdate deserializeScanUpdate(const std::string& bytes) {
@@ -331,10 +283,7 @@ ScanUpdate deserializeScanUpdate(const std::string& bytes) {
     if (!v1 && !v2 && bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
     ScanUpdate u;
     Reader in(bytes, 4);
-    for (int a = 0; a < 3; ++a) {
-        const std::uint64_t bits = in.raw64();
-        std::memcpy(&u.origin[a], &bits, sizeof bits);
-    }
+    for (int a = 0; a < 3; ++a) u.origin[a] = in.real64();
     u.groundPoints = in.varint(), u.obstaclePoints = in.varint(), u.rays = in.varint(), u.pointsSkipped = in.varint();
     u.free = in.codes();
     u.groundHits = in.codes();

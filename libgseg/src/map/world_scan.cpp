@@ -1,6 +1,7 @@
 #include <gseg/map/world_scan.hpp>
 
 #include <gseg/mrpt/observation_points.hpp>
+#include <gseg/text.hpp>
 
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
@@ -60,7 +61,7 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
     out.sensorOrigin = originOf(obs, robotPose);
     if (times) {
         times->segmentation += std::chrono::duration<double>(t1 - t0).count();
-        times->transform += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+        times->transform += secondsSince(t1);
     }
     return out;
 }

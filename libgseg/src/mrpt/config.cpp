@@ -1,6 +1,7 @@
 #include <gseg/io/kitti.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
+#include <gseg/text.hpp>
 
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
@@ -15,21 +16,6 @@
 
 namespace gseg::mrpt {
 namespace {
-
-std::string lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return s;
-}
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t");
-    if (b == std::string::npos) return "";
-    return s.substr(b, s.find_last_not_of(" \t") - b + 1);
-}
 
 // The options structs a configuration holds, by their YAML map and default INI section names.
 enum class Section { Params, SensorHeight, Traversability };
@@ -46,7 +32,7 @@ void apply(LoadedConfig& cfg, Section section, const std::string& key, const std
     try {
         if (section == Section::SensorHeight) return cfg.sensorHeight.set(key, value);
         if (section == Section::Traversability) return cfg.traversability.set(key, value);
-        if (key == "distToGround" && lower(value) == "auto") {
+        if (key == "distToGround" && lowercase(value) == "auto") {
             cfg.distToGroundAuto = true;
             return;
         }
@@ -220,7 +206,7 @@ void refuseUnboundedIni(const std::string& text, const std::string& path) {
                 }
                 std::size_t j = i;
                 while (j < line.size() && isKeyChar(line[j])) ++j;
-                const std::string word = lower(line.substr(i, j - i));
+                const std::string word = lowercase(line.substr(i, j - i));
                 if (word == "while" || word == "for" || word == "repeat" || word == "until")
                     throw std::runtime_error(where + ": '" + word + "' loops are not allowed in $eval{} (a configuration "
                                                      "must not be able to hang a tool)");
@@ -273,8 +259,8 @@ void loadIniSection(LoadedConfig& cfg, const ::mrpt::config::CConfigFileBase& in
                     const std::string& name, const std::vector<IniKey>& scanned, const std::string& where) {
     std::map<std::string, int> lineOf;  // lower-case key -> line (MRPT's INI keys ignore case)
     for (const IniKey& k : scanned) {
-        if (lower(k.section) != lower(name)) continue;
-        if (auto [it, fresh] = lineOf.emplace(lower(k.key), k.line); !fresh)
+        if (lowercase(k.section) != lowercase(name)) continue;
+        if (auto [it, fresh] = lineOf.emplace(lowercase(k.key), k.line); !fresh)
             throw std::runtime_error(where + ":" + std::to_string(k.line) + ": [" + name + "] '" + k.key +
                                      "' given twice (also on line " + std::to_string(it->second) + ")");
     }
@@ -282,7 +268,7 @@ void loadIniSection(LoadedConfig& cfg, const ::mrpt::config::CConfigFileBase& in
     std::vector<std::string> keys;
     ini.getAllKeys(name, keys);
     for (const std::string& key : keys) {
-        const auto line = lineOf.find(lower(key));
+        const auto line = lineOf.find(lowercase(key));
         const std::string at = where + (line == lineOf.end() ? "" : ":" + std::to_string(line->second)) + ": [" + name + "]";
         std::string value;
         try {
@@ -412,7 +398,7 @@ LoadedConfig defaultConfig() {
 LoadedConfig loadConfigOrDefault(const std::string& path) { return path.empty() ? defaultConfig() : loadConfig(path); }
 
 LoadedConfig loadConfig(const std::string& path) {
-    const std::string ext = lower(path);
+    const std::string ext = lowercase(path);
     ConfigFormat format;
     if (endsWith(ext, ".yaml") || endsWith(ext, ".yml")) format = ConfigFormat::Yaml;
     else if (endsWith(ext, ".ini") || endsWith(ext, ".cfg")) format = ConfigFormat::Ini;

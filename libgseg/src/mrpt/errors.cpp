@@ -1,20 +1,9 @@
 #include <gseg/mrpt/errors.hpp>
+#include <gseg/text.hpp>
 
 #include <sstream>
 
 namespace gseg::mrpt {
-namespace {
-
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t\r");
-    if (b == std::string::npos) return "";
-    return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
-
-bool startsWith(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
-
-}  // namespace
-
 std::string errorReason(const std::string& what) {
     // The innermost reason is the last "Message: ..." or the first line of a non-MRPT exception
     // that MRPT wrapped ("Original exception:" then its text).

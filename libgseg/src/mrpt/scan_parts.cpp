@@ -1,12 +1,9 @@
 #include <gseg/mrpt/scan_parts.hpp>
+#include <gseg/text.hpp>
 
 #include <cstring>
 
 namespace gseg::mrpt {
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 ScanPart scanPartOfLabel(const std::string& label) {
     if (endsWith(label, kGroundSuffix)) return ScanPart::Ground;

@@ -4,6 +4,7 @@
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/scan_source.hpp>
+#include <gseg/text.hpp>
 
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -13,11 +14,6 @@
 
 namespace gseg::mrpt {
 namespace {
-
-bool endsWith(std::string s, const std::string& suffix) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 Scan fromRawlog(const std::string& path, int index) {
     Scan scan;
@@ -55,9 +51,10 @@ Scan fromRawlog(const std::string& path, int index) {
 }  // namespace
 
 Scan loadScan(const std::string& path, int index) {
-    if (endsWith(path, ".bin")) return {gseg::io::readKittiBin(path), "KITTI scan " + path};
-    if (endsWith(path, ".ply")) return {gseg::io::readPly(path), "PLY cloud " + path};
-    if (endsWith(path, ".rawlog") || endsWith(path, ".gz")) return fromRawlog(path, index);
+    const std::string name = lowercase(path);
+    if (endsWith(name, ".bin")) return {gseg::io::readKittiBin(path), "KITTI scan " + path};
+    if (endsWith(name, ".ply")) return {gseg::io::readPly(path), "PLY cloud " + path};
+    if (endsWith(name, ".rawlog") || endsWith(name, ".gz")) return fromRawlog(path, index);
     throw std::runtime_error(path + ": unknown scan format (expected .bin, .ply, .rawlog or .rawlog.gz)");
 }
 

@@ -15,9 +15,6 @@ enum class ScanPart { Raw, Ground, Obstacles };
 inline constexpr const char* kGroundSuffix = "_ground";
 inline constexpr const char* kObstaclesSuffix = "_obstacles";
 
-/// `s` ends with `suffix`.
-bool endsWith(const std::string& s, const std::string& suffix);
-
 /// Ground for `L_ground`, Obstacles for `L_obstacles`, Raw for anything else.
 ScanPart scanPartOfLabel(const std::string& label);
 /// `L` for `L_ground` and `L_obstacles`; other labels as they are.

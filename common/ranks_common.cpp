@@ -1,7 +1,7 @@
 // What the ranks agree on, in terms of gather and broadcast (the same with and without MPI).
 #include "ranks.hpp"
 
-#include "bytes.hpp"
+#include <gseg/io/bytes.hpp>
 
 #include <algorithm>
 #include <filesystem>
@@ -10,6 +10,9 @@
 #include <stdexcept>
 
 namespace gseg::tools {
+
+using io::ByteReader;
+using io::ByteWriter;
 
 std::string Ranks::firstError(const std::string& mine) {
     std::string first;

@@ -1,6 +1,8 @@
 #include "common/cli.hpp"
 #include "common/ranks.hpp"
 
+#include <gseg/mrpt/errors.hpp>
+#include <gseg/text.hpp>
 #include <gseg/version.hpp>
 
 #include <algorithm>
@@ -10,6 +12,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <map>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -26,6 +29,31 @@ void vprint(std::FILE* out, const char* format, std::va_list args) {
 }
 
 }  // namespace
+
+std::string currentError() {
+    try {
+        throw;
+    } catch (const std::exception& e) {
+        return gseg::mrpt::errorReason(e);
+    } catch (...) {
+        return "unknown error";
+    }
+}
+
+int exitCodeOf(InvalidArgument meaning) {
+    try {
+        throw;
+    } catch (const std::invalid_argument&) {
+        return meaning == InvalidArgument::BadUsage ? kBadUsage : kBadInput;
+    } catch (...) {
+        return kBadInput;
+    }
+}
+
+int reportError(const std::string& tool, InvalidArgument meaning) {
+    std::fprintf(stderr, "%s: %s\n", tool.c_str(), currentError().c_str());
+    return exitCodeOf(meaning);
+}
 
 Verbosity verbosity() { return g_verbosity; }
 void setVerbosity(Verbosity v) { g_verbosity = v; }
@@ -68,35 +96,25 @@ unsigned usableCores() {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
-/// The number at the start of `text` into `n`; the characters it took (0: none).
-static std::size_t leadingNumber(const std::string& text, double& n) {
-    std::size_t used = 0;
-    try {
-        n = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    return used;
-}
-
 double parseMemorySize(const std::string& flag, const std::string& value) {
-    double n = -1;
-    const std::size_t used = leadingNumber(value, n);
-    std::string unit = used ? value.substr(used) : "";
-    if (!unit.empty() && (unit.back() == 'B' || unit.back() == 'b')) unit.pop_back();
+    // The number (gseg::parseNumber), then at most one unit letter and an optional B.
+    std::string number = value;
+    if (!number.empty() && (number.back() == 'B' || number.back() == 'b')) number.pop_back();
     double scale = 0;
-    if (unit.empty()) scale = 1e6;
-    else if (unit.size() == 1)
-        switch (unit[0]) {
+    if (!number.empty())
+        switch (number.back()) {
             case 'k': case 'K': scale = 1e3; break;
             case 'm': case 'M': scale = 1e6; break;
             case 'g': case 'G': scale = 1e9; break;
             case 't': case 'T': scale = 1e12; break;
             default: break;
         }
-    if (used == 0 || scale == 0 || !(n > 0) || !std::isfinite(n))
+    if (scale != 0) number.pop_back();
+    else scale = 1e6;  // no unit letter: MB
+    const std::optional<double> n = parseNumber<double>(number);
+    if (!n || !(*n > 0) || !std::isfinite(*n))
         throw std::invalid_argument(flag + " needs a size > 0 in MB, or with a unit (K, M, G, T: 2G), got '" + value + "'");
-    return n * scale;
+    return *n * scale;
 }
 
 /// Edit distance between `a` and `b` (insertions, deletions, substitutions and swaps of two
@@ -225,11 +243,7 @@ std::string valueName(const TCLAP::Arg& a) {
 }
 
 /// A number (-1, -0.5, -1e3): a value, not an option.
-bool looksNumeric(const std::string& token) {
-    char* end = nullptr;
-    std::strtod(token.c_str(), &end);
-    return end && *end == '\0' && end != token.c_str();
-}
+bool looksNumeric(const std::string& token) { return parseNumber<double>(token).has_value(); }
 
 }  // namespace
 
@@ -350,10 +364,10 @@ int CommandLine::parse(int argc, char** argv) {
     setVerbosity(quiet_.getValue() ? Verbosity::Quiet : verbose_.getValue() ? Verbosity::Verbose : Verbosity::Normal);
     if (mpiTimeout_ && mpiTimeout_->isSet()) {
         const std::string& v = mpiTimeout_->getValue();
-        double s = -1;
-        if (leadingNumber(v, s) != v.size() || !(s >= 0) || !std::isfinite(s))
+        const std::optional<double> s = parseNumber<double>(v);
+        if (!s || !(*s >= 0) || !std::isfinite(*s))
             return usageError("--mpi-timeout needs a number of seconds >= 0 (0: none), got '" + v + "'");
-        mpiTimeoutSeconds_ = s;
+        mpiTimeoutSeconds_ = *s;
     }
     return -1;
 }

@@ -12,6 +12,7 @@
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <cstdio>
+#include <exception>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,6 +23,20 @@ namespace gseg::tools {
 /// everything written); 2 bad usage (before any work, nothing changed); 3 done, but inputs (scans,
 /// frames, files) were skipped and named.
 enum Exit { kDone = 0, kBadInput = 1, kBadUsage = 2, kPartlyDone = 3 };
+
+/// What a std::invalid_argument means where a tool catches it: bad usage (the checks before any
+/// work: an option's value, an output that cannot be written) or bad input (inside the work, where
+/// it names a bad file).
+enum class InvalidArgument { BadUsage, BadInput };
+
+/// The one error-to-exit-code path of every tool, for the exception being handled (call them in a
+/// catch block). currentError(): its message in one line (MRPT's exceptions reduced to their
+/// reason, gseg::mrpt::errorReason; "unknown error" for one not derived from std::exception).
+/// exitCodeOf(): kBadUsage for a std::invalid_argument meaning bad usage, else kBadInput.
+/// reportError(): prints "<tool>: <currentError()>" on stderr and returns exitCodeOf().
+std::string currentError();
+int exitCodeOf(InvalidArgument meaning);
+int reportError(const std::string& tool, InvalidArgument meaning);
 
 enum class Verbosity { Quiet, Normal, Verbose };
 
