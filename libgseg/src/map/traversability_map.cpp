@@ -146,12 +146,12 @@ std::string costmapMetadata(const std::string& prefix, const std::vector<std::pa
     std::string text = "# gseg costmap tiles (the layout of Autoware's divided maps): each tile's map_server YAML and the\n"
                        "# map-frame origin [m] of its lower-left corner; a tile covers x_resolution x y_resolution metres\n";
     char line[256];
-    std::snprintf(line, sizeof line, "# %d x %d cells of %.17g m each; tiles not listed are unknown\n", edge, edge, res);
+    std::snprintf(line, sizeof line, "# %d x %d cells of %.12g m each; tiles not listed are unknown\n", edge, edge, res);
     text += line;
-    std::snprintf(line, sizeof line, "x_resolution: %.17g\ny_resolution: %.17g\n", edge * res, edge * res);
+    std::snprintf(line, sizeof line, "x_resolution: %.12g\ny_resolution: %.12g\n", edge * res, edge * res);
     text += line;
     for (const auto& [x, y] : list) {
-        std::snprintf(line, sizeof line, ": [%.17g, %.17g]\n", double(x * edge) * res, double(y * edge) * res);
+        std::snprintf(line, sizeof line, ": [%.12g, %.12g]\n", double(x * edge) * res, double(y * edge) * res);
         text += fileName(costmapTileStem(prefix, x, y)) + ".yaml" + line;
     }
     return text;
