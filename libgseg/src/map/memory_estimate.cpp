@@ -118,15 +118,17 @@ void LayerBox::add(const ScanUpdate& u) {
     for (std::uint64_t code : u.obstacleHits) extend(long(detail::compactBits(code)), long(detail::compactBits(code >> 1)));
 }
 
-// Per tile of the sparse layers: 14 float layers (8 and 6 scratch) of 64 x 64 cells and the hash
-// map's node, times the slack of the allocator.
-constexpr double kBytesPerLayerTile = 14.0 * LayerTiles::kTileBytes * 1.1;
+// Per tile of the sparse layers and layer: 64 x 64 floats and the hash map's node, times the
+// slack of the allocator. While computed a tile holds 14 layers (8 and 6 scratch), while written 8.
+constexpr double kBytesPerTileLayer = LayerTiles::kTileBytes * 1.1;
 // Per cell of a dense grid written: the 8 layers (32 B), GDAL's in-memory copy of them beside it
 // (32 B) and its compressed output (at most about the copy, a few B for mostly unknown cells), the
 // costmap and its PGM (2 B).
 constexpr double kBytesPerDenseCell = 32 + 32 + 4 + 2;
 
-double layerBytes(double tiles, double denseCells) { return kBytesPerLayerTile * tiles + kBytesPerDenseCell * denseCells; }
+double layerBytes(double tiles, double denseCells) {
+    return std::max(14 * kBytesPerTileLayer * tiles, 8 * kBytesPerTileLayer * tiles + kBytesPerDenseCell * denseCells);
+}
 
 // Calibration (peak RSS of rawlog-octomap with writing against the one before writing, sequence
 // 00 through kitti2rawlog: 6, 60 and 600 scans): the files take about this much per byte of the maps.

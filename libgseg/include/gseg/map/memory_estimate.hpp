@@ -88,10 +88,10 @@ private:
     std::unordered_set<std::uint32_t> tiles_;  ///< key x / kTile, key y / kTile
 };
 
-/// [bytes] The 2.5D layers at their peak: `tiles` tiles of the sparse layers (the 8 layers and
-/// the scratch layers of their computation), and `denseCells` cells of dense grids written from
-/// them (the box of a map written untiled: the grid, GDAL's copy for the GeoTIFF, the costmap; a
-/// tiled map: its overview and one costmap tile).
+/// [bytes] The 2.5D layers at their peak: `tiles` tiles of the sparse layers with the scratch
+/// layers of their computation, or, while written, the 8 layers' tiles and `denseCells` cells of
+/// dense grids written from them (the box of a map written untiled: the grid, GDAL's copy for the
+/// GeoTIFF, the costmap; a tiled map: its overview and one costmap tile), whichever is more.
 double layerBytes(double tiles, double denseCells);
 
 /// [bytes] What this process may still allocate: the smallest of the machine's available memory
