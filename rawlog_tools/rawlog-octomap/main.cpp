@@ -94,6 +94,12 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
     TCLAP::ValueArg<std::string> maxMemory("", "max-memory", "refuse to start (exit 1) if the maps and ray casting are "
                                            "estimated to need more (from the first scan; MB, or 2G; default: the "
                                            "memory available, or ulimit -v / -d if lower)", false, "", "SIZE", cmd);
+    TCLAP::SwitchArg tiles("", "tiles", "write the costmap as tiles (PREFIX_costmap_metadata.yaml naming each "
+                           "PREFIX_costmap_X_Y.pgm + .yaml by its origin, Autoware's divided-map layout) and the layers as "
+                           "one Cloud-Optimized GeoTIFF with overviews, whatever the map's size", cmd);
+    TCLAP::ValueArg<std::string> tiledAbove("", "tiled-above", "[cells] write tiles (as --tiles) when the map is wider or "
+                                            "higher than this (default 4096; below it one costmap and one GeoTIFF)",
+                                            false, "", "N", cmd);
     line.addMpiTimeout();
     TCLAP::ValueArg<std::string> bench("", "bench", "time plain OctoMap (insertPointCloud, discretized) and "
                                        "rawlog-octomap alternately, N rounds each, on the same rawlog; maps go to "
@@ -124,6 +130,9 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         c.overwrite = line.overwrite();
         if (maxMemory.isSet()) c.maxMemory = gseg::tools::parseMemorySize("--max-memory", maxMemory.getValue());
         c.mpiTimeout = line.mpiTimeout();
+        c.outputs.tiles = tiles.getValue();
+        if (tiledAbove.isSet()) c.outputs.tiledAbove = int(parseCount("--tiled-above", tiledAbove.getValue(), 1u << 20));
+        c.outputs.validate();
         c.poses.input = c.input;
         c.options.validate();
     } catch (const std::invalid_argument& e) {
@@ -199,8 +208,8 @@ struct MemoryBudget {
     gseg::map::MemoryEstimate estimate;
     std::size_t inFlight = 0, scans = 0;  ///< as estimated (scans from the rawlog's bytes per scan)
     gseg::map::MemoryLimit limit;
-    /// [bytes] the whole run with the layers over `cells` cells
-    double need(double cells) const { return estimate.peakWithWriting(inFlight, scans, cells); }
+    /// [bytes] the whole run with the layers' `layers` bytes
+    double need(double layers) const { return estimate.peakWithWriting(inFlight, scans, layers); }
 };
 
 /// Memory, before any work (#18): the maps and the scans in flight, estimated from the first
@@ -241,52 +250,72 @@ MemoryBudget checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* se
     return {true, estimate, inFlight, std::max<std::size_t>(1, scans), limit};
 }
 
-/// The 2.5D layers, the costmap and the GeoTIFF are dense over the box of the cells seen (#35): a
-/// pose that jumps kilometres makes that box (and the memory) huge long before the maps are
-/// written. After every scan, the maps' estimate plus the layers over the box so far against the
-/// limit: refused at the scan that makes it too big, naming the box and the largest jump.
+/// The 2.5D layers are sparse in tiles of 64 x 64 cells where scans saw something (#35); a map
+/// written untiled adds dense grids over its box (the costmap, the GeoTIFF), a tiled one an
+/// overview and one costmap tile. After every scan, the maps' estimate plus the layers so far
+/// against the limit: refused at the scan that makes it too big, naming the option to change.
 class LayerGuard {
 public:
     LayerGuard(const Cli& cli, const MemoryBudget& budget) : cli_(cli), budget_(budget) {}
 
-    /// Throws std::runtime_error when the layers over the box, with the maps, exceed the limit.
+    /// Throws std::runtime_error when the layers, with the maps, exceed the limit.
     void add(std::size_t k, const ScanResult& r) {
         if (!budget_.known || !r.skipped.empty()) return;
-        const double before = box_.cells();
+        const double before = box_.cells(), tilesBefore = box_.tiles();
         box_.add(r.update);
         if (haveOrigin_) {
             const double jump = (r.update.origin - lastOrigin_).norm();
             if (jump > jump_) jump_ = jump, jumpScan_ = k;
         }
         haveOrigin_ = true, lastOrigin_ = r.update.origin;
-        if (box_.cells() == before) return;
-        const double layers = gseg::map::layerBytes(box_.cells()), need = budget_.need(box_.cells());
+        if (box_.cells() == before && box_.tiles() == tilesBefore) return;
+        const double layers = layerBytes(), need = budget_.need(layers);
         if (need <= budget_.limit.bytes) return;
         const double res = cli_.options.resolution;
-        char text[700];
-        std::snprintf(text, sizeof text, "the scans up to %s cover %.0f m x %.0f m (x from %.1f m, y from %.1f m): the 2.5D "
-                      "layers over that box need about %s at --resolution %g m (%s with the maps), more than %s (%s); the "
-                      "largest step between two scans is %.0f m (to scan %zu): %s",
-                      r.describe.c_str(), box_.cellsX() * res, box_.cellsY() * res, box_.minX(res), box_.minY(res),
-                      gseg::map::formatBytes(layers).c_str(), res, gseg::map::formatBytes(need).c_str(),
-                      budget_.limit.what.c_str(), gseg::map::formatBytes(budget_.limit.bytes).c_str(), jump_, jumpScan_,
-                      jump_ > 100 ? "do the poses jump? Fix them, or map the parts of the drive separately, or use a coarser --resolution"
-                                  : "use a coarser --resolution, or map the drive in parts");
+        char text[800];
+        std::snprintf(text, sizeof text, "the scans up to %s cover %.0f m x %.0f m (x from %.1f m, y from %.1f m; %.0f tiles "
+                      "of 64 x 64 cells seen): the 2.5D layers need about %s at --resolution %g m%s (%s with the maps), more "
+                      "than %s (%s); the largest step between two scans is %.0f m (to scan %zu): %s",
+                      r.describe.c_str(), box_.cellsX() * res, box_.cellsY() * res, box_.minX(res), box_.minY(res), box_.tiles(),
+                      gseg::map::formatBytes(layers).c_str(), res, tiled() ? ", written as tiles" : ", written as one grid of the box",
+                      gseg::map::formatBytes(need).c_str(), budget_.limit.what.c_str(),
+                      gseg::map::formatBytes(budget_.limit.bytes).c_str(), jump_, jumpScan_, advice().c_str());
         throw std::runtime_error(std::string(text) + (budget_.limit.what == "--max-memory" ? "" : ", or give --max-memory"));
     }
 
-    /// "..." for the detail line: the estimate with the layers over the box of the whole drive.
+    /// "..." for the detail line: the estimate with the layers of the whole drive.
     std::string summary() const {
-        char text[200];
-        std::snprintf(text, sizeof text, "%s with writing (%s while integrating, maps %s, layers over %.0f x %.0f cells %s)",
-                      gseg::map::formatBytes(budget_.need(box_.cells())).c_str(),
+        char text[240];
+        std::snprintf(text, sizeof text, "%s with writing (%s while integrating, maps %s, layers in %.0f tiles over a box of "
+                      "%.0f x %.0f cells, %s: %s)", gseg::map::formatBytes(budget_.need(layerBytes())).c_str(),
                       gseg::map::formatBytes(budget_.estimate.peak(budget_.inFlight, budget_.scans)).c_str(),
-                      gseg::map::formatBytes(budget_.estimate.maps(budget_.scans)).c_str(), box_.cellsX(), box_.cellsY(),
-                      gseg::map::formatBytes(gseg::map::layerBytes(box_.cells())).c_str());
+                      gseg::map::formatBytes(budget_.estimate.maps(budget_.scans)).c_str(), box_.tiles(), box_.cellsX(),
+                      box_.cellsY(), tiled() ? "tiled" : "one grid", gseg::map::formatBytes(layerBytes()).c_str());
         return text;
     }
 
 private:
+    bool tiled() const { return cli_.outputs.tiled(std::int64_t(box_.cellsX()), std::int64_t(box_.cellsY())); }
+    /// [bytes] the layers' tiles and the dense grids written from them
+    double layerBytes() const {
+        const gseg::map::MapOutputOptions& o = cli_.outputs;
+        const double dense = tiled() ? double(o.pictureSide) * o.pictureSide + double(o.costmapTile) * o.costmapTile : box_.cells();
+        return gseg::map::layerBytes(box_.tiles(), dense);
+    }
+    /// What to change: the box written as one grid is too big (tiles), or the tiles themselves.
+    std::string advice() const {
+        const gseg::map::MapOutputOptions& o = cli_.outputs;
+        const double dense = gseg::map::layerBytes(0, tiled() ? 0 : box_.cells());
+        if (!tiled() && dense > gseg::map::layerBytes(box_.tiles(), 0)) {
+            char text[200];
+            std::snprintf(text, sizeof text, "write the map as tiles (--tiles, or --tiled-above below %d cells, the box's %.0f "
+                          "x %.0f cells)", o.tiledAbove, box_.cellsX(), box_.cellsY());
+            return text;
+        }
+        return jump_ > 100 ? "do the poses jump? Fix them, or map the parts of the drive separately, or use a coarser --resolution"
+                           : "use a coarser --resolution, or map the drive in parts";
+    }
+
     const Cli& cli_;
     MemoryBudget budget_;
     gseg::map::LayerBox box_;
@@ -376,7 +405,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     if (!quiet && gseg::tools::progressOut())  // the writing takes seconds on a drive: say it is going on
         std::fprintf(gseg::tools::progressOut(), "rawlog-octomap: writing %zu map files (%s_*) ...\n",
                      gseg::map::TraversabilityMap::outputPaths(cli.prefix).size(), cli.prefix.c_str());
-    report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix); });
+    report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix, cli.outputs); });
     report.times.writing = gseg::secondsSince(t0);
     report.stats = map.stats();
     report.wallSeconds = gseg::secondsSince(start);

@@ -31,6 +31,7 @@ struct Cli {
     bool overwrite = false;  ///< -w: replace map files that exist
     double maxMemory = 0;    ///< [bytes] --max-memory (0: the machine's available memory)
     double mpiTimeout = 0;   ///< [s] --mpi-timeout (gseg::tools::Ranks::setTimeout())
+    gseg::map::MapOutputOptions outputs;  ///< --tiles, --tiled-above: the costmap and GeoTIFF of a big map as tiles
 };
 
 class RemoteWorkers;

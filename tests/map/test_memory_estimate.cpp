@@ -163,14 +163,20 @@ TEST(MemoryEstimate, TheLayerBoxSpansTheGroundCellsAndTheObstacleColumnsOfEveryS
     EXPECT_EQ(box.cellsY(), 26);  // -20 .. 5
     EXPECT_DOUBLE_EQ(box.minY(0.5), -10.0);
     EXPECT_EQ(box.cells(), 40 * 26);
-    // At least the 7 float layers; a 6 km x 6 km box at 0.2 m: tens of gigabytes.
-    EXPECT_GE(gseg::map::layerBytes(1000), 28 * 1000);
-    EXPECT_GT(gseg::map::layerBytes(30000.0 * 30000.0), 40e9);
+    // Two tiles of 64 x 64 cells: cell x -10 and 29 share tile -1 and 0? No: -10 is in tile -1,
+    // 29 in tile 0; y 5 in tile 0, -20 in tile -1.
+    EXPECT_EQ(box.tiles(), 2);
+    // The sparse tiles: at least the 8 float layers per tile; dense grids: at least 8 floats a
+    // cell; a 6 km x 6 km box at 0.2 m written as one grid: tens of gigabytes, as tiles: little.
+    EXPECT_GE(gseg::map::layerBytes(1, 0), 8 * 64 * 64 * 4);
+    EXPECT_GE(gseg::map::layerBytes(0, 1000), 32 * 1000);
+    EXPECT_GT(gseg::map::layerBytes(500, 30000.0 * 30000.0), 40e9);
+    EXPECT_LT(gseg::map::layerBytes(500, 2048.0 * 2048.0 + 1024.0 * 1024.0), 1e9);
     // The whole run's peak: more than while integrating, by the writing and the layers.
     const gseg::map::MemoryEstimate e = gseg::map::estimateMemory(gseg::map::rayFootprint(
         gseg::PointCloudView(spinningScan().data(), spinningScan().size() / 3), Eigen::Vector3d::Zero(), {}));
     EXPECT_GT(e.peakWithWriting(6, 10, 0), e.peak(6, 10));
-    EXPECT_NEAR(e.peakWithWriting(6, 10, 1e6) - e.peakWithWriting(6, 10, 0), gseg::map::layerBytes(1e6), 1);
+    EXPECT_NEAR(e.peakWithWriting(6, 10, 1e6) - e.peakWithWriting(6, 10, 0), 1e6, 1);
 }
 
 // The tool: the six sequence-00 scans through kitti2rawlog.
@@ -242,10 +248,11 @@ TEST_F(RawlogOctomapMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKi
 #endif
 }
 
-// #35: two scans 6 km apart diagonally (a GPS jump): the layers over the box would need tens of
-// gigabytes. Before: grew to 18.6 GB resident and was killed by the kernel after 147 s, writing
-// nothing. Now refused at the second scan, in one line naming the box and the jump.
-TEST_F(RawlogOctomapMemory, APoseJumpIsRefusedAtTheScanThatMakesTheLayersTooBigNotKilled) {
+// #35: two scans 6 km apart diagonally (a GPS jump). Before the layers were sparse: grew to 18.6
+// GB resident and was killed by the kernel after 147 s, writing nothing; then refused at the
+// second scan. Now mapped under ulimit -v 4 GB: the layers in tiles where the scans saw the
+// ground, the costmap as tiles and the layers as one COG (the box is about 21700 cells a side).
+TEST_F(RawlogOctomapMemory, APoseJumpMapsInMemoryOfTheGroundSeenAsTiles) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
 #else
@@ -264,33 +271,41 @@ TEST_F(RawlogOctomapMemory, APoseJumpIsRefusedAtTheScanThatMakesTheLayersTooBigN
     };
     double seconds = 0;
     r = runJump("-q", "ulimit -v 4000000; ", seconds);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_LT(seconds, 120) << "not minutes of growing";
+    EXPECT_TRUE(fs::exists(dir_ / "m_costmap_metadata.yaml"));
+    EXPECT_TRUE(fs::exists(dir_ / "m_layers.tif"));
+    EXPECT_FALSE(fs::exists(dir_ / "m_costmap.pgm")) << "a box of 21700 cells a side is written as tiles";
+    EXPECT_NE(gseg::test::entriesContaining(dir_.string(), "m_costmap_"), "");
+    EXPECT_EQ(gseg::test::entriesContaining(dir_.string(), ".tmp"), "") << "no temporary";
+    // Forced to one grid of the box (--tiled-above beyond it): refused at the second scan, in one
+    // line naming the box, the jump and the options to change.
+    r = runJump("-q -w --tiled-above 100000", "ulimit -v 4000000; ", seconds);
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_EQ(r.output.rfind("rawlog-octomap: the scans up to scan 1 ('VELODYNE' at rawlog entry ", 0), 0u) << r.output;
-    EXPECT_TRUE(std::regex_search(r.output, std::regex("cover 43[0-9][0-9] m x 43[0-9][0-9] m \\(x from -[0-9.]+ m, y from -[0-9.]+ m\\)")))
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("cover 43[0-9][0-9] m x 43[0-9][0-9] m \\(x from -[0-9.]+ m, y from -[0-9.]+ m; [0-9]+ tiles")))
         << r.output;
-    EXPECT_TRUE(std::regex_search(r.output, std::regex("the 2.5D layers over that box need about [0-9]+ GB at --resolution 0.2 m")))
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("the 2.5D layers need about [0-9]+ GB at --resolution 0.2 m, written as one grid of the box")))
         << r.output;
     EXPECT_NE(r.output.find("more than the address-space limit (ulimit -v) ("), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("the largest step between two scans is 6001 m (to scan 1): do the poses jump?"), std::string::npos)
-        << r.output;
-    EXPECT_NE(r.output.find("or use a coarser --resolution, or give --max-memory"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the largest step between two scans is 6001 m (to scan 1): write the map as tiles (--tiles, or "
+                            "--tiled-above below 100000 cells"), std::string::npos) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one line: " << r.output;
     EXPECT_LT(seconds, 30) << "refused at once, not after growing for minutes";
-    expectNothingWritten();
-    // The user's own limit is named as such; one that fits the layers maps the two scans.
-    r = runJump("-q --max-memory 2G", "", seconds);
+    // The user's own limit is named as such.
+    r = runJump("-q -w --tiled-above 100000 --max-memory 2G", "", seconds);
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_NE(r.output.find("more than --max-memory (2.0 GB); the largest step"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("or give --max-memory"), std::string::npos) << r.output;
-    expectNothingWritten();
     // The same two scans 600 m apart: a box of 0.2 GB of layers, mapped.
     std::ofstream(dir_ / "jump.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 -424 0 1 0 0 0 0 1 424\n";
     r = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -w -i '" + seq + "' --first 0 --last 1 --poses '" +
                                (dir_ / "jump.txt").string() + "' -o '" + (dir_ / "jump.rawlog").string() + "'");
     ASSERT_EQ(r.status, 0) << r.output;
-    r = runJump("-q --max-memory 2G", "", seconds);
+    r = runJump("-q -w --max-memory 2G", "", seconds);
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_TRUE(fs::exists(dir_ / "m_layers.tif"));
+    EXPECT_TRUE(fs::exists(dir_ / "m_costmap.pgm")) << "a box of about 3000 cells a side: one costmap";
 #endif
 }
 

@@ -99,32 +99,42 @@ void validate(const LayerGrid& grid) {
     }
 }
 
+/// A band's name, unit, meaning and nodata; +-inf as +-kNoLimit, said in the band's metadata
+/// (`infinite`: the band holds some), so GDAL's statistics stay finite.
+void describeBand(GDALRasterBandH band, const std::string& name, const std::string& unit, const std::string& meaning, bool infinite) {
+    GDALSetDescription(band, name.c_str());
+    GDALSetRasterUnitType(band, unit.c_str());
+    GDALSetMetadataItem(band, "UNIT", unit.c_str(), nullptr);
+    GDALSetMetadataItem(band, "MEANING", meaning.c_str(), nullptr);
+    GDALSetRasterNoDataValue(band, std::numeric_limits<double>::quiet_NaN());
+    if (infinite) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%g", double(kNoLimit));
+        GDALSetMetadataItem(band, "NO_LIMIT", text, nullptr);
+    }
+}
+
+/// The dataset-level metadata, geotransform and CRS of a layer file whose lower-left corner is
+/// at (originX, originY) [m], `height` rows of `res` [m].
+void describeDataset(GDALDatasetH ds, double originX, double originY, int height, double res) {
+    double gt[6] = {originX, res, 0.0, originY + height * res, 0.0, -res};  // north-up
+    GDALSetGeoTransform(ds, gt);
+    GDALSetProjection(ds, kMapFrameWkt);
+    GDALSetMetadataItem(ds, "GSEG_CONTENT", "gseg 2.5D map layers: one float32 band per layer, NaN = unknown", nullptr);
+    GDALSetMetadataItem(ds, "GSEG_FRAME", "map frame (the rawlog's world frame) in metres: columns along +x, rows along -y (first row: largest y)", nullptr);
+}
+
 /// The in-memory (MEM driver) dataset of the grid: bands, names, units, nodata, geotransform, CRS.
 GDALDatasetH memoryDataset(const LayerGrid& grid) {
     const int w = grid.width(), h = grid.height(), n = int(grid.layers().size());
     GDALDatasetH ds = GDALCreate(GDALGetDriverByName("MEM"), "", w, h, n, GDT_Float32, nullptr);
     if (!ds) return nullptr;
-    const double res = grid.resolution();
-    double gt[6] = {grid.originX(), res, 0.0, grid.originY() + h * res, 0.0, -res};  // north-up
-    GDALSetGeoTransform(ds, gt);
-    GDALSetProjection(ds, kMapFrameWkt);
-    GDALSetMetadataItem(ds, "GSEG_CONTENT", "gseg 2.5D map layers: one float32 band per layer, NaN = unknown", nullptr);
-    GDALSetMetadataItem(ds, "GSEG_FRAME", "map frame (the rawlog's world frame) in metres: columns along +x, rows along -y (first row: largest y)", nullptr);
+    describeDataset(ds, grid.originX(), grid.originY(), h, grid.resolution());
     for (int b = 0; b < n; ++b) {
         const LayerGrid::Layer& layer = grid.layers()[std::size_t(b)];
         GDALRasterBandH band = GDALGetRasterBand(ds, b + 1);
-        GDALSetDescription(band, layer.name.c_str());
-        GDALSetRasterUnitType(band, layer.unit.c_str());
-        GDALSetMetadataItem(band, "UNIT", layer.unit.c_str(), nullptr);
-        GDALSetMetadataItem(band, "MEANING", layer.meaning.c_str(), nullptr);
-        GDALSetRasterNoDataValue(band, std::numeric_limits<double>::quiet_NaN());
-        // +-inf as +-kNoLimit, said in the band's metadata: GDAL's statistics stay finite.
         const bool infinite = std::any_of(layer.values.begin(), layer.values.end(), [](float v) { return std::isinf(v); });
-        if (infinite) {
-            char text[32];
-            std::snprintf(text, sizeof text, "%g", double(kNoLimit));
-            GDALSetMetadataItem(band, "NO_LIMIT", text, nullptr);
-        }
+        describeBand(band, layer.name, layer.unit, layer.meaning, infinite);
         std::vector<float> capped(infinite ? std::size_t(w) : 0);
         for (int row = 0; row < h; ++row) {  // image row 0 = the grid's last row (largest y)
             const float* src = layer.values.data() + grid.index(0, h - 1 - row);
@@ -160,6 +170,133 @@ std::string encodeLayersGeoTiff(const LayerGrid& grid) {
     if (const GByte* data = VSIGetMemFileBuffer(name.c_str(), &size, FALSE)) bytes.assign(reinterpret_cast<const char*>(data), std::size_t(size));
     VSIUnlink(name.c_str());
     if (errors.failed() || bytes.empty()) throw std::runtime_error("layer GeoTIFF: " + errors.text("GDAL wrote no file"));
+    return bytes;
+}
+
+namespace {
+
+/// Writes the cells of `tiles` that fall in `band`'s raster (image pixel (col, row) = cell
+/// (x0 + col, yEnd - 1 - row)) block by block: only blocks with an allocated tile are written (a
+/// sparse GTiff leaves the others out: nodata). False on a GDAL failure.
+bool writeSparseBands(GDALDatasetH ds, int overview, const LayerTiles& tiles, std::int64_t x0, std::int64_t yEnd, int block) {
+    GDALRasterBandH first = GDALGetRasterBand(ds, 1);
+    if (overview >= 0) first = GDALGetOverview(first, overview);
+    const int w = GDALGetRasterBandXSize(first), h = GDALGetRasterBandYSize(first);
+    std::set<std::pair<int, int>> blocks;  // (block row, block column) with data
+    const std::int64_t n = LayerTiles::kTile;
+    for (const auto& [tx, ty] : tiles.tileList()) {
+        const std::int64_t c0 = std::max<std::int64_t>(0, tx * n - x0), c1 = std::min<std::int64_t>(w - 1, (tx + 1) * n - 1 - x0);
+        const std::int64_t r0 = std::max<std::int64_t>(0, yEnd - (ty + 1) * n), r1 = std::min<std::int64_t>(h - 1, yEnd - 1 - ty * n);
+        if (c0 > c1 || r0 > r1) continue;
+        for (std::int64_t br = r0 / block; br <= r1 / block; ++br)
+            for (std::int64_t bc = c0 / block; bc <= c1 / block; ++bc) blocks.insert({int(br), int(bc)});
+    }
+    std::vector<float> row;
+    for (const auto& [br, bc] : blocks) {
+        const int col0 = bc * block, row0 = br * block;
+        const int bw = std::min(block, w - col0), bh = std::min(block, h - row0);
+        const LayerGrid g = tiles.window(x0 + col0, yEnd - row0 - bh, bw, bh);
+        row.resize(std::size_t(bw));
+        for (int b = 0; b < int(g.layers().size()); ++b) {
+            GDALRasterBandH band = GDALGetRasterBand(ds, b + 1);
+            if (overview >= 0) band = GDALGetOverview(band, overview);
+            const std::vector<float>& v = g.layers()[std::size_t(b)].values;
+            for (int r = 0; r < bh; ++r) {
+                const float* src = v.data() + g.index(0, bh - 1 - r);
+                for (int c = 0; c < bw; ++c) row[std::size_t(c)] = std::isinf(src[c]) ? (src[c] > 0 ? kNoLimit : -kNoLimit) : src[c];
+                if (GDALRasterIO(band, GF_Write, col0, row0 + r, bw, 1, row.data(), bw, 1, GDT_Float32, 0, 0) != CE_None) return false;
+            }
+        }
+    }
+    return true;
+}
+
+/// Whether any allocated cell of layer `l` is infinite.
+bool anyInfinite(const LayerTiles& tiles, std::size_t l) {
+    const std::int64_t n = LayerTiles::kTile;
+    for (const auto& [tx, ty] : tiles.tileList())
+        for (std::int64_t iy = ty * n; iy < (ty + 1) * n; ++iy)
+            for (std::int64_t ix = tx * n; ix < (tx + 1) * n; ++ix)
+                if (std::isinf(tiles.get(l, ix, iy))) return true;
+    return false;
+}
+
+/// The bytes of a /vsimem/ file, then the file removed.
+std::string takeMemoryFile(const std::string& name) {
+    std::string bytes;
+    vsi_l_offset size = 0;
+    if (const GByte* data = VSIGetMemFileBuffer(name.c_str(), &size, FALSE)) bytes.assign(reinterpret_cast<const char*>(data), std::size_t(size));
+    VSIUnlink(name.c_str());
+    return bytes;
+}
+
+}  // namespace
+
+int cogOverviewCount(std::int64_t width, std::int64_t height, int block) {
+    int count = 0;
+    for (std::int64_t side = std::max(width, height); side > block; side = (side + 1) / 2) ++count;
+    return count;
+}
+
+std::string encodeLayersCog(const LayerTiles& tiles, int block) {
+    if (tiles.boxWidth() == 0 || tiles.boxHeight() == 0) throw std::invalid_argument("layer COG: the map has no cells");
+    if (tiles.layers().empty()) throw std::invalid_argument("layer COG: the map has no layers");
+    if (block < 16 || block % 16 != 0) throw std::invalid_argument("layer COG: the block size must be a multiple of 16");
+    // The image's corners on the grid of the coarsest overview: its cells are whole overview cells.
+    const int levels = cogOverviewCount(tiles.boxWidth(), tiles.boxHeight(), block);
+    const std::int64_t f = std::int64_t(1) << levels;
+    const std::int64_t x0 = LayerTiles::floorDiv(tiles.minX(), f) * f, yEnd = -LayerTiles::floorDiv(-(tiles.maxY() + 1), f) * f;
+    const std::int64_t y0 = LayerTiles::floorDiv(tiles.minY(), f) * f, xEnd = -LayerTiles::floorDiv(-(tiles.maxX() + 1), f) * f;
+    const std::int64_t w = xEnd - x0, h = yEnd - y0;
+    if (w > (1 << 30) || h > (1 << 30)) throw std::invalid_argument("layer COG: the map is too big");
+    GdalErrors errors;
+    registerDrivers();
+    // The blocks written here and the ones the COG driver reads (every block of the box, empty
+    // ones as nodata) go through GDAL's block cache: at its default (5 % of the machine's memory)
+    // it would hold gigabytes of them; 64 MB is as fast. Restored when done.
+    const GIntBig cacheBefore = GDALGetCacheMax64();
+    if (cacheBefore > (GIntBig(64) << 20)) GDALSetCacheMax64(GIntBig(64) << 20);
+    struct RestoreCache {
+        GIntBig bytes;
+        ~RestoreCache() { GDALSetCacheMax64(bytes); }
+    } restore{cacheBefore};
+    const std::string source = memoryFileName(), target = memoryFileName();
+    const std::string blockText = std::to_string(block);
+    const std::string blockX = "BLOCKXSIZE=" + blockText, blockY = "BLOCKYSIZE=" + blockText;
+    const char* sourceOptions[] = {"TILED=YES", blockX.c_str(), blockY.c_str(), "SPARSE_OK=TRUE", "COMPRESS=DEFLATE", "ZLEVEL=1",
+                                   "BIGTIFF=YES", nullptr};
+    const int n = int(tiles.layers().size());
+    Dataset ds(GDALCreate(GDALGetDriverByName("GTiff"), source.c_str(), int(w), int(h), n, GDT_Float32, const_cast<char**>(sourceOptions)));
+    if (!ds.h) throw std::runtime_error("layer COG: " + errors.text("cannot create the raster"));
+    describeDataset(ds.h, double(x0) * tiles.resolution(), double(y0) * tiles.resolution(), int(h), tiles.resolution());
+    for (int b = 0; b < n; ++b) {
+        const LayerTiles::Info& l = tiles.layers()[std::size_t(b)];
+        describeBand(GDALGetRasterBand(ds.h, b + 1), l.name, l.unit, l.meaning, anyInfinite(tiles, std::size_t(b)));
+    }
+    bool ok = writeSparseBands(ds.h, -1, tiles, x0, yEnd, block);
+    // The overviews, computed by gseg from the tiles (LayerTiles::overview(): class and cost the
+    // most blocking cell, the rest the mean), so no pass over the empty box is made.
+    std::vector<int> factors;
+    for (int k = 1; k <= levels; ++k) factors.push_back(1 << k);
+    if (ok && levels > 0)
+        ok = GDALBuildOverviews(ds.h, "NONE", levels, factors.data(), 0, nullptr, nullptr, nullptr) == CE_None;
+    for (int k = 0; ok && k < levels; ++k)
+        ok = writeSparseBands(ds.h, k, tiles.overview(factors[std::size_t(k)]), x0 / factors[std::size_t(k)], yEnd / factors[std::size_t(k)], block);
+    if (!ok || errors.failed()) {
+        ds.close();
+        VSIUnlink(source.c_str());
+        throw std::runtime_error("layer COG: " + errors.text("cannot write the raster"));
+    }
+    GDALFlushCache(ds.h);
+    const std::string cogBlock = "BLOCKSIZE=" + blockText;
+    const char* cogOptions[] = {"COMPRESS=DEFLATE", "PREDICTOR=YES", cogBlock.c_str(), "OVERVIEWS=FORCE_USE_EXISTING", "SPARSE_OK=TRUE",
+                                "BIGTIFF=IF_SAFER", nullptr};
+    Dataset cog(GDALCreateCopy(GDALGetDriverByName("COG"), target.c_str(), ds.h, FALSE, const_cast<char**>(cogOptions), nullptr, nullptr));
+    cog.close();
+    ds.close();
+    VSIUnlink(source.c_str());
+    std::string bytes = takeMemoryFile(target);
+    if (errors.failed() || bytes.empty()) throw std::runtime_error("layer COG: " + errors.text("GDAL wrote no file"));
     return bytes;
 }
 

@@ -1,5 +1,6 @@
 #include <gseg/map/memory_estimate.hpp>
 
+#include <gseg/map/layer_tiles.hpp>
 #include <gseg/map/scan_update.hpp>
 
 #include "voxel_keys.hpp"
@@ -109,6 +110,7 @@ void LayerBox::add(const ScanUpdate& u) {
     auto extend = [&](long x, long y) {
         lo_[0] = std::min(lo_[0], x), hi_[0] = std::max(hi_[0], x);
         lo_[1] = std::min(lo_[1], y), hi_[1] = std::max(hi_[1], y);
+        tiles_.insert((std::uint32_t(x / LayerTiles::kTile) << 16) | std::uint32_t(y / LayerTiles::kTile));
     };
     for (const GroundCellSample& c : u.groundCells) extend(long(c.cell >> 16), long(c.cell & 0xffffu));
     // Obstacle hits are sorted by Morton code: the ones of a column are not together, but their
@@ -116,20 +118,24 @@ void LayerBox::add(const ScanUpdate& u) {
     for (std::uint64_t code : u.obstacleHits) extend(long(detail::compactBits(code)), long(detail::compactBits(code >> 1)));
 }
 
-// Per cell: the 7 layers (28 B) and, while they are computed, 5 temporaries (20 B); while the
-// GeoTIFF is encoded, GDAL's in-memory copy of the 7 layers (28 B) beside the layers, and its
-// compressed output (at most about the copy: a few B for the mostly unknown cells of a big box);
-// the costmap and its PGM (2 B).
-constexpr double kBytesPerLayerCell = 28 + 28 + 4 + 2;
+// Per tile of the sparse layers and layer: 64 x 64 floats and the hash map's node, times the
+// slack of the allocator. While computed a tile holds 14 layers (8 and 6 scratch), while written 8.
+constexpr double kBytesPerTileLayer = LayerTiles::kTileBytes * 1.1;
+// Per cell of a dense grid written: the 8 layers (32 B), GDAL's in-memory copy of them beside it
+// (32 B) and its compressed output (at most about the copy, a few B for mostly unknown cells), the
+// costmap and its PGM (2 B).
+constexpr double kBytesPerDenseCell = 32 + 32 + 4 + 2;
 
-double layerBytes(double cells) { return kBytesPerLayerCell * cells; }
+double layerBytes(double tiles, double denseCells) {
+    return std::max(14 * kBytesPerTileLayer * tiles, 8 * kBytesPerTileLayer * tiles + kBytesPerDenseCell * denseCells);
+}
 
 // Calibration (peak RSS of rawlog-octomap with writing against the one before writing, sequence
 // 00 through kitti2rawlog: 6, 60 and 600 scans): the files take about this much per byte of the maps.
 constexpr double kWritingPerMapByte = 1.9;
 
-double MemoryEstimate::peakWithWriting(std::size_t inFlight, std::size_t scans, double layerCells) const {
-    return peak(inFlight, scans) + kWritingPerMapByte * maps(scans) + layerBytes(layerCells);
+double MemoryEstimate::peakWithWriting(std::size_t inFlight, std::size_t scans, double layers) const {
+    return peak(inFlight, scans) + kWritingPerMapByte * maps(scans) + layers;
 }
 
 namespace {

@@ -15,74 +15,96 @@ constexpr double kPi = 3.14159265358979323846;
 /// Column key parts: OctoMap key x, y (cell index + 32768).
 int keyX(std::uint32_t cell) { return int(cell >> 16); }
 int keyY(std::uint32_t cell) { return int(cell & 0xffffu); }
+/// The map cell index of a column key part (negative left of / below the origin).
+std::int64_t cellOf(int key) { return std::int64_t(key) - 32768; }
+std::uint32_t columnKey(std::int64_t ix, std::int64_t iy) { return (std::uint32_t(ix + 32768) << 16) | std::uint32_t(iy + 32768); }
+
+/// The layers' order in the tiles: the table of terrain_layers.hpp, then the scratch layers of the
+/// computation (dropped at the end).
+enum Layer : std::size_t { kElevation, kSlope, kStep, kRoughness, kClearance, kClass, kCost, kSource, kOutputLayers,
+                           kLowZ = kOutputLayers, kHighZ, kOffX, kOffY, kRise, kClassBefore, kAllLayers };
+
+using Cursor = LayerTiles::Cursor;
+
+/// Calls f(ix, iy) for every cell of the tiles in `tiles` (tile coordinates) that lies in the box.
+template <class F>
+void forEachCell(const LayerTiles& t, const std::vector<std::pair<std::int64_t, std::int64_t>>& tiles, F&& f) {
+    const int n = LayerTiles::kTile;
+    for (const auto& [tx, ty] : tiles)
+        for (std::int64_t iy = std::max(ty * n, t.minY()); iy < std::min((ty + 1) * n, t.maxY() + 1); ++iy)
+            for (std::int64_t ix = std::max(tx * n, t.minX()); ix < std::min((tx + 1) * n, t.maxX() + 1); ++ix) f(ix, iy);
+}
 
 /// Gap filling (terrain_layers.hpp): judged against the classes before any gap is filled, so the
-/// result does not depend on the order cells are visited.
-template <class ColumnOf>
-void fillGaps(LayerGrid& g, const TraversabilityOptions& o, ColumnOf columnOf, const ObstacleColumns& obstacles,
-              const RayFreeQuery& rayFree) {
-    auto& elevation = g.find("elevation")->values;
-    auto& slope = g.find("slope")->values;
-    auto& cls = g.find("class")->values;
-    auto& cost = g.find("cost")->values;
-    auto& source = g.find("source")->values;
-    auto& clearance = g.find("clearance")->values;
-    const std::vector<float> before = cls;
+/// result does not depend on the order cells are visited. A filled cell lies within maxGapWidth
+/// (at most 50 cells) of a traversable one: the tiles with data and their 8 neighbours hold them all.
+void fillGaps(LayerTiles& g, const TraversabilityOptions& o, const ObstacleColumns& obstacles, const RayFreeQuery& rayFree) {
+    static_assert(LayerTiles::kTile > 51, "a gap's cells lie in the tiles next to its ends");
+    const auto allocated = g.tileList();
+    for (const auto& [tx, ty] : allocated)  // the classes before
+        for (std::int64_t iy = ty * LayerTiles::kTile; iy < (ty + 1) * LayerTiles::kTile; ++iy)
+            for (std::int64_t ix = tx * LayerTiles::kTile; ix < (tx + 1) * LayerTiles::kTile; ++ix)
+                g.at(kClassBefore, ix, iy) = g.get(kClass, ix, iy);
+    std::vector<std::pair<std::int64_t, std::int64_t>> candidates;
+    for (const auto& [tx, ty] : allocated)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) candidates.emplace_back(tx + dx, ty + dy);
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    Cursor before(g, kClassBefore), elevation(g, kElevation), here(g, kClassBefore);
     const double res = o.resolution, tanMax = std::tan(o.maxSlope * kPi / 180.0);
     const int dirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
     const float trav = float(ColumnClass::Traversable);
     struct Fill {
-        std::size_t i;
+        std::int64_t ix, iy;
         float z, slopeDeg, clearance;
     };
     std::vector<Fill> fills;
-    for (int cy = 0; cy < g.height(); ++cy)
-        for (int cx = 0; cx < g.width(); ++cx) {
-            const std::size_t i = g.index(cx, cy);
-            if (!std::isnan(before[i])) continue;
-            double bestWidth = std::numeric_limits<double>::infinity();
-            float bestZ = 0, bestSlope = 0;
-            for (const auto& d : dirs) {
-                const double stepLen = res * std::hypot(double(d[0]), double(d[1]));
-                const int reach = int(std::floor(o.gapWidth() / stepLen + 1e-9)) + 1;
-                int dist[2] = {0, 0};
-                float z[2] = {0, 0};
-                for (int side = 0; side < 2; ++side) {
-                    const int sx = side ? -d[0] : d[0], sy = side ? -d[1] : d[1];
-                    for (int k = 1; k <= reach; ++k) {
-                        const int x = cx + k * sx, y = cy + k * sy;
-                        if (!g.inside(x, y)) break;
-                        const float c = before[g.index(x, y)];
-                        if (std::isnan(c)) continue;
-                        if (c == trav) dist[side] = k, z[side] = elevation[g.index(x, y)];
-                        break;  // the first known cell ends the search: an obstacle stops it
-                    }
+    forEachCell(g, candidates, [&](std::int64_t cx, std::int64_t cy) {
+        if (!std::isnan(here.get(cx, cy))) return;
+        double bestWidth = std::numeric_limits<double>::infinity();
+        float bestZ = 0, bestSlope = 0;
+        for (const auto& d : dirs) {
+            const double stepLen = res * std::hypot(double(d[0]), double(d[1]));
+            const int reach = int(std::floor(o.gapWidth() / stepLen + 1e-9)) + 1;
+            int dist[2] = {0, 0};
+            float z[2] = {0, 0};
+            for (int side = 0; side < 2; ++side) {
+                const int sx = side ? -d[0] : d[0], sy = side ? -d[1] : d[1];
+                for (int k = 1; k <= reach; ++k) {
+                    const std::int64_t x = cx + k * sx, y = cy + k * sy;
+                    const float c = before.get(x, y);  // NaN outside the box and the tiles, as unknown
+                    if (std::isnan(c)) continue;
+                    if (c == trav) dist[side] = k, z[side] = elevation.get(x, y);
+                    break;  // the first known cell ends the search: an obstacle stops it
                 }
-                if (!dist[0] || !dist[1]) continue;
-                const double width = (dist[0] + dist[1] - 1) * stepLen, span = (dist[0] + dist[1]) * stepLen;
-                if (width > o.gapWidth() + 1e-9 || width >= bestWidth) continue;
-                const double dz = std::abs(double(z[0]) - double(z[1]));
-                if (dz > o.maxStep || dz > tanMax * span) continue;
-                bestWidth = width;
-                bestZ = float((double(z[0]) * dist[1] + double(z[1]) * dist[0]) / (dist[0] + dist[1]));
-                bestSlope = float(std::atan(dz / span) * 180.0 / kPi);
             }
-            if (!std::isfinite(bestWidth)) continue;
-            const std::uint32_t column = columnOf(cx, cy);
-            // A ray passed over the interpolated ground within the robot's height, none went below it.
-            if (!rayFree(column, bestZ, bestZ + float(o.clearance))) continue;
-            if (rayFree(column, bestZ - float(o.clearance), bestZ - float(o.maxStep))) continue;
-            // Nothing stands in it: no obstacle voxel between minObstacleHeight and clearance above.
-            float lowest = std::numeric_limits<float>::infinity();
-            if (const auto col = obstacles.find(column); col != obstacles.end())
-                for (float z : col->second)
-                    if (z > bestZ + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
-            if (lowest - bestZ < o.clearance) continue;
-            fills.push_back({i, bestZ, bestSlope, lowest - bestZ});
+            if (!dist[0] || !dist[1]) continue;
+            const double width = (dist[0] + dist[1] - 1) * stepLen, span = (dist[0] + dist[1]) * stepLen;
+            if (width > o.gapWidth() + 1e-9 || width >= bestWidth) continue;
+            const double dz = std::abs(double(z[0]) - double(z[1]));
+            if (dz > o.maxStep || dz > tanMax * span) continue;
+            bestWidth = width;
+            bestZ = float((double(z[0]) * dist[1] + double(z[1]) * dist[0]) / (dist[0] + dist[1]));
+            bestSlope = float(std::atan(dz / span) * 180.0 / kPi);
         }
+        if (!std::isfinite(bestWidth)) return;
+        const std::uint32_t column = columnKey(cx, cy);
+        // A ray passed over the interpolated ground within the robot's height, none went below it.
+        if (!rayFree(column, bestZ, bestZ + float(o.clearance))) return;
+        if (rayFree(column, bestZ - float(o.clearance), bestZ - float(o.maxStep))) return;
+        // Nothing stands in it: no obstacle voxel between minObstacleHeight and clearance above.
+        float lowest = std::numeric_limits<float>::infinity();
+        if (const auto col = obstacles.find(column); col != obstacles.end())
+            for (float z : col->second)
+                if (z > bestZ + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
+        if (lowest - bestZ < o.clearance) return;
+        fills.push_back({cx, cy, bestZ, bestSlope, lowest - bestZ});
+    });
     for (const Fill& f : fills) {
-        elevation[f.i] = f.z, slope[f.i] = f.slopeDeg, cls[f.i] = trav, source[f.i] = 2, clearance[f.i] = f.clearance;
-        cost[f.i] = float(std::min(99.0, std::floor(99.0 * f.slopeDeg / o.maxSlope)));
+        g.at(kElevation, f.ix, f.iy) = f.z, g.at(kSlope, f.ix, f.iy) = f.slopeDeg, g.at(kClass, f.ix, f.iy) = trav;
+        g.at(kSource, f.ix, f.iy) = 2, g.at(kClearance, f.ix, f.iy) = f.clearance;
+        g.at(kCost, f.ix, f.iy) = float(std::min(99.0, std::floor(99.0 * f.slopeDeg / o.maxSlope)));
     }
 }
 
@@ -103,8 +125,8 @@ const std::vector<std::string>& terrainLayerNames() {
     return names;
 }
 
-LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& o,
-                        double emptyX, double emptyY, const gseg::TerrainModel* terrain, const RayFreeQuery& rayFree) {
+LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& o,
+                             double emptyX, double emptyY, const gseg::TerrainModel* terrain, const RayFreeQuery& rayFree) {
     o.validate();
     const auto minPoints = std::uint64_t(o.minGroundPoints);
     int lo[2] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max()}, hi[2] = {-1, -1};
@@ -134,144 +156,157 @@ LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstac
         lo[0] = hi[0] = int(std::floor(emptyX / res)) + 32768;
         lo[1] = hi[1] = int(std::floor(emptyY / res)) + 32768;
     }
-    LayerGrid g(hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, res, (lo[0] - 32768) * res, (lo[1] - 32768) * res);
-    auto& elevation = g.add("elevation", "m", "mean height of the ground points (map frame z)").values;
-    auto& slope = g.add("slope", "deg", "slope of the least-squares plane through the ground-point centroids of the cell and its 8 neighbours").values;
-    auto& step = g.add("step", "m", "largest height difference between a ground point of the cell and one of a neighbouring cell, up or down").values;
-    auto& roughness = g.add("roughness", "m", "standard deviation of the ground point heights in the cell").values;
-    auto& clearance = g.add("clearance", "m", "free height above the ground up to the lowest obstacle (inf: none)").values;
-    auto& cls = g.add("class", "-", "1 traversable, 2 not traversable, NaN unknown").values;
-    auto& cost = g.add("cost", "-", "0-99 traversable (99 = at a robot limit), 100 not traversable, NaN unknown").values;
-    auto& source = g.add("source", "-", "ground from: 0 the scans' ground points, 1 the drive's terrain model, 2 interpolated across a gap").values;
-    const int w = g.width(), h = g.height();
-    auto at = [&](std::uint32_t cell) { return g.index(keyX(cell) - lo[0], keyY(cell) - lo[1]); };
-    auto columnKey = [&](int cx, int cy) { return (std::uint32_t(cx + lo[0]) << 16) | std::uint32_t(cy + lo[1]); };
+    std::vector<LayerTiles::Info> info{
+            {"elevation", "m", "mean height of the ground points (map frame z)"},
+            {"slope", "deg", "slope of the least-squares plane through the ground-point centroids of the cell and its 8 neighbours"},
+            {"step", "m", "largest height difference between a ground point of the cell and one of a neighbouring cell, up or down"},
+            {"roughness", "m", "standard deviation of the ground point heights in the cell"},
+            {"clearance", "m", "free height above the ground up to the lowest obstacle (inf: none)"},
+            {"class", "-", "1 traversable, 2 not traversable, NaN unknown"},
+            {"cost", "-", "0-99 traversable (99 = at a robot limit), 100 not traversable, NaN unknown"},
+            {"source", "-", "ground from: 0 the scans' ground points, 1 the drive's terrain model, 2 interpolated across a gap"},
+            {"lowZ", "m", ""}, {"highZ", "m", ""}, {"offX", "m", ""}, {"offY", "m", ""}, {"rise", "m", ""}, {"classBefore", "-", ""}};
+    LayerTiles g(res, info);
+    g.setBox(cellOf(lo[0]), cellOf(lo[1]), cellOf(hi[0]), cellOf(hi[1]));
+    // The cell centres exactly as a dense grid from the box's corner computes them (same bytes).
+    const double originX = (lo[0] - 32768) * res, originY = (lo[1] - 32768) * res;
+    auto centreX = [&](std::int64_t ix) { return originX + (int(ix - cellOf(lo[0])) + 0.5) * res; };
+    auto centreY = [&](std::int64_t iy) { return originY + (int(iy - cellOf(lo[1])) + 0.5) * res; };
+    Cursor elevation(g, kElevation), slope(g, kSlope), step(g, kStep), roughness(g, kRoughness), clearance(g, kClearance);
+    Cursor cls(g, kClass), cost(g, kCost), source(g, kSource), lowZ(g, kLowZ), highZ(g, kHighZ), offX(g, kOffX), offY(g, kOffY);
+    Cursor rise(g, kRise);
 
-    std::vector<float> lowZ(g.cells(), kNaN), highZ(g.cells(), kNaN), offX(g.cells(), 0.f), offY(g.cells(), 0.f);
     for (const auto& [cell, s] : ground.cells()) {
         if (s.count < minPoints) continue;
         const double n = double(s.count), mean = s.sumZ / n;
-        const std::size_t i = at(cell);
-        elevation[i] = float(mean);
-        lowZ[i] = s.minZ, highZ[i] = s.maxZ;
-        offX[i] = float(s.sumX / n - g.centreX(keyX(cell) - lo[0])), offY[i] = float(s.sumY / n - g.centreY(keyY(cell) - lo[1]));
-        roughness[i] = float(std::sqrt(std::max(0.0, s.sumZ2 / n - mean * mean)));
-        source[i] = 0;
+        const std::int64_t ix = cellOf(keyX(cell)), iy = cellOf(keyY(cell));
+        elevation.at(ix, iy) = float(mean);
+        lowZ.at(ix, iy) = s.minZ, highZ.at(ix, iy) = s.maxZ;
+        offX.at(ix, iy) = float(s.sumX / n - centreX(ix)), offY.at(ix, iy) = float(s.sumY / n - centreY(iy));
+        roughness.at(ix, iy) = float(std::sqrt(std::max(0.0, s.sumZ2 / n - mean * mean)));
+        source.at(ix, iy) = 0;
     }
     // The drive's terrain model where the scans' ground points are too few: its elevation, no
     // spread (roughness 0; the step rule sees the modelled height).
     for (const Modelled& m : modelled) {
-        const std::size_t i = at(m.cell);
-        if (!std::isnan(elevation[i])) continue;
-        elevation[i] = m.z, lowZ[i] = highZ[i] = m.z, roughness[i] = 0, source[i] = 1;
+        const std::int64_t ix = cellOf(keyX(m.cell)), iy = cellOf(keyY(m.cell));
+        if (!std::isnan(elevation.at(ix, iy))) continue;
+        elevation.at(ix, iy) = m.z, lowZ.at(ix, iy) = highZ.at(ix, iy) = m.z, roughness.at(ix, iy) = 0, source.at(ix, iy) = 1;
+        offX.at(ix, iy) = offY.at(ix, iy) = 0;
     }
+    // Obstacle-only columns get their tile too (their class).
+    for (const auto& [cell, zs] : obstacles)
+        if (!zs.empty()) g.touch(cellOf(keyX(cell)), cellOf(keyY(cell)));
+    if (g.tiles() == 0) g.touch(cellOf(lo[0]), cellOf(lo[1]));  // nothing seen: the one unknown cell
+    const auto tiles = g.tileList();
 
     // Slope and step from the 3 x 3 neighbourhood of each cell with an elevation.
-    for (int cy = 0; cy < h; ++cy)
-        for (int cx = 0; cx < w; ++cx) {
-            const std::size_t i = g.index(cx, cy);
-            const float z0 = elevation[i];
-            if (std::isnan(z0)) continue;
-            double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, sx = 0, sy = 0, sz = 0, m = 0, jump = 0;
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    if (!g.inside(cx + dx, cy + dy)) continue;
-                    const std::size_t j = g.index(cx + dx, cy + dy);
-                    const float z = elevation[j];
-                    if (std::isnan(z)) continue;
-                    const double x = dx * res + offX[j], y = dy * res + offY[j];
-                    sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z, sx += x, sy += y, sz += z, ++m;
-                    if (j != i) jump = std::max({jump, double(highZ[j]) - double(lowZ[i]), double(highZ[i]) - double(lowZ[j])});
-                }
-            step[i] = float(jump);
-            if (m < 3) continue;
-            // Centred normal equations of z = a + b x + c y.
-            const double cxx = sxx - sx * sx / m, cxy = sxy - sx * sy / m, cyy = syy - sy * sy / m;
-            const double cxz = sxz - sx * sz / m, cyz = syz - sy * sz / m;
-            const double det = cxx * cyy - cxy * cxy;
-            if (!(det > 0.25 * res * res * res * res)) continue;  // the centroids (nearly) on a line: no plane
-            const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
-            slope[i] = float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
-        }
+    Cursor nElevation(g, kElevation), nLowZ(g, kLowZ), nHighZ(g, kHighZ), nOffX(g, kOffX), nOffY(g, kOffY);
+    forEachCell(g, tiles, [&](std::int64_t cx, std::int64_t cy) {
+        const float z0 = elevation.get(cx, cy);
+        if (std::isnan(z0)) return;
+        double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, sx = 0, sy = 0, sz = 0, m = 0, jump = 0;
+        const float low0 = lowZ.get(cx, cy), high0 = highZ.get(cx, cy);
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const float z = nElevation.get(cx + dx, cy + dy);  // NaN outside the box and the tiles
+                if (std::isnan(z)) continue;
+                const double x = dx * res + nOffX.get(cx + dx, cy + dy), y = dy * res + nOffY.get(cx + dx, cy + dy);
+                sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z, sx += x, sy += y, sz += z, ++m;
+                if (dx != 0 || dy != 0)
+                    jump = std::max({jump, double(nHighZ.get(cx + dx, cy + dy)) - double(low0), double(high0) - double(nLowZ.get(cx + dx, cy + dy))});
+            }
+        step.at(cx, cy) = float(jump);
+        if (m < 3) return;
+        // Centred normal equations of z = a + b x + c y.
+        const double cxx = sxx - sx * sx / m, cxy = sxy - sx * sy / m, cyy = syy - sy * sy / m;
+        const double cxz = sxz - sx * sz / m, cyz = syz - sy * sz / m;
+        const double det = cxx * cyy - cxy * cxy;
+        if (!(det > 0.25 * res * res * res * res)) return;  // the centroids (nearly) on a line: no plane
+        const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
+        slope.at(cx, cy) = float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
+    });
 
     // Rise above the lowest elevation within groundRiseRadius (a disc of cell centres).
-    std::vector<float> rise(g.cells(), kNaN);
     const int rr = int(std::ceil(o.groundRiseRadius / res));
-    for (int cy = 0; cy < h; ++cy)
-        for (int cx = 0; cx < w; ++cx) {
-            const float z0 = elevation[g.index(cx, cy)];
-            if (std::isnan(z0)) continue;
-            float lowest = z0;
-            for (int dy = -rr; dy <= rr; ++dy)
-                for (int dx = -rr; dx <= rr; ++dx)
-                    if ((dx * dx + dy * dy) * res * res <= o.groundRiseRadius * o.groundRiseRadius * (1 + 1e-9) &&
-                        g.inside(cx + dx, cy + dy)) {
-                        const float z = elevation[g.index(cx + dx, cy + dy)];
-                        if (z < lowest) lowest = z;  // NaN compares false
-                    }
-            rise[g.index(cx, cy)] = z0 - lowest;
-        }
+    forEachCell(g, tiles, [&](std::int64_t cx, std::int64_t cy) {
+        const float z0 = elevation.get(cx, cy);
+        if (std::isnan(z0)) return;
+        float lowest = z0;
+        for (int dy = -rr; dy <= rr; ++dy)
+            for (int dx = -rr; dx <= rr; ++dx)
+                if ((dx * dx + dy * dy) * res * res <= o.groundRiseRadius * o.groundRiseRadius * (1 + 1e-9)) {
+                    const float z = nElevation.get(cx + dx, cy + dy);
+                    if (z < lowest) lowest = z;  // NaN compares false
+                }
+        rise.at(cx, cy) = z0 - lowest;
+    });
 
     // Clearance and class.
     const int r = std::max(1, int(std::lround(1.0 / res)));
     std::vector<float> near;
-    for (int cy = 0; cy < h; ++cy)
-        for (int cx = 0; cx < w; ++cx) {
-            const std::size_t i = g.index(cx, cy);
-            const auto col = obstacles.find((std::uint32_t(cx + lo[0]) << 16) | std::uint32_t(cy + lo[1]));
-            const std::vector<float>* zs = col == obstacles.end() ? nullptr : &col->second;
-            const float z0 = elevation[i];
-            if (!std::isnan(z0)) {
-                float lowest = std::numeric_limits<float>::infinity();
-                if (zs)
-                    for (float z : *zs)
-                        if (z > z0 + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
-                clearance[i] = lowest - z0;
-                const bool ok = clearance[i] >= o.clearance && step[i] <= o.maxStep && roughness[i] <= o.maxRoughness &&
-                                rise[i] <= o.maxGroundRise &&
-                                !(slope[i] > o.maxSlope);  // no slope (too few neighbours): not judged by it
-                cls[i] = float(ok ? ColumnClass::Traversable : ColumnClass::Obstacle);
-                // Modelled ground is free only where a ray crossed the layer just above the obstacle
-                // height and left it free: ground seen through a low slot (under a car's body or a
-                // ledge whose top no ray reached) stays unknown.
-                if (ok && source[i] == 1 && rayFree &&
-                    !rayFree(columnKey(cx, cy), z0 + float(o.minObstacleHeight), z0 + float(o.minObstacleHeight + 2 * res))) {
-                    cls[i] = kNaN;
-                    continue;
-                }
-                if (ok) {
-                    double worst = std::max(step[i] / o.maxStep, roughness[i] / o.maxRoughness);
-                    if (!std::isnan(slope[i])) worst = std::max(worst, slope[i] / o.maxSlope);
-                    cost[i] = float(std::min(99.0, std::floor(99.0 * worst)));
-                } else {
-                    cost[i] = 100;
-                }
-                continue;
-            }
-            if (!zs || zs->empty()) continue;
-            near.clear();
-            for (int dy = -r; dy <= r; ++dy)
-                for (int dx = -r; dx <= r; ++dx)
-                    if (g.inside(cx + dx, cy + dy) && !std::isnan(elevation[g.index(cx + dx, cy + dy)]))
-                        near.push_back(elevation[g.index(cx + dx, cy + dy)]);
-            float ref = 0;
-            if (!near.empty()) {
-                std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
-                ref = near[near.size() / 2];
-            } else {
-                ref = *std::min_element(zs->begin(), zs->end()) - float(res / 2);
-            }
-            bool blocked = false;
+    forEachCell(g, tiles, [&](std::int64_t cx, std::int64_t cy) {
+        const auto col = obstacles.find(columnKey(cx, cy));
+        const std::vector<float>* zs = col == obstacles.end() ? nullptr : &col->second;
+        const float z0 = elevation.get(cx, cy);
+        if (!std::isnan(z0)) {
             float lowest = std::numeric_limits<float>::infinity();
-            for (float z : *zs)
-                if (z > ref + o.minObstacleHeight) {
-                    lowest = std::min(lowest, z - float(res / 2));
-                    blocked |= z < ref + o.clearance;
-                }
-            if (blocked) cls[i] = float(ColumnClass::Obstacle), cost[i] = 100, clearance[i] = std::max(0.0f, lowest - ref);
+            if (zs)
+                for (float z : *zs)
+                    if (z > z0 + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
+            const float free = lowest - z0;
+            clearance.at(cx, cy) = free;
+            const float stepHere = step.get(cx, cy), roughHere = roughness.get(cx, cy), slopeHere = slope.get(cx, cy);
+            const bool ok = free >= o.clearance && stepHere <= o.maxStep && roughHere <= o.maxRoughness &&
+                            rise.get(cx, cy) <= o.maxGroundRise &&
+                            !(slopeHere > o.maxSlope);  // no slope (too few neighbours): not judged by it
+            cls.at(cx, cy) = float(ok ? ColumnClass::Traversable : ColumnClass::Obstacle);
+            // Modelled ground is free only where a ray crossed the layer just above the obstacle
+            // height and left it free: ground seen through a low slot (under a car's body or a
+            // ledge whose top no ray reached) stays unknown.
+            if (ok && source.get(cx, cy) == 1 && rayFree &&
+                !rayFree(columnKey(cx, cy), z0 + float(o.minObstacleHeight), z0 + float(o.minObstacleHeight + 2 * res))) {
+                cls.at(cx, cy) = kNaN;
+                return;
+            }
+            if (ok) {
+                double worst = std::max(stepHere / o.maxStep, roughHere / o.maxRoughness);
+                if (!std::isnan(slopeHere)) worst = std::max(worst, slopeHere / o.maxSlope);
+                cost.at(cx, cy) = float(std::min(99.0, std::floor(99.0 * worst)));
+            } else {
+                cost.at(cx, cy) = 100;
+            }
+            return;
         }
-    if (o.fillGaps && rayFree) fillGaps(g, o, columnKey, obstacles, rayFree);
+        if (!zs || zs->empty()) return;
+        near.clear();
+        for (int dy = -r; dy <= r; ++dy)
+            for (int dx = -r; dx <= r; ++dx)
+                if (const float z = nElevation.get(cx + dx, cy + dy); !std::isnan(z)) near.push_back(z);
+        float ref = 0;
+        if (!near.empty()) {
+            std::nth_element(near.begin(), near.begin() + std::ptrdiff_t(near.size() / 2), near.end());
+            ref = near[near.size() / 2];
+        } else {
+            ref = *std::min_element(zs->begin(), zs->end()) - float(res / 2);
+        }
+        bool blocked = false;
+        float lowest = std::numeric_limits<float>::infinity();
+        for (float z : *zs)
+            if (z > ref + o.minObstacleHeight) {
+                lowest = std::min(lowest, z - float(res / 2));
+                blocked |= z < ref + o.clearance;
+            }
+        if (blocked) cls.at(cx, cy) = float(ColumnClass::Obstacle), cost.at(cx, cy) = 100, clearance.at(cx, cy) = std::max(0.0f, lowest - ref);
+    });
+    if (o.fillGaps && rayFree) fillGaps(g, o, obstacles, rayFree);
+    g.keepLayers(kOutputLayers);
     return g;
+}
+
+LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& o,
+                        double emptyX, double emptyY, const gseg::TerrainModel* terrain, const RayFreeQuery& rayFree) {
+    return terrainLayerTiles(ground, obstacles, o, emptyX, emptyY, terrain, rayFree).dense();
 }
 
 gseg::io::RosMap costmapOf(const LayerGrid& layers) {

@@ -103,24 +103,70 @@ std::string mapPlyBytes(const OccupiedVoxels& v, double resolution) {
     return gseg::io::labelledPlyBytes(PointCloudView(v.xyz.data(), v.labels.size()), v.labels, colours, options);
 }
 
-/// The free, occupied and unknown cells of a costmap, as a planner reads its PGM.
-void countCostmapCells(const gseg::io::RosMap& map, std::size_t (&cells)[3]) {
-    cells[0] = cells[1] = cells[2] = 0;
-    for (int cy = 0; cy < map.height; ++cy)
-        for (int cx = 0; cx < map.width; ++cx) {
-            const gseg::io::RosCell c = map.at(cx, cy);
-            ++cells[c == gseg::io::RosCell::Free ? 0 : c == gseg::io::RosCell::Occupied ? 1 : 2];
-        }
+/// The free, occupied and unknown cells of the costmap over the box of `tiles` (costmapOf(): the
+/// class layer's traversable free, not traversable occupied, the rest unknown).
+void countCostmapCells(const LayerTiles& tiles, std::size_t (&cells)[3]) {
+    cells[0] = cells[1] = 0;
+    const std::size_t cls = tiles.layerIndex("class");
+    const std::int64_t n = LayerTiles::kTile;
+    for (const auto& [tx, ty] : tiles.tileList())
+        for (std::int64_t iy = std::max(ty * n, tiles.minY()); iy < std::min((ty + 1) * n, tiles.maxY() + 1); ++iy)
+            for (std::int64_t ix = std::max(tx * n, tiles.minX()); ix < std::min((tx + 1) * n, tiles.maxX() + 1); ++ix) {
+                const float c = tiles.get(cls, ix, iy);
+                cells[0] += c == float(ColumnClass::Traversable);
+                cells[1] += c == float(ColumnClass::Obstacle);
+            }
+    cells[2] = std::size_t(tiles.boxWidth() * tiles.boxHeight()) - cells[0] - cells[1];
 }
 
-/// The costmap's PGM and YAML (files 6 and 7; the YAML names the PGM by its file name).
-void writeCostmap(gseg::io::AtomicFileSet& files, const gseg::io::RosMap& map) {
-    const std::string pgm = gseg::io::encodePgm(map);
-    files[6].write(pgm.data(), pgm.size());
-    const std::string path = files.paths()[6];
+/// The costmap tiles (x, y) of `edge` cells that hold a known cell, sorted by y then x.
+std::vector<std::pair<std::int64_t, std::int64_t>> costmapTiles(const LayerTiles& tiles, int edge) {
+    std::vector<std::pair<std::int64_t, std::int64_t>> list;
+    const std::size_t cls = tiles.layerIndex("class");
+    const std::int64_t n = LayerTiles::kTile;
+    for (const auto& [tx, ty] : tiles.tileList())
+        for (std::int64_t iy = ty * n; iy < (ty + 1) * n; ++iy)
+            for (std::int64_t ix = tx * n; ix < (tx + 1) * n; ++ix)
+                if (!std::isnan(tiles.get(cls, ix, iy))) list.emplace_back(LayerTiles::floorDiv(iy, edge), LayerTiles::floorDiv(ix, edge));
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    for (auto& p : list) std::swap(p.first, p.second);
+    return list;
+}
+
+/// "PREFIX_costmap_3_-2" for tile (3, -2).
+std::string costmapTileStem(const std::string& prefix, std::int64_t x, std::int64_t y) {
+    return prefix + "_costmap_" + std::to_string(x) + "_" + std::to_string(y);
+}
+
+std::string fileName(const std::string& path) {
     const std::size_t slash = path.find_last_of('/');
-    const std::string yaml = gseg::io::encodeRosMapYaml(map, slash == std::string::npos ? path : path.substr(slash + 1));
-    files[7].write(yaml.data(), yaml.size());
+    return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+/// The tiles' metadata in the layout of Autoware's divided maps (traversability_map.hpp).
+std::string costmapMetadata(const std::string& prefix, const std::vector<std::pair<std::int64_t, std::int64_t>>& list, int edge,
+                            double res) {
+    std::string text = "# gseg costmap tiles (the layout of Autoware's divided maps): each tile's map_server YAML and the\n"
+                       "# map-frame origin [m] of its lower-left corner; a tile covers x_resolution x y_resolution metres\n";
+    char line[256];
+    std::snprintf(line, sizeof line, "# %d x %d cells of %.12g m each; tiles not listed are unknown\n", edge, edge, res);
+    text += line;
+    std::snprintf(line, sizeof line, "x_resolution: %.12g\ny_resolution: %.12g\n", edge * res, edge * res);
+    text += line;
+    for (const auto& [x, y] : list) {
+        std::snprintf(line, sizeof line, ": [%.12g, %.12g]\n", double(x * edge) * res, double(y * edge) * res);
+        text += fileName(costmapTileStem(prefix, x, y)) + ".yaml" + line;
+    }
+    return text;
+}
+
+/// A costmap's PGM and YAML (files `pgm` and `pgm + 1`; the YAML names the PGM by its file name).
+void writeCostmap(gseg::io::AtomicFileSet& files, std::size_t pgm, const gseg::io::RosMap& map) {
+    const std::string bytes = gseg::io::encodePgm(map);
+    files[pgm].write(bytes.data(), bytes.size());
+    const std::string yaml = gseg::io::encodeRosMapYaml(map, fileName(files.paths()[pgm]));
+    files[pgm + 1].write(yaml.data(), yaml.size());
 }
 
 }  // namespace
@@ -236,14 +282,16 @@ MapStats TraversabilityMap::stats() const {
     const PictureLayout layout = pictureLayout(g, path_);
     s.cellsUnknown = std::size_t(layout.cellsWide * layout.cellsHigh) - s.cellsTraversable - s.cellsObstacle;
     if (costmapScans_ != stats_.scans && !empty()) {
-        countCostmapCells(costmapOf(layers()), costmapCells_);
+        countCostmapCells(layerTiles(), costmapCells_);
         costmapScans_ = stats_.scans;
     }
     s.costmapFree = costmapCells_[0], s.costmapOccupied = costmapCells_[1], s.costmapUnknown = costmapCells_[2];
     return s;
 }
 
-LayerGrid TraversabilityMap::layers() const {
+LayerGrid TraversabilityMap::layers() const { return layerTiles().dense(); }
+
+LayerTiles TraversabilityMap::layerTiles() const {
     ObstacleColumns columns;
     const float occupied = configured_->getOccupancyThresLog();
     const double p = options_.obstacleClearProbability;
@@ -273,7 +321,7 @@ LayerGrid TraversabilityMap::layers() const {
         }
         return false;
     };
-    return terrainLayers(*groundCells_, columns, options_, first.x(), first.y(), options_.driveTerrain ? terrain_.get() : nullptr,
+    return terrainLayerTiles(*groundCells_, columns, options_, first.x(), first.y(), options_.driveTerrain ? terrain_.get() : nullptr,
                          rayFree);
 }
 
@@ -293,10 +341,34 @@ std::string TraversabilityMap::pictureTitle() const {
     return buf;
 }
 
-std::vector<std::string> TraversabilityMap::write(const std::string& prefix) const {
+void MapOutputOptions::validate() const {
+    if (tiledAbove < 1) throw std::invalid_argument("map outputs: tiledAbove must be at least 1 cell");
+    if (costmapTile < 64 || costmapTile > 16384) throw std::invalid_argument("map outputs: costmapTile must be 64 to 16384 cells");
+    if (pictureSide < 16) throw std::invalid_argument("map outputs: pictureSide must be at least 16 cells");
+}
+
+std::vector<std::string> TraversabilityMap::write(const std::string& prefix, const MapOutputOptions& how) const {
     if (empty()) throw std::logic_error("TraversabilityMap::write: no scan was inserted");
+    how.validate();
+    const LayerTiles tiles = layerTiles();
+    const bool tiled = how.tiled(tiles.boxWidth(), tiles.boxHeight());
+    // The files: the voxel maps and pictures (0-5), the costmap (one PGM + YAML, or the tiles'
+    // metadata and a PGM + YAML per tile), the layers' GeoTIFF, the layer pictures.
+    std::vector<std::string> paths = outputPaths(prefix);
+    std::vector<std::pair<std::int64_t, std::int64_t>> costTiles;
+    if (tiled) {
+        costTiles = costmapTiles(tiles, how.costmapTile);
+        std::vector<std::string> costmap{prefix + "_costmap_metadata.yaml"};
+        for (const auto& [x, y] : costTiles) {
+            costmap.push_back(costmapTileStem(prefix, x, y) + ".pgm");
+            costmap.push_back(costmapTileStem(prefix, x, y) + ".yaml");
+        }
+        paths.erase(paths.begin() + 6, paths.begin() + 8);
+        paths.insert(paths.begin() + 6, costmap.begin(), costmap.end());
+    }
+    const std::size_t tif = paths.size() - terrainLayerNames().size() - 1;
     // One file at a time, straight to its temporary: the peak memory is the map plus one file.
-    gseg::io::AtomicFileSet files(outputPaths(prefix));
+    gseg::io::AtomicFileSet files(paths);
     const double res = configured_->getResolution();
     files[0].write([&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
     files[1].write([&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
@@ -311,14 +383,26 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
     const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
-    const LayerGrid grid = layers();
-    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid, v.groundUnderObstacles);
-    const gseg::io::RosMap costmap = costmapOf(grid);
-    writeCostmap(files, costmap);
-    countCostmapCells(costmap, costmapCells_);
+    countCostmapCells(tiles, costmapCells_);
     costmapScans_ = stats_.scans;
-    const std::string tif = encodeLayersGeoTiff(grid);
-    files[8].write(tif.data(), tif.size());
+    // A small map: one dense grid of its box; a tiled one: an overview for the scene and pictures.
+    const int factor = tiled ? int((std::max(tiles.boxWidth(), tiles.boxHeight()) + how.pictureSide - 1) / how.pictureSide) : 1;
+    const LayerGrid grid = tiled ? tiles.overview(factor).dense() : tiles.dense();
+    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid, v.groundUnderObstacles);
+    if (!tiled) {
+        writeCostmap(files, 6, costmapOf(grid));
+        const std::string bytes = encodeLayersGeoTiff(grid);
+        files[tif].write(bytes.data(), bytes.size());
+    } else {
+        const std::string metadata = costmapMetadata(prefix, costTiles, how.costmapTile, res);
+        files[6].write(metadata.data(), metadata.size());
+        for (std::size_t k = 0; k < costTiles.size(); ++k) {
+            const int edge = how.costmapTile;
+            writeCostmap(files, 7 + 2 * k, costmapOf(tiles.window(costTiles[k].first * edge, costTiles[k].second * edge, edge, edge)));
+        }
+        const std::string bytes = encodeLayersCog(tiles);
+        files[tif].write(bytes.data(), bytes.size());
+    }
     LayerPictureOptions picture;
     picture.title = pictureTitle();
     for (std::size_t i = 0; i < terrainLayerNames().size(); ++i) {
@@ -326,7 +410,7 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix) con
         LayerPictureOptions o = picture;
         if (name == "cost") o.min = 0, o.max = 100;
         const std::string png = encodeLayerPng(grid, name, o);
-        files[9 + i].write(png.data(), png.size());
+        files[tif + 1 + i].write(png.data(), png.size());
     }
     files.commit();
     return files.paths();

@@ -22,6 +22,9 @@
 /// predictor), band-interleaved; the same grid always gives the same bytes.
 
 #include <gseg/map/layer_grid.hpp>
+#include <gseg/map/layer_tiles.hpp>
+
+#include <cstdint>
 
 #include <string>
 
@@ -35,6 +38,19 @@ constexpr float kNoLimit = 1000.0f;
 /// a layer whose values are not width * height, an empty or duplicate layer name, and
 /// std::runtime_error with GDAL's message if GDAL fails.
 std::string encodeLayersGeoTiff(const LayerGrid& grid);
+
+/// The layers of a big map (#35) as one Cloud-Optimized GeoTIFF (GDAL's COG driver): the bands,
+/// names, units, nodata, +-inf and CRS as encodeLayersGeoTiff(), in blocks of `block` x `block`
+/// cells (blocks without a cell of a tile are left out: sparse), with cogOverviewCount()
+/// overviews of factor 2, 4, 8, ... computed from the tiles (LayerTiles::overview()). The image
+/// covers the box of `tiles`, widened to whole cells of the coarsest overview (NaN there), so an
+/// overview pixel holds exactly `factor` x `factor` cells. QGIS and `gdalinfo` open it at once.
+/// Throws std::invalid_argument on a map without cells or layers or a block size that is not a
+/// multiple of 16, std::runtime_error with GDAL's message if GDAL fails.
+std::string encodeLayersCog(const LayerTiles& tiles, int block = 512);
+
+/// The overviews encodeLayersCog() makes: halvings until the longer side fits in one block.
+int cogOverviewCount(std::int64_t width, std::int64_t height, int block);
 
 /// Writes encodeLayersGeoTiff(grid) to `path` through gseg::io::AtomicFile (complete or absent).
 /// Throws as encodeLayersGeoTiff() (the message naming `path`) and std::runtime_error naming

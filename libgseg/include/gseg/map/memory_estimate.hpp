@@ -23,6 +23,8 @@
 
 #include <cstddef>
 #include <string>
+#include <cstdint>
+#include <unordered_set>
 
 namespace gseg::map {
 
@@ -52,8 +54,8 @@ struct MemoryEstimate {
     double maps(std::size_t scans) const { return firstMap + growthPerScan * double(scans > 0 ? scans - 1 : 0); }
     /// [bytes] The peak of a whole run, writing included: peak() and then, while the files are
     /// written, what they take beside the maps (writingPerMapByte() per byte of the maps: the
-    /// voxel lists, trees and scene) and the 2.5D layers over `layerCells` cells (layerBytes()).
-    double peakWithWriting(std::size_t inFlight, std::size_t scans, double layerCells) const;
+    /// voxel lists, trees and scene) and the 2.5D layers' `layers` bytes (layerBytes()).
+    double peakWithWriting(std::size_t inFlight, std::size_t scans, double layers) const;
 };
 
 /// The estimate for scans like `footprint`'s (rayFootprint()).
@@ -61,13 +63,14 @@ MemoryEstimate estimateMemory(const RayFootprint& footprint);
 
 struct ScanUpdate;
 
-/// The box of map cells (x, y columns, at the map resolution) that the 2.5D layers, the costmap and
-/// the layers' GeoTIFF cover: every column with a ground point or an obstacle hit of a scan. The
-/// layers are dense over this box, so their memory follows its area, not the ground seen: a pose
-/// that jumps kilometres away makes it huge (#35). Grown scan by scan with add().
+/// The 2.5D layers' extent, grown scan by scan with add(): the box of map cells (x, y columns, at
+/// the map resolution) of every column with a ground point or an obstacle hit of a scan, and the
+/// tiles of LayerTiles::kTile x kTile cells those columns fall in. The layers are sparse in such
+/// tiles (gseg/map/layer_tiles.hpp), so their memory follows the tiles; the box decides whether
+/// the outputs are one dense grid of it or tiles (MapOutputOptions::tiled()).
 class LayerBox {
 public:
-    /// Extends the box by the columns of the update's ground cells and obstacle hits.
+    /// Extends the box and the tiles by the columns of the update's ground cells and obstacle hits.
     void add(const ScanUpdate& update);
     bool empty() const { return hi_[0] < lo_[0]; }
     /// [cells] along x and y (0 when empty)
@@ -77,14 +80,19 @@ public:
     /// [m] the box's lower-left corner and its size, at cells of edge `resolution`
     double minX(double resolution) const { return (lo_[0] - 32768) * resolution; }
     double minY(double resolution) const { return (lo_[1] - 32768) * resolution; }
+    /// The tiles with a column seen.
+    double tiles() const { return double(tiles_.size()); }
 
 private:
     long lo_[2] = {1L << 20, 1L << 20}, hi_[2] = {-1, -1};  ///< OctoMap key x, y (cell index + 32768)
+    std::unordered_set<std::uint32_t> tiles_;  ///< key x / kTile, key y / kTile
 };
 
-/// [bytes] The 2.5D layers over `cells` cells at their peak: 7 float layers and the temporaries of
-/// their computation, then the GeoTIFF's in-memory copy beside them, and the costmap.
-double layerBytes(double cells);
+/// [bytes] The 2.5D layers at their peak: `tiles` tiles of the sparse layers with the scratch
+/// layers of their computation, or, while written, the 8 layers' tiles and `denseCells` cells of
+/// dense grids written from them (the box of a map written untiled: the grid, GDAL's copy for the
+/// GeoTIFF, the costmap; a tiled map: its overview and one costmap tile), whichever is more.
+double layerBytes(double tiles, double denseCells);
 
 /// [bytes] What this process may still allocate: the smallest of the machine's available memory
 /// (MemAvailable of /proc/meminfo), RLIMIT_AS less the address space in use and RLIMIT_DATA less

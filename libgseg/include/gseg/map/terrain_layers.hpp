@@ -41,6 +41,7 @@
 #include <gseg/io/ros_map.hpp>
 #include <gseg/map/column_class.hpp>
 #include <gseg/map/layer_grid.hpp>
+#include <gseg/map/layer_tiles.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/terrain_model.hpp>
 #include <gseg/traversability_options.hpp>
@@ -82,10 +83,19 @@ const std::vector<std::string>& terrainLayerNames();
 /// in a voxel whose centre lies in [zLow, zHigh] [m] and left it free.
 using RayFreeQuery = std::function<bool(std::uint32_t column, float zLow, float zHigh)>;
 
-/// The layers of the table above, over the bounding box of every cell with ground points, obstacle
-/// voxels or modelled ground; without any, one unknown cell holding map position (emptyX, emptyY)
-/// [m]. `terrain`: the drive's terrain model, built (TerrainModel::build()) at the map's resolution,
-/// or nullptr; `rayFree`: the rays' free space (gap filling needs it; without it no gap is filled).
+/// The layers of the table above, in sparse tiles (gseg/map/layer_tiles.hpp) where a cell has
+/// ground points, obstacle voxels, modelled ground or a filled gap; the box (LayerTiles::setBox())
+/// is the bounding box of every cell with ground points, obstacle voxels or modelled ground, and
+/// without any, one unknown cell holding map position (emptyX, emptyY) [m]. Memory follows the
+/// tiles, not the box (#35). `terrain`: the drive's terrain model, built (TerrainModel::build()) at
+/// the map's resolution, or nullptr; `rayFree`: the rays' free space (gap filling needs it; without
+/// it no gap is filled).
+LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& options,
+                             double emptyX = 0, double emptyY = 0, const gseg::TerrainModel* terrain = nullptr,
+                             const RayFreeQuery& rayFree = RayFreeQuery());
+
+/// terrainLayerTiles() as one dense grid over its box (LayerTiles::dense(): throws
+/// std::length_error on a box too big for one grid).
 LayerGrid terrainLayers(const GroundCells& ground, const ObstacleColumns& obstacles, const TraversabilityOptions& options,
                         double emptyX = 0, double emptyY = 0, const gseg::TerrainModel* terrain = nullptr,
                         const RayFreeQuery& rayFree = RayFreeQuery());

@@ -9,6 +9,7 @@
 /// robot pose and the sensor mounting first, and give the sensor's world position as ray origin.
 
 #include <gseg/map/layer_grid.hpp>
+#include <gseg/map/layer_tiles.hpp>
 #include <gseg/map/map_stats.hpp>
 #include <gseg/map/top_down_grid.hpp>
 #include <gseg/point_cloud.hpp>
@@ -39,6 +40,21 @@ namespace gseg {
 class TerrainModel;
 }
 namespace gseg::map {
+
+/// How TraversabilityMap::write() lays out the costmap and the layers' GeoTIFF (#35): a map whose
+/// box is at most `tiledAbove` cells a side gets the files of a small map (one costmap PGM + YAML,
+/// one GeoTIFF, pictures of every cell); a bigger one, or any with `tiles`, the costmap as tiles,
+/// the layers as one Cloud-Optimized GeoTIFF with overviews, pictures of an overview.
+struct MapOutputOptions {
+    bool tiles = false;      ///< always write tiles (rawlog-octomap --tiles)
+    int tiledAbove = 4096;   ///< [cells] write tiles when the map's box is wider or higher than this (--tiled-above), >= 1
+    int costmapTile = 1024;  ///< [cells] edge of a costmap tile, 64 to 16384
+    int pictureSide = 2048;  ///< [cells] a tiled map's pictures show an overview at most this many cells a side, >= 16
+    /// Throws std::invalid_argument naming the field of a value out of its range.
+    void validate() const;
+    /// Whether a map of this box gets tiles.
+    bool tiled(std::int64_t boxWidth, std::int64_t boxHeight) const { return tiles || boxWidth > tiledAbove || boxHeight > tiledAbove; }
+};
 
 /// Builds the maps scan by scan. Per scan, every voxel crossed by a ray (to a ground or an obstacle
 /// point) gets a miss in both trees, except voxels holding a hit of that scan; ground hits update
@@ -87,11 +103,15 @@ public:
     /// computed for them unless write() has already counted them for this many scans).
     MapStats stats() const;
     /// The 2.5D layers (elevation, slope, step, roughness, clearance, class, cost) from the ground
-    /// points of every scan and the occupied obstacle voxels (gseg/map/terrain_layers.hpp).
-    /// Without any ground point or obstacle: one unknown cell at the first sensor position.
+    /// points of every scan and the occupied obstacle voxels (gseg/map/terrain_layers.hpp), in
+    /// sparse tiles: memory follows the ground seen. Without any ground point or obstacle: one
+    /// unknown cell at the first sensor position.
+    LayerTiles layerTiles() const;
+    /// layerTiles() as one dense grid over its box; throws std::length_error where the box is
+    /// too big for one (LayerTiles::dense()).
     LayerGrid layers() const;
 
-    /// The files write() writes for `prefix`, in this order. Throws std::invalid_argument for a
+    /// The files write() writes for `prefix` for a map of a small box (not tiled), in this order. Throws std::invalid_argument for a
     /// prefix io::checkOutputPrefix() refuses (empty, "out/", a folder, /dev/null).
     static std::vector<std::string> outputPaths(const std::string& prefix);
     /// Writes, all of them or none (temporary files, then renamed; if a rename fails the previous
@@ -112,9 +132,20 @@ public:
     ///   float32 band per layer, NaN unknown;
     /// - `<prefix>_layer_<name>.png` for each layer (terrainLayerNames()): its picture
     ///   (gseg/map/layer_picture.hpp).
+    /// A map with tiles (MapOutputOptions::tiled()) gets, instead of the costmap's PGM and YAML
+    /// and the one GeoTIFF:
+    /// - `<prefix>_costmap_metadata.yaml`: the tiles in the layout of Autoware's divided maps
+    ///   (`x_resolution`, `y_resolution`: the tile edge [m]; then each tile's YAML file name with
+    ///   the map-frame origin [m] of its lower-left corner: `PREFIX_costmap_3_-2.yaml: [614.4, -409.6]`);
+    /// - `<prefix>_costmap_<x>_<y>.pgm` and `.yaml`: tile (x, y) (cells x * costmapTile ... along
+    ///   x, likewise y), a ROS map_server map of costmapTile x costmapTile cells, for every tile
+    ///   with a known cell;
+    /// - `<prefix>_layers.tif`: one Cloud-Optimized GeoTIFF with overviews (encodeLayersCog());
+    /// and the layer pictures and the scene's elevation mesh drawn from an overview of at most
+    /// pictureSide cells a side (LayerTiles::overview()).
     /// The same map always gives the same bytes. Throws std::runtime_error naming the file on
     /// failure and std::logic_error if no scan was inserted. Returns the paths written.
-    std::vector<std::string> write(const std::string& prefix) const;
+    std::vector<std::string> write(const std::string& prefix, const MapOutputOptions& how = MapOutputOptions()) const;
     /// The first line of the picture's title: "6 scans, 3.55 m driven".
     std::string pictureTitle() const;
 
