@@ -566,7 +566,7 @@ public:
         if (prefix.empty()) throw py::value_error("prefix is empty (it starts the name of every file written, e.g. 'out/map')");
         if (empty()) throw py::value_error("no scan was inserted: nothing to write");
         std::vector<gseg::io::NamedPath> outputs;
-        for (const auto& path : gseg::map::TraversabilityMap::outputPaths(prefix)) outputs.push_back({"prefix", path});
+        for (const auto& path : gseg::map::TraversabilityMap::pathsToCheck(prefix)) outputs.push_back({"prefix", path});
         try {
             gseg::io::checkOutputs({}, outputs, gseg::io::OutputRules{overwrite, false});
         } catch (const std::invalid_argument& e) {

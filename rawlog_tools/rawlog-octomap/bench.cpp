@@ -106,7 +106,7 @@ void runBench(const Cli& cli) {
     ours.overwrite = true;  // every round writes them again (checked here, before the first)
     const std::string plainBt = cli.prefix + "_bench_plain.bt";
     std::vector<gseg::io::NamedPath> outputs = {{"-o", plainBt}};
-    for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(ours.prefix)) outputs.push_back({"-o", path});
+    for (const std::string& path : gseg::map::TraversabilityMap::pathsToCheck(ours.prefix)) outputs.push_back({"-o", path});
     gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
 #ifdef NDEBUG

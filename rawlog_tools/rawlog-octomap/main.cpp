@@ -341,7 +341,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     const auto start = std::chrono::steady_clock::now();
     // Fail early: every output can be written, none is an input or exists (unless -w), before any work.
     std::vector<gseg::io::NamedPath> outputs;
-    for (const std::string& path : gseg::map::TraversabilityMap::outputPaths(cli.prefix)) outputs.push_back({"-o", path});
+    for (const std::string& path : gseg::map::TraversabilityMap::pathsToCheck(cli.prefix)) outputs.push_back({"-o", path});
     gseg::io::checkOutputs({{"input", cli.input}, {"--poses", cli.poses.poses}, {"--calib", cli.poses.calib}, {"-c", cli.config}},
                            outputs, {cli.overwrite, false});
     const gseg::mrpt::LoadedConfig& cfg = cli.loaded;

@@ -3,6 +3,7 @@
 // an overview; memory that follows the ground seen (a pose jump, a 10 km loop, under a limit of
 // the address space).
 #include <gseg/io/ros_map.hpp>
+#include <gseg/io/output_checks.hpp>
 #include <gseg/map/layer_file.hpp>
 #include <gseg/map/layer_tiles.hpp>
 #include <gseg/map/terrain_layers.hpp>
@@ -299,6 +300,15 @@ TEST(LayerTiles, ABigMapIsWrittenAsTilesWithPicturesOfAnOverviewASmallOneAsBefor
     EXPECT_THROW(map.write(big, how), std::invalid_argument) << "pictureSide below 16";
     how.pictureSide = 2048, how.costmapTile = 32;
     EXPECT_THROW(map.write(big, how), std::invalid_argument) << "costmapTile below 64";
+    // The tiles of an earlier tiled run are never replaced without overwrite (the tools' -w): with
+    // every other file of the map gone, their metadata still stops the up-front check.
+    for (const std::string& path : TraversabilityMap::outputPaths(big)) fs::remove(path);
+    std::vector<gseg::io::NamedPath> outputs, named;
+    for (const std::string& path : TraversabilityMap::pathsToCheck(big)) outputs.push_back({"-o", path});
+    for (const std::string& path : TraversabilityMap::outputPaths(big)) named.push_back({"-o", path});
+    EXPECT_NO_THROW(gseg::io::checkOutputs({}, named, {false, false})) << "the fixed names alone miss the tiles";
+    EXPECT_THROW(gseg::io::checkOutputs({}, outputs, {false, false}), std::invalid_argument);
+    EXPECT_NO_THROW(gseg::io::checkOutputs({}, outputs, {true, false}));
 }
 
 /// Maps `positions` in a child under RLIMIT_AS `limitBytes` and writes the maps (tiled where

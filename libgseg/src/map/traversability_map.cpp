@@ -335,6 +335,12 @@ std::vector<std::string> TraversabilityMap::outputPaths(const std::string& prefi
     return paths;
 }
 
+std::vector<std::string> TraversabilityMap::pathsToCheck(const std::string& prefix) {
+    std::vector<std::string> paths = outputPaths(prefix);
+    paths.push_back(prefix + "_costmap_metadata.yaml");
+    return paths;
+}
+
 std::string TraversabilityMap::pictureTitle() const {
     char buf[96];
     std::snprintf(buf, sizeof buf, "%zu scan%s, %.2f m driven", stats_.scans, stats_.scans == 1 ? "" : "s", stats_.pathLength);

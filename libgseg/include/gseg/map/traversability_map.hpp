@@ -114,6 +114,10 @@ public:
     /// The files write() writes for `prefix` for a map of a small box (not tiled), in this order. Throws std::invalid_argument for a
     /// prefix io::checkOutputPrefix() refuses (empty, "out/", a folder, /dev/null).
     static std::vector<std::string> outputPaths(const std::string& prefix);
+    /// The files that must not exist before a write() without overwrite: outputPaths() and the
+    /// tiles' metadata (a tiled map's tiles, whose names depend on the map, come with it), for the
+    /// up-front check of io::checkOutputs().
+    static std::vector<std::string> pathsToCheck(const std::string& prefix);
     /// Writes, all of them or none (temporary files, then renamed; if a rename fails the previous
     /// versions are put back):
     /// - `<prefix>_ground.bt`, `<prefix>_obstacles.bt`: the occupancy OcTrees (liboctomap, octovis);
