@@ -375,12 +375,7 @@ public:
             s = segmenter_.segment(p.view, false, checkHeight ? gseg::mrpt::HeightCheck::Now : gseg::mrpt::HeightCheck::Never);
             const gseg::map::TraversabilityOptions& t = params_.config.traversability;
             if (sensorPose && t.driveTerrain) {  // the drive's context, causal: the scans given before with their poses
-                std::vector<float> world(3 * p.view.size());
-                for (std::size_t i = 0; i < p.view.size(); ++i) {
-                    double x = 0, y = 0, z = 0;
-                    sensorPose->composePoint(p.view.x(i), p.view.y(i), p.view.z(i), x, y, z);
-                    world[3 * i] = float(x), world[3 * i + 1] = float(y), world[3 * i + 2] = float(z);
-                }
+                const std::vector<float> world = gseg::mrpt::transformedPoints(p.view, *sensorPose);
                 if (!drive_) drive_ = std::make_unique<gseg::DriveTerrain>(t.terrainOptions(), t.maxRange);
                 drive_->label(gseg::PointCloudView(world.data(), p.view.size()), s.result,
                               Eigen::Vector3d(sensorPose->x(), sensorPose->y(), sensorPose->z()));

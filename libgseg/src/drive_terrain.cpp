@@ -41,6 +41,13 @@ std::size_t onResult(Result& result, F&& relabel) {
 
 }  // namespace
 
+std::vector<TerrainSample> terrainSamples(const PointCloudView& world, const Result& result, double cellSize, double maxRange,
+                                          const Eigen::Vector3d& sensor) {
+    std::vector<std::uint8_t> labels = result.labels;
+    for (const std::uint32_t i : result.belowGround) labels.at(i) = 2;  // reflections: no evidence
+    return terrainSamples(world, labels, cellSize, maxRange, sensor);
+}
+
 std::size_t DriveTerrain::label(const PointCloudView& world, Result& result, const Eigen::Vector3d& sensor) {
     return onResult(result, [&](std::vector<std::uint8_t>& labels) { return label(world, labels, sensor); });
 }

@@ -166,7 +166,6 @@ FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, c
     std::error_code notAFile;
     if (cli.driveContext && !std::filesystem::is_regular_file(in, notAFile)) {
         drive.why = "the input is not a regular file and can be read only once; give a file for the drive's context";
-        drive.anyPose = true;  // say so: the user may expect the context
     } else if (cli.driveContext) {
         gseg::Progress pass1(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name) + ": the drive's terrain (pass 1 of 2)",
                              "scans");
@@ -205,7 +204,7 @@ FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, c
         std::snprintf(text, sizeof text, ", %zu scans labelled with the drive's terrain model (%zu anchored + %zu grown cells, poses: %s): "
                       "%zu points turned ground", t.withDrive, drive.model->anchors(), drive.model->grown(), drive.poseSource.c_str(), t.driveRelabelled);
         result.message += text;
-    } else if (cli.driveContext && t.scans && drive.anyPose) {  // a rawlog without any pose: single scans, as ever
+    } else if (t.scans && !drive.why.empty()) {
         result.message += ", single-scan labels (no drive context: " + drive.why + ")";
     }
     if (t.nonFinite) result.message += ", " + std::to_string(t.nonFinite) + " non-finite points labelled non-ground";

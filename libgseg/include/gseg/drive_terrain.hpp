@@ -49,6 +49,12 @@ private:
     double maxRange_, keepRadius_;
 };
 
+/// The evidence of one scan from a segmenter's Result (terrainSamples() on its labels; its
+/// reflections, belowGround, left out): what DriveTerrain adds, for a first pass that builds a
+/// whole drive's model. Throws std::invalid_argument if the sizes differ.
+std::vector<TerrainSample> terrainSamples(const PointCloudView& world, const Result& result, double cellSize, double maxRange,
+                                          const Eigen::Vector3d& sensor);
+
 /// The offline form on a segmenter's Result: `model` (built from the whole drive) relabels the
 /// scan whose points in the world frame are `world` (TerrainModel::relabel()); reflections
 /// (belowGround) stay non-ground; the counts follow. Returns the points turned ground.

@@ -16,8 +16,7 @@ DriveModel driveModelOf(const std::string& rawlog, const gseg::mrpt::LoadedConfi
                         const std::function<void(std::size_t, double)>& progress) {
     DriveModel out;
     if (!config.traversability.driveTerrain) {
-        out.why = "driveTerrain: false in the configuration";
-        return out;
+        return out;  // turned off: nothing to say
     }
     PoseConfig poseConfig;
     poseConfig.input = rawlog;
@@ -33,15 +32,15 @@ DriveModel driveModelOf(const std::string& rawlog, const gseg::mrpt::LoadedConfi
         } catch (const std::exception& e) {
             const std::string what = e.what();
             if (what.find("pose") == std::string::npos) throw;  // a corrupt rawlog: not a matter of poses
-            out.why = what.substr(0, what.find(": give --poses"));  // rawlog-gseg reads the rawlog's own poses
-            out.anyPose = !out.poses.empty();
+            // A rawlog without any pose holds single scans, not a drive: nothing to say. A drive
+            // with a scan missing its pose is named (rawlog-gseg reads the rawlog's own poses).
+            if (!out.poses.empty()) out.why = what.substr(0, what.find(": give --poses"));
             out.poses.clear();
             return out;
         }
         if (!job.raw || job.presegmented()) continue;  // rawlog-gseg passes a segmented scan through
         if (!sensors.empty() && std::find(sensors.begin(), sensors.end(), job.raw->sensorLabel) == sensors.end()) continue;
         out.poses[{job.entry, job.raw->sensorLabel}] = job.robotPose;
-        out.anyPose = true;
         try {
             filter.filter(*job.raw, job.robotPose);
             ++out.scans;
@@ -51,7 +50,7 @@ DriveModel driveModelOf(const std::string& rawlog, const gseg::mrpt::LoadedConfi
     }
     out.poseSource = stream.poseSource();
     if (out.scans == 0) {
-        out.why = "no scan with a pose";
+        if (!out.poses.empty()) out.why = "no scan of the drive could be segmented";
         out.poses.clear();
         return out;
     }

@@ -55,18 +55,11 @@ void GroundFilter::relabelWithDrive(const std::vector<float>& sensorXyzi, const 
                                     Output& out) {
     const gseg::map::TraversabilityOptions& t = config().traversability;
     if (!t.driveTerrain) return;
-    std::vector<float> world(3 * (sensorXyzi.size() / 4));
-    for (std::size_t i = 0; i < world.size() / 3; ++i) {
-        double x = 0, y = 0, z = 0;
-        worldSensorPose.composePoint(sensorXyzi[4 * i], sensorXyzi[4 * i + 1], sensorXyzi[4 * i + 2], x, y, z);
-        world[3 * i] = float(x), world[3 * i + 1] = float(y), world[3 * i + 2] = float(z);
-    }
+    const std::vector<float> world = gm::transformedPoints(PointCloudView(sensorXyzi.data(), sensorXyzi.size() / 4, 16), worldSensorPose);
     const PointCloudView cloud(world.data(), world.size() / 3);
     const Eigen::Vector3d sensor(worldSensorPose.x(), worldSensorPose.y(), worldSensorPose.z());
     if (collect_) {
-        std::vector<std::uint8_t> labels = out.result.labels;
-        for (const std::uint32_t i : out.result.belowGround) labels[i] = 2;  // reflections: no evidence
-        collect_->add(gseg::terrainSamples(cloud, labels, collect_->options().cellSize, t.maxRange, sensor));
+        collect_->add(gseg::terrainSamples(cloud, out.result, collect_->options().cellSize, t.maxRange, sensor));
     } else if (driveModel_) {
         out.driveRelabelled = gseg::relabelWithModel(*driveModel_, cloud, out.result);
     } else {

@@ -206,6 +206,16 @@ void levelPoints(std::vector<float>& xyzi, const ::mrpt::poses::CPose3D& sensorP
     }
 }
 
+std::vector<float> transformedPoints(const gseg::PointCloudView& points, const ::mrpt::poses::CPose3D& pose) {
+    std::vector<float> out(3 * points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        double x = 0, y = 0, z = 0;
+        pose.composePoint(points.x(i), points.y(i), points.z(i), x, y, z);
+        out[3 * i] = float(x), out[3 * i + 1] = float(y), out[3 * i + 2] = float(z);
+    }
+    return out;
+}
+
 std::vector<float> levelledPoints(const ::mrpt::obs::CObservation& obs) {
     std::vector<float> pts = sensorFramePoints(obs);
     ::mrpt::poses::CPose3D sensorPose;

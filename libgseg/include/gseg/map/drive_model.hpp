@@ -29,8 +29,9 @@ struct DriveModel {
     std::map<std::pair<std::size_t, std::string>, ::mrpt::poses::CPose3D> poses;  ///< vehicle pose by (rawlog entry, sensorLabel)
     std::size_t scans = 0;   ///< scans whose evidence was added
     std::string poseSource;  ///< where the poses came from (ScanStream::poseSource())
-    std::string why;         ///< "" or why there is no model (no poses in the rawlog, driveTerrain false)
-    bool anyPose = false;    ///< some scan had a pose (false: a rawlog of single scans, not a drive)
+    /// Why a drive gets no model (a scan without a pose after scans with one); "" where there is a
+    /// model or nothing to say (driveTerrain false, a rawlog without any pose: single scans).
+    std::string why;
 
     /// The pose of the scan with `label` at rawlog `entry`, where the first pass saw it.
     std::optional<::mrpt::poses::CPose3D> poseOf(std::size_t entry, const std::string& label) const;

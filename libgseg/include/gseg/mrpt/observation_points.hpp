@@ -7,6 +7,8 @@
 /// with a level vehicle z points up and the ground lies at z = -(sensor height). That is the frame
 /// GroundSegmenter expects (Params::distToGround = sensor height above the ground).
 
+#include <gseg/point_cloud.hpp>
+
 #include <mrpt/core/Clock.h>
 
 #include <cstddef>
@@ -39,6 +41,10 @@ std::vector<float> sensorFramePoints(const ::mrpt::obs::CObservation& obs);
 
 /// Rotates 4-float points from the sensor frame into the levelled frame (see above).
 void levelPoints(std::vector<float>& xyzi, const ::mrpt::poses::CPose3D& sensorPose);
+
+/// x, y, z (3 floats a point) of `points` moved by `pose` (e.g. world from sensor); a point with a
+/// NaN stays NaN. The drive's context (#31) labels scans in the world frame.
+std::vector<float> transformedPoints(const gseg::PointCloudView& points, const ::mrpt::poses::CPose3D& pose);
 
 /// sensorFramePoints() then levelPoints() with the observation's own sensorPose.
 std::vector<float> levelledPoints(const ::mrpt::obs::CObservation& obs);
