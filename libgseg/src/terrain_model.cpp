@@ -33,7 +33,19 @@ struct TerrainModel::Tile {
     /// build()'s working copy of the modelled elevations (NaN: not modelled), dense so that the
     /// least-squares sums over a candidate's disc read 4 bytes a cell, not a whole TerrainCell.
     std::array<float, std::size_t(kTileSize * kTileSize)> modelled;
+    /// build(): modelled cells per block of 8 x 8 cells (4 x 4 blocks a tile), an upper bound of a
+    /// candidate's support read from a few blocks before its disc is summed.
+    std::array<std::uint16_t, 16> blockModelled;
 };
+
+namespace {
+constexpr int kBlockBits = 3;  ///< blocks of 2^3 x 2^3 cells
+/// The block counter of cell j of a tile.
+std::size_t blockOf(std::int32_t j) {
+    return std::size_t((((j >> TerrainModel::kTileBits) >> kBlockBits) << (TerrainModel::kTileBits - kBlockBits)) |
+                       ((j & ((1 << TerrainModel::kTileBits) - 1)) >> kBlockBits));
+}
+}  // namespace
 
 void TerrainOptions::validate() const {
     auto positive = [](double v, const char* name) {
@@ -166,6 +178,7 @@ void TerrainModel::build() {
         std::int32_t ix, iy;
         TerrainCell* cell;
         float* modelled;  ///< its slot in the tile's working copy
+        std::uint16_t* block;  ///< its block's count of modelled cells
         float z;
     };
     std::vector<Candidate> candidates;
@@ -174,6 +187,7 @@ void TerrainModel::build() {
     for (const auto& [key, tile] : tiles) {
         const std::int32_t tx = std::int32_t(std::uint32_t(key >> 32)), ty = std::int32_t(std::uint32_t(key));
         tile->modelled.fill(std::numeric_limits<float>::quiet_NaN());
+        tile->blockModelled.fill(0);
         for (std::int32_t j = 0; j < kTileSize * kTileSize; ++j) {
             TerrainCell& c = tile->cells[std::size_t(j)];
             if (c.lowScans == 0) continue;
@@ -181,10 +195,11 @@ void TerrainModel::build() {
             if (c.groundScans >= std::uint32_t(options_.minScans) && c.groundCount >= std::uint64_t(options_.minAnchorPoints)) {
                 c.state = TerrainCell::Anchor, c.elevation = float(c.groundSumZ / double(c.groundCount));
                 tile->modelled[std::size_t(j)] = c.elevation;
+                ++tile->blockModelled[blockOf(j)];
                 ++anchors_;
             } else if (c.lowScans >= std::uint32_t(options_.minScans) && c.lowMax - c.lowMin <= spreadLimit) {
                 const std::int32_t ix = tx * kTileSize + (j & kTileMask), iy = ty * kTileSize + (j >> kTileBits);
-                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], float(c.lowSum / double(c.lowScans))});
+                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], &tile->blockModelled[blockOf(j)], float(c.lowSum / double(c.lowScans))});
             }
         }
     }
@@ -219,6 +234,18 @@ void TerrainModel::build() {
                     if (it != model.tiles_.end()) tiles[std::size_t((j + span) * side + i + span)] = it->second.get();
                 }
         }
+        /// The modelled cells in the blocks that hold the square of cells within `r` of (ix, iy): at
+        /// least as many as within the disc of radius r (the centre's tile and `r` within its span).
+        std::uint32_t bound(std::int32_t ix, std::int32_t iy, int r) const {
+            constexpr int perTile = kTileBits - kBlockBits;
+            std::uint32_t n = 0;
+            for (std::int32_t by = (iy - r) >> kBlockBits; by <= (iy + r) >> kBlockBits; ++by)
+                for (std::int32_t bx = (ix - r) >> kBlockBits; bx <= (ix + r) >> kBlockBits; ++bx) {
+                    const Tile* t = tiles[std::size_t(((by >> perTile) - ty + span) * side + (bx >> perTile) - tx + span)];
+                    if (t) n += t->blockModelled[std::size_t(((by & ((1 << perTile) - 1)) << perTile) | (bx & ((1 << perTile) - 1)))];
+                }
+            return n;
+        }
         /// The modelled elevation of cell (ix, iy) within the span of the centre's tile (NaN: none).
         float operator()(std::int32_t ix, std::int32_t iy) const {
             const Tile* t = tiles[std::size_t(((iy >> kTileBits) - ty + span) * side + (ix >> kTileBits) - tx + span)];
@@ -242,6 +269,14 @@ void TerrainModel::build() {
             const Candidate& cand = candidates[k];
             if (cand.cell->state != TerrainCell::None) continue;
             near.centre(cand.ix, cand.iy);
+            if (near.bound(cand.ix, cand.iy, r) < std::uint32_t(options_.minSupport)) continue;  // too few modelled cells around
+            bool level = true;  // no step to a modelled cell beside it (judged first: 8 cells, not the disc)
+            for (int dy = -1; dy <= 1 && level; ++dy)
+                for (int dx = -1; dx <= 1 && level; ++dx) {
+                    const float e = (dx || dy) ? near(cand.ix + dx, cand.iy + dy) : std::numeric_limits<float>::quiet_NaN();
+                    if (!std::isnan(e)) level = std::abs(double(cand.z) - double(e)) <= neighbourStep * std::hypot(double(dx), double(dy));
+                }
+            if (!level) continue;
             // Least squares z = a + b dx + c dy over the modelled cells within the radius (centred sums).
             double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
             float lo = std::numeric_limits<float>::infinity(), hi = -lo;
@@ -265,16 +300,11 @@ void TerrainModel::build() {
                 continue;  // a line of cells that is not level: no prediction across it
             }
             if (!(std::abs(double(cand.z) - predicted) <= options_.tolerance)) continue;
-            bool level = true;  // and no step to a modelled cell beside it
-            for (int dy = -1; dy <= 1 && level; ++dy)
-                for (int dx = -1; dx <= 1 && level; ++dx) {
-                    const float e = (dx || dy) ? near(cand.ix + dx, cand.iy + dy) : std::numeric_limits<float>::quiet_NaN();
-                    if (!std::isnan(e)) level = std::abs(double(cand.z) - double(e)) <= neighbourStep * std::hypot(double(dx), double(dy));
-                }
-            if (level) joined.push_back(k);
+            joined.push_back(k);
         }
         for (const std::size_t k : joined) {
             candidates[k].cell->state = TerrainCell::Grown, candidates[k].cell->elevation = *candidates[k].modelled = candidates[k].z;
+            ++*candidates[k].block;
             ++grown_;
         }
         // The next wave: the candidates still out within the radius of a cell that joined.

@@ -10,6 +10,8 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr std::size_t kCells = std::size_t(LayerTiles::kTile) * LayerTiles::kTile;
+static_assert(LayerTiles::kTile == 1 << LayerTiles::kTileShift, "Cursor::get() divides by a shift");
+static_assert((-1 >> 1) == -1, "Cursor::get() needs an arithmetic right shift (floor division)");
 
 /// The index of cell (ix, iy) within its tile.
 std::size_t inTile(std::int64_t ix, std::int64_t iy) {
@@ -63,11 +65,6 @@ float* LayerTiles::Cursor::tile(std::int64_t tx, std::int64_t ty, bool allocate)
         }
     }
     return values_;
-}
-
-float LayerTiles::Cursor::get(std::int64_t ix, std::int64_t iy) {
-    const float* v = tile(floorDiv(ix, kTile), floorDiv(iy, kTile), false);
-    return v ? v[inTile(ix, iy)] : kNaN;
 }
 
 float& LayerTiles::Cursor::at(std::int64_t ix, std::int64_t iy) {

@@ -41,10 +41,13 @@ void forEachCell(const LayerTiles& t, const std::vector<std::pair<std::int64_t, 
 void fillGaps(LayerTiles& g, const TraversabilityOptions& o, const ObstacleColumns& obstacles, const RayFreeQuery& rayFree) {
     static_assert(LayerTiles::kTile > 51, "a gap's cells lie in the tiles next to its ends");
     const auto allocated = g.tileList();
-    for (const auto& [tx, ty] : allocated)  // the classes before
-        for (std::int64_t iy = ty * LayerTiles::kTile; iy < (ty + 1) * LayerTiles::kTile; ++iy)
-            for (std::int64_t ix = tx * LayerTiles::kTile; ix < (tx + 1) * LayerTiles::kTile; ++ix)
-                g.at(kClassBefore, ix, iy) = g.get(kClass, ix, iy);
+    {  // the classes before, tile by tile (a tile's cells of one layer are contiguous)
+        Cursor from(g, kClass), to(g, kClassBefore);
+        for (const auto& [tx, ty] : allocated) {
+            const float* src = &from.at(tx * LayerTiles::kTile, ty * LayerTiles::kTile);
+            std::copy(src, src + LayerTiles::kTile * LayerTiles::kTile, &to.at(tx * LayerTiles::kTile, ty * LayerTiles::kTile));
+        }
+    }
     std::vector<std::pair<std::int64_t, std::int64_t>> candidates;
     for (const auto& [tx, ty] : allocated)
         for (int dy = -1; dy <= 1; ++dy)

@@ -12,6 +12,7 @@
 namespace gseg::mrpt {
 
 GzipOutputStream::GzipOutputStream(Sink sink, std::string name) : sink_(std::move(sink)), name_(std::move(name)) {
+    pending_.reserve(kPending);
     auto* z = new z_stream{};
     // windowBits 15 + 16: the gzip wrapper (no time stamp), which MRPT's readers detect; level 1 as MRPT writes.
     if (deflateInit2(z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
@@ -48,17 +49,28 @@ void GzipOutputStream::pump(const void* data, std::size_t size, int flush) {
 size_t GzipOutputStream::Write(const void* buffer, size_t count) {
     if (finished_) throw std::logic_error(name_ + ": write after the gzip stream was finished");
     const auto* p = static_cast<const char*>(buffer);
+    written_ += count;
+    if (pending_.size() + count <= kPending) {  // small writes: gathered (the same compressed bytes)
+        pending_.insert(pending_.end(), p, p + count);
+        return count;
+    }
+    flushPending();
     for (size_t left = count; left > 0;) {  // zlib counts in unsigned int
         const std::size_t chunk = std::min<size_t>(left, 1u << 30);
         pump(p, chunk, Z_NO_FLUSH);
         p += chunk, left -= chunk;
     }
-    written_ += count;
     return count;
+}
+
+void GzipOutputStream::flushPending() {
+    if (!pending_.empty()) pump(pending_.data(), pending_.size(), Z_NO_FLUSH);
+    pending_.clear();
 }
 
 void GzipOutputStream::finish() {
     if (finished_) return;
+    flushPending();
     pump(nullptr, 0, Z_FINISH);
     finished_ = true;
 }

@@ -24,6 +24,8 @@ namespace gseg::map {
 class LayerTiles {
 public:
     static constexpr int kTile = 64;  ///< [cells] tile edge
+    static constexpr int kTileShift = 6;  ///< kTile = 1 << kTileShift (floorDiv by a shift, two's complement)
+    static constexpr std::int64_t kTileMask = kTile - 1;
     /// [bytes] one tile of one layer
     static constexpr std::size_t kTileBytes = std::size_t(kTile) * kTile * sizeof(float);
 
@@ -54,7 +56,13 @@ public:
     class Cursor {
     public:
         Cursor(LayerTiles& t, std::size_t layer) : t_(&t), layer_(layer) {}
-        float get(std::int64_t ix, std::int64_t iy);
+        /// The cell's value, NaN where its tile is not allocated. Inline: the layers' 3 x 3 and disc
+        /// loops read a neighbour's value this way, mostly within the tile read last.
+        float get(std::int64_t ix, std::int64_t iy) {
+            const std::int64_t tx = ix >> kTileShift, ty = iy >> kTileShift;
+            const float* v = tx == tx_ && ty == ty_ ? values_ : tile(tx, ty, false);
+            return v ? v[std::size_t(((iy & kTileMask) << kTileShift) | (ix & kTileMask))] : std::numeric_limits<float>::quiet_NaN();
+        }
         float& at(std::int64_t ix, std::int64_t iy);
 
     private:
