@@ -214,6 +214,10 @@ void TerrainModel::build() {
     for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx)
             if (double(dx * dx + dy * dy) <= r2 && (dx || dy)) disc.emplace_back(dx, dy);
+    std::vector<int> halfWidth(std::size_t(2 * r + 1), -1);  // the disc's row dy spans dx = -w..w (-1: no cell)
+    for (int dy = -r; dy <= r; ++dy)
+        for (int dx = 0; dx <= r; ++dx)
+            if (double(dx * dx + dy * dy) <= r2) halfWidth[std::size_t(dy + r)] = dx;
     // The tiles around a candidate's tile, found once per tile (candidates come tile by tile), so
     // a cell near it is an index, not a hash lookup.
     const int span = (r + kTileSize - 1) / kTileSize, side = 2 * span + 1;
@@ -245,6 +249,12 @@ void TerrainModel::build() {
                     if (t) n += t->blockModelled[std::size_t(((by & ((1 << perTile) - 1)) << perTile) | (bx & ((1 << perTile) - 1)))];
                 }
             return n;
+        }
+        /// The modelled elevations from cell (ix, iy) to the end of its tile's row, nullptr where the
+        /// tile has no evidence (within the span of the centre's tile).
+        const float* row(std::int32_t ix, std::int32_t iy) const {
+            const Tile* t = tiles[std::size_t(((iy >> kTileBits) - ty + span) * side + (ix >> kTileBits) - tx + span)];
+            return t ? &t->modelled[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))] : nullptr;
         }
         /// The modelled elevation of cell (ix, iy) within the span of the centre's tile (NaN: none).
         float operator()(std::int32_t ix, std::int32_t iy) const {
@@ -280,12 +290,23 @@ void TerrainModel::build() {
             // Least squares z = a + b dx + c dy over the modelled cells within the radius (centred sums).
             double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
             float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-            for (const auto& [dx, dy] : disc) {
-                const float e = near(cand.ix + dx, cand.iy + dy);
-                if (std::isnan(e)) continue;
-                const double x = dx * cs, y = dy * cs, z = e;
-                n += 1, sx += x, sy += y, sz += z, sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z;
-                lo = std::min(lo, e), hi = std::max(hi, e);
+            // The disc row by row (the order of `disc`: dy, then dx), each row's cells read from at
+            // most two tiles' contiguous rows.
+            for (int dy = -r; dy <= r; ++dy) {
+                const int w = halfWidth[std::size_t(dy + r)];
+                const std::int32_t y = cand.iy + dy;
+                for (int dx = -w; dx <= w;) {
+                    const std::int32_t x = cand.ix + dx;
+                    const int run = std::min(w - dx + 1, int(kTileSize - (x & kTileMask)));  // cells left in this tile's row
+                    const float* row = near.row(x, y);
+                    for (int i = 0; i < run; ++i, ++dx) {
+                        const float e = row ? row[i] : std::numeric_limits<float>::quiet_NaN();
+                        if (std::isnan(e) || (dx == 0 && dy == 0)) continue;
+                        const double px = dx * cs, py = dy * cs, z = e;
+                        n += 1, sx += px, sy += py, sz += z, sxx += px * px, sxy += px * py, syy += py * py, sxz += px * z, syz += py * z;
+                        lo = std::min(lo, e), hi = std::max(hi, e);
+                    }
+                }
             }
             if (n < options_.minSupport) continue;
             double predicted = sz / n;  // the support's mean where its cells do not span a plane
