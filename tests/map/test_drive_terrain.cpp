@@ -87,12 +87,17 @@ TerrainModel flatPatch(int scans, const TerrainOptions& o = TerrainOptions()) {
     return m;
 }
 
-TEST(TerrainModel, AnchorsNeedSeveralScansThatFoundGround) {
-    TerrainModel once = flatPatch(1);
+TEST(TerrainModel, AnchorsNeedTheScansThatFoundGroundTheOptionAsks) {
+    TerrainOptions two;
+    two.minScans = 2;
+    TerrainModel once = flatPatch(1, two);
     once.build();
     EXPECT_EQ(once.anchors(), 0u);
     EXPECT_TRUE(std::isnan(once.elevationAt(1.0, 1.0)));
-    TerrainModel twice = flatPatch(2);
+    TerrainModel byDefault = flatPatch(1);  // terrainMinScans 1 by default (docs/drive-terrain.md)
+    byDefault.build();
+    EXPECT_EQ(byDefault.anchors(), 400u);
+    TerrainModel twice = flatPatch(2, two);
     twice.build();
     EXPECT_EQ(twice.anchors(), 400u);
     EXPECT_NEAR(twice.elevationAt(1.0, 1.0), 0.0, 1e-6);
@@ -102,10 +107,12 @@ TEST(TerrainModel, AnchorsNeedSeveralScansThatFoundGround) {
 }
 
 TEST(TerrainModel, LevelCandidatesJoinAndGrowOnWhatStandsStaysOut) {
-    TerrainModel m = flatPatch(2);
+    TerrainOptions two;
+    two.minScans = 2;
+    TerrainModel m = flatPatch(2, two);
     // Two scans' lowest returns beside the patch: a level strip 8 cells wide (x 20..27) joins
-    // wave after wave; a car (0.5 m up) and a strip seen by one scan only stay out; a candidate
-    // whose scans disagree by more than 2 x tolerance stays out.
+    // wave after wave; a car (0.5 m up) and, with minScans 2, a strip seen by one scan only stay
+    // out; a candidate whose scans disagree by more than 2 x tolerance stays out.
     for (int k = 0; k < 2; ++k) {
         std::vector<TerrainSample> s;
         for (int ix = 20; ix < 28; ++ix)
@@ -131,6 +138,27 @@ TEST(TerrainModel, LevelCandidatesJoinAndGrowOnWhatStandsStaysOut) {
     m.build();
     EXPECT_EQ(m.grown(), 160u);
     EXPECT_EQ(m.anchors(), 400u);
+}
+
+TEST(TerrainModel, ByDefaultOneScanThatAgreesWithTheModelAroundJoinsButACarDoesNot) {
+    // A sparse sensor sees most cells 10-40 m out in one scan only (16 rings: 90 % of them on
+    // drive 09): by default (minScans 1) one scan's lowest return joins where it agrees with the
+    // plane of the model around it; a car's, 0.5 m up, and a step beside the patch do not.
+    TerrainModel m = flatPatch(1);
+    std::vector<TerrainSample> s;
+    for (int ix = 20; ix < 24; ++ix)
+        for (int iy = 0; iy < 20; ++iy) s.push_back(sample(ix, iy, 0, 0, 0.03f, 0.1f));  // bare soil 3 cm up
+    for (int ix = 0; ix < 10; ++ix)
+        for (int iy = 20; iy < 30; ++iy) s.push_back(sample(ix, iy, 0, 0, 0.5f, 1.5f));  // a car
+    for (int ix = 0; ix < 20; ++ix) s.push_back(sample(ix, -1, 0, 0, 0.3f, 0.3f));       // a 0.3 m step
+    m.add(s);
+    m.build();
+    EXPECT_EQ(m.anchors(), 400u);
+    EXPECT_EQ(m.grown(), 80u);
+    EXPECT_EQ(m.find(23, 7)->state, TerrainCell::Grown);
+    EXPECT_NEAR(m.find(23, 7)->elevation, 0.03, 1e-6);
+    EXPECT_EQ(m.find(3, 25)->state, TerrainCell::None);
+    EXPECT_EQ(m.find(4, -1)->state, TerrainCell::None);
 }
 
 TEST(TerrainModel, ASlopeGrowsAlongItsPlaneAndAStepDoesNot) {
@@ -415,8 +443,9 @@ TEST(DriveTerrain, SixteenAndThirtyTwoRingsOverRollingTerrainLeaveNoRingStripesN
         const double f = traversableShare(full, w, 0, 10, 4, 10, &wrong);
         EXPECT_LT(a, 0.05) << name;
         EXPECT_GT(m, a + 0.15) << name;
-        EXPECT_GE(f, m + 0.2) << name;
-        EXPECT_GT(f, 0.6) << name << ": model " << m << ", with gaps filled " << f;
+        EXPECT_GE(f, m + 0.3 * (1 - m)) << name;  // gap filling closes at least 30 % of what the model leaves
+        // terrainMinScans 1: 16 rings model 0.58, filled 0.93; 32 rings 0.90, 1.00 (with 2: 0.20 / 0.69, 0.66 / 1.00)
+        EXPECT_GT(f, 0.85) << name << ": model " << m << ", with gaps filled " << f;
         std::printf("%s: alone %.3f, model %.3f, gaps filled %.3f\n", name.c_str(), a, m, f);
         EXPECT_EQ(wrong, 0) << name;
         int interpolated = 0;
@@ -555,13 +584,13 @@ TEST_P(DriveTerrainReal, MapsOfTheSharedDrivesKeepTheirFloors) {
     EXPECT_LE(s.unsafeBeyondCell, f.unsafe1) << f.drive;
 }
 
-// Measured on 2026-12-04 (rawlog-octomap -c config/kitti_hdl64.yaml, gseg eval-map): recall 97.31 /
-// 95.75 / 97.27 / 96.44, precision 99.65 / 99.82 / 99.80 / 99.76, unsafe beyond one cell 0.071 /
-// 0.047 / 0.111 / 0.141 %; without the model (driveTerrain: false, fillGaps: false) recall 96.76 /
-// 94.99 / 96.54 / 89.87.
+// Measured on 2026-12-06 (rawlog-octomap -c config/kitti_hdl64.yaml, terrainMinScans 1, gseg
+// eval-map): recall 97.55 / 95.94 / 97.30 / 96.81, precision 99.64 / 99.82 / 99.77 / 99.72, unsafe
+// beyond one cell 0.071 / 0.047 / 0.111 / 0.111 %; without the model (driveTerrain: false,
+// fillGaps: false) recall 96.76 / 94.99 / 96.54 / 89.87.
 INSTANTIATE_TEST_SUITE_P(Drives, DriveTerrainReal,
-                         ::testing::Values(MapFloor{"00", 97.0, 99.5, 0.2}, MapFloor{"05", 95.5, 99.5, 0.2},
-                                           MapFloor{"07", 97.0, 99.5, 0.2}, MapFloor{"09", 96.2, 99.5, 0.2}),
+                         ::testing::Values(MapFloor{"00", 97.3, 99.5, 0.2}, MapFloor{"05", 95.7, 99.5, 0.2},
+                                           MapFloor{"07", 97.0, 99.5, 0.2}, MapFloor{"09", 96.6, 99.5, 0.2}),
                          [](const auto& info) { return std::string("seq") + info.param.drive; });
 
 TEST(DriveTerrainReal, OneThreeThreadsAndTwoRanksGiveTheSameLayersAndCostmap) {

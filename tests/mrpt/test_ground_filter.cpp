@@ -1015,7 +1015,7 @@ TEST(RawlogGseg, ADriveWithPosesIsLabelledWithItsTerrainModelAndWithoutAsEachSca
         gained += long(g[k]) - long(g0[k]);
     }
     EXPECT_EQ(gained, turned) << "the summary counts what changed";
-    EXPECT_GT(turned, 5000) << "measured 2026-12-06: 13053 points of the rural drive's verges and far rings";
+    EXPECT_GT(turned, 10000) << "measured 2026-12-06: 17351 points of the rural drive's verges and far rings";
     // A FIFO is read once: its scans are labelled alone, and the summary says why.
     const fs::path fifo = kDir / "d09.fifo";
     fs::remove(fifo);

@@ -43,7 +43,7 @@ struct TerrainOptions {
     double cellSize = 0.2;       ///< [m] cell edge (the map route uses the map resolution)
     double tolerance = 0.1;      ///< [m] a candidate within this of the predicted ground joins the model
     double supportRadius = 2.0;  ///< [m] modelled cells within this predict a candidate's height
-    int minScans = 2;            ///< [scans] scans that must agree on a cell (anchor or candidate), >= 1
+    int minScans = 1;            ///< [scans] scans that must agree on a cell (anchor or candidate), >= 1
     int minAnchorPoints = 3;     ///< [points] ground points (all scans) an anchor needs, >= 1
     int minSupport = 3;          ///< [cells] modelled cells a prediction needs, >= 1
     double maxSlope = 20;        ///< [deg] a candidate also lies within tolerance + cellSize x tan(maxSlope) of each modelled cell beside it (a kerb's face between two levels stays out), in (0, 90)

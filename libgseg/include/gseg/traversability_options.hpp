@@ -36,7 +36,7 @@ struct TraversabilityOptions {
     bool driveTerrain = true;         ///< cells without ground points get the ground the drive's terrain model grows from confident ground and the scans' lowest returns
     double terrainTolerance = 0.1;    ///< [m] a cell's lowest returns (or a point) within this of the ground predicted from the model around it join the model, > 0
     double terrainRadius = 2.0;       ///< [m] modelled cells within this predict a cell's ground, > 0 (used as at least one cell and at most 50: terrainOptions())
-    int terrainMinScans = 2;          ///< [scans] scans that must agree on a cell before it anchors or joins the model, >= 1
+    int terrainMinScans = 1;          ///< [scans] scans that must agree on a cell before it anchors or joins the model, >= 1
     double terrainPointTolerance = 0.05;  ///< [m] labels with the drive's context (rawlog-gseg, gseg eval on drives, Python): a non-ground point within this of its cell's modelled ground becomes ground, > 0
     double terrainStandHeight = 0.3;  ///< [m] ... unless a return of any scan in its cell or the 8 around stands more than this above that ground (the foot of a wall, fence, car or bush), > terrainPointTolerance
     bool fillGaps = true;             ///< an unknown cell between traversable cells (ring stripes) becomes traversable (layer `source` = 2) where the ground interpolates within maxStep and maxSlope, rays passed over it and none below it

@@ -1,0 +1,58 @@
+"""tools/derived_drives.py make: the drives it derives keep the right rings, frames and labels."""
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+
+TOOL = pathlib.Path(__file__).resolve().parents[2] / "tools" / "derived_drives.py"
+
+
+def _drive(folder, frames=3, rings=4, per_ring=300):
+    """A KITTI drive folder: each frame `rings` rings of `per_ring` points, azimuth rising from -pi
+    to pi within a ring (as a Velodyne stores them); label = 100 x ring + frame, z = ring."""
+    (folder / "velodyne").mkdir(parents=True)
+    (folder / "labels").mkdir()
+    az = np.linspace(-np.pi + 0.01, np.pi - 0.01, per_ring)
+    for f in range(frames):
+        pts, lab = [], []
+        for r in range(rings):
+            pts.append(np.stack([10 * np.cos(az), 10 * np.sin(az), np.full(per_ring, float(r)), np.zeros(per_ring)], 1))
+            lab.append(np.full(per_ring, 100 * r + f, np.uint32))
+        np.concatenate(pts).astype(np.float32).tofile(folder / "velodyne" / f"{f:06d}.bin")
+        np.concatenate(lab).tofile(folder / "labels" / f"{f:06d}.label")
+    (folder / "poses.txt").write_text("".join(f"1 0 0 {f} 0 1 0 0 0 0 1 0\n" for f in range(frames)))
+    (folder / "calib.txt").write_text("Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n")
+
+
+def _read(folder, frame):
+    p = np.fromfile(folder / "velodyne" / f"{frame:06d}.bin", np.float32).reshape(-1, 4)
+    return p, np.fromfile(folder / "labels" / f"{frame:06d}.label", np.uint32)
+
+
+def test_rings_frames_and_height_of_the_derived_drives(tmp_path):
+    seq = tmp_path / "07"
+    _drive(seq)
+    out = tmp_path / "derived"
+    r = subprocess.run([sys.executable, str(TOOL), "make", str(out), str(seq)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["07r2", "07r4", "07f2", "07lowz"]
+    for name, rings in (("07r2", [0, 2]), ("07r4", [0])):
+        p, lab = _read(out / name, 1)
+        assert len(p) == 300 * len(rings) == len(lab)
+        assert sorted(set(lab // 100)) == rings and set(lab % 100) == {1}, "labels travel with their points"
+        assert np.array_equal(p[:, 2], (lab // 100).astype(np.float32))
+    assert sorted(x.name for x in (out / "07f2" / "velodyne").iterdir()) == ["000000.bin", "000001.bin"]
+    assert set(_read(out / "07f2", 1)[1] % 100) == {2}, "every 2nd frame"
+    assert (out / "07f2" / "poses.txt").read_text().splitlines() == ["1 0 0 0 0 1 0 0 0 0 1 0", "1 0 0 2 0 1 0 0 0 0 1 0"]
+    p0, lab0 = _read(seq, 0)
+    p, lab = _read(out / "07lowz", 0)
+    assert np.array_equal(lab, lab0) and np.allclose(p[:, 2], p0[:, 2] + 0.5) and np.array_equal(p[:, :2], p0[:, :2])
+
+
+def test_a_frame_whose_labels_do_not_match_its_points_is_refused(tmp_path):
+    seq = tmp_path / "05"
+    _drive(seq, frames=1)
+    np.zeros(5, np.uint32).tofile(seq / "labels" / "000000.label")
+    r = subprocess.run([sys.executable, str(TOOL), "make", str(tmp_path / "d"), str(seq)], capture_output=True, text=True)
+    assert r.returncode != 0 and "1200 points but 5 labels" in r.stderr

@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""Drives you do not have, derived from the labelled ones: a check that a map rule generalises.
+
+  tools/derived_drives.py make OUT SEQ...       derived drive folders in OUT
+  tools/derived_drives.py score OUT BIN CONFIG  map every drive in OUT with BIN/rawlog-octomap and
+                                                CONFIG, score it with ../shared/tools/score_map.py
+
+`make` writes, for each labelled KITTI drive folder SEQ (velodyne/, labels/, poses.txt, calib.txt),
+four drives the shared data does not have:
+  NNr2    every 2nd ring (a 32-ring sensor's geometry; rings found where the azimuth wraps, as
+          `gseg eval --ring-step` finds them)
+  NNr4    every 4th ring (16 rings)
+  NNf2    every 2nd frame (the vehicle twice as fast)
+  NNlowz  the sensor 0.5 m lower (every point's z + 0.5 in the sensor frame, poses unchanged);
+          `score` maps it with distToGround: auto (CONFIG's copy, which must hold a fixed height)
+Labels travel with their points; score_map.py's truth comes from the derived points, so each drive
+is scored against what its own sensor saw. `score` prints one line per drive: traversable
+precision, recall, unsafe beyond one cell [%], then the mean and worst over the drives.
+Writes only under OUT; the shared data is read in place.
+"""
+import array, json, math, os, re, shutil, subprocess, sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCORER = os.path.join(HERE, '..', '..', 'shared', 'tools', 'score_map.py')
+MODES = ('r2', 'r4', 'f2', 'lowz')
+
+
+def rings(p, n, min_ring_points=200):
+    """Ring index per point: a new ring where the azimuth wraps (KITTI stores the scan ring by ring)."""
+    out, ring, begun, before = [0] * n, 0, 0, 0.0
+    for i in range(n):
+        az = math.atan2(p[4 * i + 1], p[4 * i])
+        if i > 0 and az - before < -math.pi and i - begun > min_ring_points:
+            ring, begun = ring + 1, i
+        before = az
+        out[i] = ring
+    return out
+
+
+def derive(seq, out, mode):
+    os.makedirs(os.path.join(out, 'velodyne'), exist_ok=True)
+    os.makedirs(os.path.join(out, 'labels'), exist_ok=True)
+    frames = sorted(f[:-4] for f in os.listdir(os.path.join(seq, 'velodyne')) if f.endswith('.bin'))
+    poses = open(os.path.join(seq, 'poses.txt')).read().splitlines()
+    keep = frames[::2] if mode == 'f2' else frames
+    shutil.copy(os.path.join(seq, 'calib.txt'), os.path.join(out, 'calib.txt'))
+    with open(os.path.join(out, 'poses.txt'), 'w') as f:
+        f.write('\n'.join(poses[int(k)] for k in keep) + '\n')
+    times = os.path.join(seq, 'times.txt')
+    if os.path.exists(times):
+        t = open(times).read().splitlines()
+        with open(os.path.join(out, 'times.txt'), 'w') as f:
+            f.write('\n'.join(t[int(k)] for k in keep) + '\n')
+    for n, k in enumerate(keep):
+        p = array.array('f')
+        p.frombytes(open(os.path.join(seq, 'velodyne', k + '.bin'), 'rb').read())
+        lab = array.array('I')
+        lab.frombytes(open(os.path.join(seq, 'labels', k + '.label'), 'rb').read())
+        if len(p) != 4 * len(lab):
+            sys.exit(f'{seq}: frame {k}: {len(p) // 4} points but {len(lab)} labels')
+        if mode in ('r2', 'r4'):
+            step, ring = int(mode[1]), rings(p, len(lab))
+            P, L = array.array('f'), array.array('I')
+            for i, r in enumerate(ring):
+                if r % step == 0:
+                    P.extend(p[4 * i:4 * i + 4])
+                    L.append(lab[i])
+            p, lab = P, L
+        elif mode == 'lowz':
+            for i in range(len(lab)):
+                p[4 * i + 2] += 0.5
+        open(os.path.join(out, 'velodyne', f'{n:06d}.bin'), 'wb').write(p.tobytes())
+        open(os.path.join(out, 'labels', f'{n:06d}.label'), 'wb').write(lab.tobytes())
+
+
+def make(out, seqs):
+    for seq in seqs:
+        name = os.path.basename(os.path.normpath(seq))
+        for mode in MODES:
+            derive(seq, os.path.join(out, name + mode), mode)
+            print(f'{name}{mode}', flush=True)
+
+
+def score(out, bindir, config):
+    auto = os.path.join(out, 'config_auto_height.yaml')
+    text = open(config).read()
+    if not re.search(r'^distToGround:\s*[0-9.]+', text, re.M):
+        sys.exit(f'{config}: needs a fixed distToGround (the lowz drives use a copy with auto)')
+    open(auto, 'w').write(re.sub(r'^distToGround:\s*[0-9.]+', 'distToGround: auto', text, count=1, flags=re.M))
+    rows = []
+    for d in sorted(e for e in os.listdir(out) if os.path.isdir(os.path.join(out, e, 'velodyne'))):
+        folder, rawlog, prefix = os.path.join(out, d), os.path.join(out, d + '.rawlog'), os.path.join(out, 'maps', d)
+        os.makedirs(os.path.join(out, 'maps'), exist_ok=True)
+        if not os.path.exists(rawlog):
+            subprocess.run([os.path.join(bindir, 'kitti2rawlog'), '-q', '-w', '-i', folder, '-o', rawlog], check=True)
+        subprocess.run([os.path.join(bindir, 'rawlog-octomap'), '-q', '-w', '-i', rawlog, '-o', prefix,
+                        '-c', auto if d.endswith('lowz') else config], check=True)
+        m = json.loads(subprocess.run([sys.executable, SCORER, folder, prefix + '_costmap.yaml', '--json'],
+                                      check=True, capture_output=True, text=True).stdout)['map']
+        rows.append((d, m['trav_P'], m['trav_R'], m['unsafe1']))
+        print(f'{d:8s} P {m["trav_P"]:6.2f}  R {m["trav_R"]:6.2f}  unsafe1 {m["unsafe1"]:5.2f} %', flush=True)
+    if rows:
+        n = len(rows)
+        print(f'mean     P {sum(r[1] for r in rows) / n:6.2f}  R {sum(r[2] for r in rows) / n:6.2f}  '
+              f'worst: P {min(r[1] for r in rows):.2f}, R {min(r[2] for r in rows):.2f}, unsafe1 {max(r[3] for r in rows):.2f} %')
+
+
+if __name__ == '__main__':
+    a = sys.argv[1:]
+    if len(a) >= 3 and a[0] == 'make':
+        make(a[1], a[2:])
+    elif len(a) == 4 and a[0] == 'score':
+        score(a[1], a[2], a[3])
+    else:
+        sys.exit(__doc__)
