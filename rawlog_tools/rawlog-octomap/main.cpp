@@ -434,6 +434,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     RemoteWorkers remote(ranks);  // told to stop when this returns, whatever happened
     gseg::io::installTemporaryCleanup("rawlog-octomap");  // an interrupted run leaves no temporary
     try {
+        gseg::tools::noteWarnings("rawlog-octomap", cli.loaded.warnings);
         if (!cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
                                 gseg::mrpt::toYaml(cli.loaded).c_str());

@@ -354,6 +354,34 @@ std::vector<UsageCase> usageCases() {
     return cases;
 }
 
+// #32: a configuration that still sets the retired key `threads` (one scan over several threads)
+// runs with every tool that reads one, each saying once on stderr that the key is ignored.
+TEST(EveryTool, AConfigurationWithTheRetiredKeyThreadsRunsWithOneWarning) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = fs::path(GSEG_BINARY_DIR) / "tests" / "tool_common" / "retired_key";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string old = (dir / "old.yaml").string();
+    std::ofstream(old) << "distToGround: auto\nthreads: 2\n";
+    const std::string vlp16 = std::string(GSEG_SOURCE_DIR) + "/config/vlp16.yaml";
+    int n = 0;
+    for (const ToolCase& t : toolCases()) {
+        if (t.command.find("kitti2rawlog") != std::string::npos) continue;  // reads no configuration
+        std::string args = replaceOut(t.args, (dir / ("out" + std::to_string(n++))).string());
+        if (const std::size_t at = args.find(vlp16); at != std::string::npos) args.replace(at, vlp16.size(), old);
+        else args += " -c " + old;
+        const auto r = runCommand("{ " + t.command + " " + args + " 2>" + (dir / "err.txt").string() + " >/dev/null; }");
+        const std::string err = gseg::test::readText((dir / "err.txt").string());
+        EXPECT_EQ(r.status, 0) << t.command << ": " << err;
+        const std::string tool = t.command.substr(t.command.rfind('/') + 1);
+        const std::string warning = tool + ": warning: " + old + ":2: 'threads' is ignored: ";
+        const std::size_t at = err.find(warning);
+        EXPECT_NE(at, std::string::npos) << t.command << ": " << err;
+        EXPECT_EQ(err.find("'threads' is ignored", at + warning.size()), std::string::npos) << "said once: " << err;
+    }
+    EXPECT_EQ(n, 5);
+}
+
 TEST(EveryTool, AUsageMistakeIsOneLineNamingTheOptionInTheSameWordsEverywhere) {
     // Was: "--bogus: no sequences/ folder" (gseg eval), "give the scan once" (gseg segment --bogus),
     // "Couldn't find match for argument (Argument: x.ply)" (--ply_out x.ply), "One or more required
