@@ -1,6 +1,7 @@
 #include <gseg/map/map_builder.hpp>
 
 #include <gseg/ordered_pipeline.hpp>
+#include <gseg/map/memory_policy.hpp>
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/observation_points.hpp>
 #include <gseg/text.hpp>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <new>
 #include <stdexcept>
 
 namespace gseg::map {
@@ -60,7 +62,7 @@ ScanResult ScanWorker::operator()(const ScanParts& parts, const ::mrpt::poses::C
     } catch (const std::out_of_range& e) {
         throw std::runtime_error(r.describe + ": " + e.what() + "; for poses in UTM or other large coordinates use --origin first");
     } catch (const std::bad_alloc&) {
-        throw;  // MapBuilder::run() names the phase; the tool adds the options memory follows
+        throw;  // MapBuilder::run() and insert() name the phase and the options memory follows
     } catch (const std::exception& e) {
         throw std::runtime_error(r.describe + ": " + e.what());
     }
@@ -100,11 +102,11 @@ void MapBuilder::run(ScanStream& stream, const BuildOptions& o) {
     map_.setUpdateThreads(std::max(1u, local));  // the voxels of a scan's update by tiles (same maps for any number)
     if (tally_.scansByRank.size() < o.ranks) tally_.scansByRank.resize(o.ranks, 0);
     // `what()` names the phase, built only when an allocation failed.
-    auto guarded = [](const auto& what, auto&& f) -> decltype(f()) {
+    auto guarded = [this](const auto& what, auto&& f) -> decltype(f()) {
         try {
             return f();
         } catch (const std::bad_alloc&) {
-            throw OutOfMemory("out of memory while " + what());
+            throw OutOfMemory(outOfMemoryMessage(what(), map_.options()));
         }
     };
     auto work = [&](unsigned w, ScanJob& job) {  // local threads first, then the remote ones (if any)
@@ -135,9 +137,13 @@ bool MapBuilder::insert(const ::mrpt::obs::CObservation& obs, const ::mrpt::pose
     char describe[200];
     std::snprintf(describe, sizeof describe, "observation %zu ('%s', t = %.6f s)", inserted_++, obs.sensorLabel.c_str(),
                   ::mrpt::Clock::toDouble(obs.timestamp));
-    const ScanResult r = workers_.front()(parts, robotPose, describe);
-    integrate(r);
-    return r.skipped.empty();
+    try {
+        const ScanResult r = workers_.front()(parts, robotPose, describe);
+        integrate(r);
+        return r.skipped.empty();
+    } catch (const std::bad_alloc&) {
+        throw OutOfMemory(outOfMemoryMessage(std::string("adding ") + describe + " to the maps", map_.options()));
+    }
 }
 
 void MapBuilder::clear() {
