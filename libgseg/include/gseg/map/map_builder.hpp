@@ -133,6 +133,9 @@ public:
     const gseg::mrpt::LoadedConfig& config() const { return config_; }
 
 private:
+    /// `count` ScanWorkers for run(), and as many threads for the maps' updates.
+    void startWorkers(unsigned count);
+
     gseg::mrpt::LoadedConfig config_;
     TraversabilityMap map_;
     BuildTally tally_;
