@@ -398,27 +398,51 @@ TEST(PlaneFit, SingleRingIsALineNotATiltedPlane) {
 
 // The classification's moments (PointMoments) spare the least-squares refit its sums where RANSAC's
 // plane holds every point: the fit must be the same bit for bit, with and without outliers.
-TEST(PlaneFit, ClassificationMomentsGiveTheSameFitBitForBit) {
+/// The seed of a tilted plane (every third with outliers).
+class PlaneFitMoments : public ::testing::TestWithParam<std::uint32_t> {
+public:
+    static std::vector<Eigen::Vector3f> plane(std::uint32_t seed) {
+        return tiltedPlane(double(seed % 20), 20 + int(seed) * 7, seed % 3 == 0 ? int(seed) : 0, seed);
+    }
+};
+
+TEST_P(PlaneFitMoments, ClassificationMomentsGiveTheSameFitBitForBit) {
+    const std::uint32_t seed = GetParam();
     gseg::Params p;
     const gseg::SlopeLimit slope(p);
+    const auto pts = plane(seed);
+    gseg::PointMoments m;
+    gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
+    ASSERT_EQ(m.count, pts.size());
+    std::vector<std::uint8_t> in1, in2;
+    gseg::PlaneFitScratch s1, s2;
+    const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in1, s1, 30.0, 0.5);
+    const auto b = gseg::fitPlane(pts.data(), pts.size(), p, seed, in2, s2, 30.0, 0.5, &m);
+    ASSERT_EQ(a.valid, b.valid);
+    EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), sizeof(float) * 3), 0);
+    EXPECT_EQ(std::memcmp(&a.d, &b.d, sizeof(float)), 0);
+    EXPECT_EQ(a.numInliers, b.numInliers);
+    EXPECT_EQ(in1, in2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, PlaneFitMoments, ::testing::Range(std::uint32_t(1), std::uint32_t(41)));
+
+TEST(PlaneFit, TheSeedsOfPlaneFitMomentsMeetThePlaneThatHoldsEveryPoint) {
+    gseg::Params p;
     int allInliers = 0;
     for (std::uint32_t seed = 1; seed <= 40; ++seed) {
-        const auto pts = tiltedPlane(double(seed % 20), 20 + int(seed) * 7, seed % 3 == 0 ? int(seed) : 0, seed);
-        gseg::PointMoments m;
-        gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
-        ASSERT_EQ(m.count, pts.size());
-        std::vector<std::uint8_t> in1, in2;
-        gseg::PlaneFitScratch s1, s2;
-        const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in1, s1, 30.0, 0.5);
-        const auto b = gseg::fitPlane(pts.data(), pts.size(), p, seed, in2, s2, 30.0, 0.5, &m);
-        ASSERT_EQ(a.valid, b.valid) << seed;
-        EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), sizeof(float) * 3), 0) << seed;
-        EXPECT_EQ(std::memcmp(&a.d, &b.d, sizeof(float)), 0) << seed;
-        EXPECT_EQ(a.numInliers, b.numInliers) << seed;
-        EXPECT_EQ(in1, in2) << seed;
+        const auto pts = PlaneFitMoments::plane(seed);
+        std::vector<std::uint8_t> in;
+        gseg::PlaneFitScratch s;
+        const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in, s, 30.0, 0.5);
         allInliers += a.valid && a.numInliers == pts.size();
     }
     EXPECT_GE(allInliers, 10);  // the case the moments serve was met
+}
+
+TEST(PlaneFit, MomentsOfAnotherPointCountAreNotTaken) {
+    gseg::Params p;
+    const gseg::SlopeLimit slope(p);
     // Moments of another point count are not taken; moments of these points are (zeroed, the refit
     // finds no plane through them and RANSAC's plane stays).
     const auto pts = tiltedPlane(5, 100, 0, 7);

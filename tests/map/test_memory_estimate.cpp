@@ -199,7 +199,7 @@ TEST(MemoryEstimate, TheLayerBoxSpansTheGroundCellsAndTheObstacleColumnsOfEveryS
 }
 
 // The tool: the six sequence-00 scans through kitti2rawlog.
-class RawlogOctomapMemory : public ::testing::Test {
+class RawlogOctomapToolMemory : public ::testing::Test {
 protected:
     void SetUp() override {
         const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
@@ -225,7 +225,7 @@ protected:
     fs::path dir_;
 };
 
-TEST_F(RawlogOctomapMemory, MaxMemoryRefusesBeforeAnyWorkNamingTheOptionsAndTheEstimate) {
+TEST_F(RawlogOctomapToolMemory, MaxMemoryRefusesBeforeAnyWorkNamingTheOptionsAndTheEstimate) {
     double seconds = 0;
     auto r = run("--resolution 0.1 --max-memory 150", "", seconds);
     EXPECT_EQ(r.status, 1) << r.output;
@@ -249,7 +249,7 @@ TEST_F(RawlogOctomapMemory, MaxMemoryRefusesBeforeAnyWorkNamingTheOptionsAndTheE
               std::string::npos) << r.output;
 }
 
-TEST_F(RawlogOctomapMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKilled) {
+TEST_F(RawlogOctomapToolMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKilled) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
 #else
@@ -271,7 +271,7 @@ TEST_F(RawlogOctomapMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKi
 // GB resident and was killed by the kernel after 147 s, writing nothing; then refused at the
 // second scan. Now mapped under ulimit -v 4 GB: the layers in tiles where the scans saw the
 // ground, the costmap as tiles and the layers as one COG (the box is about 21700 cells a side).
-TEST_F(RawlogOctomapMemory, APoseJumpMapsInMemoryOfTheGroundSeenAsTiles) {
+TEST_F(RawlogOctomapToolMemory, APoseJumpMapsInMemoryOfTheGroundSeenAsTiles) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
 #else

@@ -43,7 +43,7 @@ std::string rowOf(const std::string& out, const std::string& name) {
 
 }  // namespace
 
-TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
+TEST(BenchToolPerScan, OneRowPerScanAndAutoHeightPerScan) {
     const fs::path dir = kDir / "rows";
     fs::remove_all(dir);
     fs::create_directories(dir);
@@ -71,7 +71,7 @@ TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
     EXPECT_NE(out.find("throughput: "), std::string::npos) << out;
 }
 
-TEST(BenchPerScan, BadConfigAndArguments) {
+TEST(BenchToolPerScan, BadConfigAndArguments) {
     const fs::path dir = kDir / "bad";
     fs::create_directories(dir);
     std::ofstream(dir / "bad.yaml") << "noSuchKey: 3\n";
@@ -93,7 +93,7 @@ TEST(BenchPerScan, BadConfigAndArguments) {
     EXPECT_EQ(status, 2) << out;
 }
 
-TEST(BenchHostile, NanPointsAndEmptyScansNeverAbort) {
+TEST(BenchToolHostile, NanPointsAndEmptyScansNeverAbort) {
     // Before: an exception escaped a worker thread and aborted the process (issue #9 item 4).
     const fs::path dir = kDir / "hostile";
     fs::remove_all(dir);

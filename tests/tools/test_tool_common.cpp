@@ -64,23 +64,27 @@ TEST(Progress, PlainLinesAtASteadyRateWhenNotATerminal) {
               "tool: 40 scans, 1.0 scans/s, 40 s in all\n");
 }
 
-TEST(Progress, SteadyRateWhateverTheItemRate) {
-    // rawlog-gseg printed every 100th scan off a terminal: minutes apart on a slow input, many
-    // lines a second on a fast one. Now one line per interval, fast or slow items alike.
-    for (const double secondsPerItem : {0.01, 0.5, 7.0}) {
-        Captured out;
-        gseg::Progress p(out.f, "tool", "frames", 0, 10.0, [&] { return out.now; });
-        const int items = int(std::lround(120.0 / secondsPerItem));  // two minutes of work
-        for (int k = 1; k <= items; ++k) {
-            out.now = k * secondsPerItem;
-            p.update(std::size_t(k), -1, k % 3 ? "" : "1 skipped");
-        }
-        const std::string t = out.text();
-        const auto lines = std::count(t.begin(), t.end(), '\n');
-        EXPECT_GE(lines, 9) << secondsPerItem << " s per item:\n" << t;  // the first line + one per 10 s or so
-        EXPECT_LE(lines, 13) << secondsPerItem << " s per item:\n" << t;
+// rawlog-gseg printed every 100th scan off a terminal: minutes apart on a slow input, many lines
+// a second on a fast one. Now one line per interval, fast or slow items alike.
+/// Seconds per item.
+class ProgressRate : public ::testing::TestWithParam<double> {};
+
+TEST_P(ProgressRate, SteadyLinesWhateverTheItemRate) {
+    const double secondsPerItem = GetParam();
+    Captured out;
+    gseg::Progress p(out.f, "tool", "frames", 0, 10.0, [&] { return out.now; });
+    const int items = int(std::lround(120.0 / secondsPerItem));  // two minutes of work
+    for (int k = 1; k <= items; ++k) {
+        out.now = k * secondsPerItem;
+        p.update(std::size_t(k), -1, k % 3 ? "" : "1 skipped");
     }
+    const std::string t = out.text();
+    const auto lines = std::count(t.begin(), t.end(), '\n');
+    EXPECT_GE(lines, 9) << t;  // the first line + one per 10 s or so
+    EXPECT_LE(lines, 13) << t;
 }
+
+INSTANTIATE_TEST_SUITE_P(SecondsPerItem, ProgressRate, ::testing::Values(0.01, 0.5, 7.0));
 
 TEST(Progress, SkippedItemsAreSaidApartFromTheItemsDone) {
     Captured out;
