@@ -82,6 +82,10 @@ void note(const char* format, ...) {
     va_end(args);
 }
 
+void noteWarnings(const std::string& tool, const std::vector<std::string>& warnings) {
+    for (const std::string& w : warnings) note("%s: warning: %s\n", tool.c_str(), w.c_str());
+}
+
 std::string versionLine(const std::string& toolName) {
     return toolName + (toolName.rfind("gseg", 0) == 0 ? " " : " (gseg) ") + GSEG_VERSION;
 }

@@ -50,6 +50,9 @@ void setVerbosity(Verbosity v);
 void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
 void detail(const char* format, ...) __attribute__((format(printf, 1, 2)));
 void note(const char* format, ...) __attribute__((format(printf, 1, 2)));
+/// note()s "<tool>: warning: <w>" for each of `warnings` (a configuration's ignored keys,
+/// gseg::mrpt::LoadedConfig::warnings): every tool says each once, after loading its configuration.
+void noteWarnings(const std::string& tool, const std::vector<std::string>& warnings);
 /// "rawlog-gseg (gseg) 0.1.0", "gseg segment 0.1.0": what --version prints.
 std::string versionLine(const std::string& toolName);
 

@@ -157,11 +157,25 @@ void checkKey(const std::string& key, const std::vector<std::string>& known, con
                           " lists them");
 }
 
+/// "parameters:2: ..." names a line of the text configFromDict() makes, not of any file: left out.
+std::string withoutTextLine(std::string m) {
+    if (m.rfind("parameters", 0) == 0) {
+        std::size_t at = 10;
+        if (at < m.size() && m[at] == ':') ++at;
+        while (at < m.size() && std::isdigit(static_cast<unsigned char>(m[at]))) ++at;
+        if (at < m.size() && m[at] == ':') ++at;
+        while (at < m.size() && m[at] == ' ') ++at;
+        m.erase(0, at);
+    }
+    return m;
+}
+
 /// Keyword arguments or a dict -> YAML text -> the one configuration loader (same keys, checks
 /// and messages as the files). Nested dicts: `sensorHeight`, `traversability`.
 gseg::mrpt::LoadedConfig configFromDict(const py::dict& d) {
     std::vector<std::string> top = gseg::Params::keys();
     top.insert(top.end(), {"distToGround", "sensorHeight", "traversability"});
+    for (const auto& r : gseg::mrpt::retiredKeys()) top.push_back(r.key);  // loaded with a warning
     for (const auto& item : d) {
         const std::string key = py::str(item.first);
         checkKey(key, top, "parameter", "gseg.Params.keys()");
@@ -192,18 +206,14 @@ gseg::mrpt::LoadedConfig configFromDict(const py::dict& d) {
     try {
         return gseg::mrpt::loadConfigFromText(text + nested, gseg::mrpt::ConfigFormat::Yaml, "parameters");
     } catch (const std::exception& e) {
-        // "parameters:2: ..." names a line of the text made above, not of any file: left out.
-        std::string m = gseg::mrpt::errorReason(e);
-        if (m.rfind("parameters", 0) == 0) {
-            std::size_t at = 10;
-            if (at < m.size() && m[at] == ':') ++at;
-            while (at < m.size() && std::isdigit(static_cast<unsigned char>(m[at]))) ++at;
-            if (at < m.size() && m[at] == ':') ++at;
-            while (at < m.size() && m[at] == ' ') ++at;
-            m.erase(0, at);
-        }
-        throw py::value_error(m);
+        throw py::value_error(withoutTextLine(gseg::mrpt::errorReason(e)));
     }
+}
+
+/// The configuration's warnings (a retired key) as Python warnings, each once.
+void warnAbout(const gseg::mrpt::LoadedConfig& c) {
+    for (const std::string& w : c.warnings)
+        py::module_::import("warnings").attr("warn")(withoutTextLine(w), py::handle(PyExc_UserWarning), 1);
 }
 
 /// The configuration as a dict of Python values (numbers as float/int/bool where they read so).
@@ -248,6 +258,7 @@ PyParams paramsFrom(const py::object& source, const py::kwargs& kwargs) {
             } catch (const std::exception& e) {
                 throw py::value_error(gseg::mrpt::errorReason(e));
             }
+            warnAbout(p.config);
             if (kwargs.empty()) return p;
             d = configDict(p.config);
         } else {
@@ -264,7 +275,9 @@ PyParams paramsFrom(const py::object& source, const py::kwargs& kwargs) {
             d[item.first] = item.second;
         }
     }
-    return PyParams{configFromDict(d)};
+    PyParams p{configFromDict(d)};
+    warnAbout(p.config);
+    return p;
 }
 
 // --- results ------------------------------------------------------------------------------------

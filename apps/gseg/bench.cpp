@@ -60,10 +60,10 @@ struct Input {
 /// scan, outside the timing; points with NaN or infinite coordinates are labelled non-ground by
 /// the segmenter, uncounted in its work). A scan with no point cannot be timed and is listed in
 /// `skipped`.
-std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config, int threadsPerScan,
+std::vector<Input> loadInputs(const std::vector<std::string>& paths, const std::string& config,
                               std::vector<std::string>& skipped) {
-    ::gseg::mrpt::LoadedConfig cfg = ::gseg::mrpt::loadConfigOrDefault(config);  // the one default without -c
-    if (threadsPerScan > 0) cfg.params.threads = threadsPerScan;
+    const ::gseg::mrpt::LoadedConfig cfg = ::gseg::mrpt::loadConfigOrDefault(config);  // the one default without -c
+    tools::noteWarnings("gseg bench", cfg.warnings);
     tools::detail("parameters (%s):\n%s", config.empty() ? "the default" : config.c_str(),
                   ::gseg::mrpt::toYaml(cfg).c_str());
     tools::say("%s\n", ::gseg::mrpt::heightSummary(cfg, config).c_str());
@@ -171,18 +171,18 @@ void printSteps(const std::vector<Sample>& all) {
                 column(all, [](const Sample& s) { return s.p2.total(); }).median);
 }
 
-int run(const std::vector<std::string>& paths, const std::string& config, int repeat, int threads, int threadsPerScan) {
+int run(const std::vector<std::string>& paths, const std::string& config, int repeat, int threads) {
     std::vector<std::string> skipped;
-    const std::vector<Input> inputs = loadInputs(paths, config, threadsPerScan, skipped);
+    const std::vector<Input> inputs = loadInputs(paths, config, skipped);
     if (inputs.empty()) throw std::runtime_error("no scan to time (" + std::to_string(skipped.size()) + " skipped)");
     std::size_t points = 0;
     for (const auto& in : inputs) points += in.scan.size();
     const bool perScanParams = std::any_of(inputs.begin(), inputs.end(), [&](const Input& in) {
         return in.params.distToGround != inputs.front().params.distToGround;
     });
-    tools::say("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s), %d thread(s) per scan; build: %s; "
+    tools::say("gseg bench: %zu scan(s), %zu points, warm-up + %d repeats, %d thread(s); build: %s; "
                 "%u hardware threads\n",
-                inputs.size(), points, repeat, threads, inputs.front().params.threads, kBuild,
+                inputs.size(), points, repeat, threads, kBuild,
                 std::thread::hardware_concurrency());
 
     double wallS = 0;
@@ -221,9 +221,6 @@ int runBench(int argc, char** argv) {
     TCLAP::ValueArg<int> rep("", "repeat", "timed passes over all scans (default 20)", false, 20, "N", cmd);
     TCLAP::ValueArg<int> thr("", "threads", "N independent segmenters on N threads, each timing every scan "
                              "(scan-level parallelism; default 1)", false, 1, "N", cmd);
-    TCLAP::ValueArg<int> perScan("", "threads-per-scan", "threads working on one scan (the parameter threads: "
-                                 "cells and neighbour searches in parallel; overrides the config's; default: the "
-                                 "config's, else 1)", false, 0, "N", cmd);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     std::vector<std::string> scans = input.getValue();
     scans.insert(scans.end(), scanArgs.getValue().begin(), scanArgs.getValue().end());
@@ -232,10 +229,8 @@ int runBench(int argc, char** argv) {
     if (scans.empty()) return line.usageError("no scan to time: give -i SCAN (repeatable)");
     if (repeat < 1 || threads < 1 || threads > 256)
         return line.usageError("--repeat must be >= 1 and --threads between 1 and 256");
-    if (perScan.isSet() && (perScan.getValue() < 1 || perScan.getValue() > 256))
-        return line.usageError("--threads-per-scan must be between 1 and 256");
     try {
-        return run(scans, config, repeat, threads, perScan.getValue());
+        return run(scans, config, repeat, threads);
     } catch (...) {
         return tools::reportError("gseg bench", tools::InvalidArgument::BadInput);
     }

@@ -116,7 +116,7 @@ FrameList findFrames(const fs::path& root, const std::vector<std::string>& only)
 /// thread count agrees). `note` says when the fallback was used.
 struct FrameSegmenter {
     explicit FrameSegmenter(const Setup& setup)
-        : seg(::gseg::mrpt::LoadedConfig{setup.params, setup.autoHeight, setup.sensorHeight, {}}) {}
+        : seg(::gseg::mrpt::LoadedConfig{setup.params, setup.autoHeight, setup.sensorHeight, {}, {}}) {}
     Result segment(const PointCloudView& cloud, std::string& note) {
         if (cloud.empty()) throw std::invalid_argument("gseg: the point cloud is empty");
         ::gseg::mrpt::ScanSegmentation s = seg.segment(cloud, false, ::gseg::mrpt::HeightCheck::Never);
@@ -372,7 +372,7 @@ struct Cli {
     bool driveContext = true;  ///< score drives (poses.txt + calib.txt) with their terrain model too
 };
 
-Setup makeSetup(const Cli& cli) {
+Setup makeSetup(const Cli& cli, bool root) {
     Setup setup;
     mrpt::LoadedConfig cfg;
     try {
@@ -380,6 +380,7 @@ Setup makeSetup(const Cli& cli) {
     } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
         throw std::runtime_error(e.what());
     }
+    if (root) tools::noteWarnings("gseg eval", cfg.warnings);  // once, not once per rank
     setup.params = cfg.params, setup.autoHeight = cfg.distToGroundAuto, setup.sensorHeight = cfg.sensorHeight;
     setup.traversability = cfg.traversability;
     tools::detail("parameters (%s):\n%s", cli.config.empty() ? "the default" : cli.config.c_str(),
@@ -417,7 +418,7 @@ int run(const Cli& cli, tools::Ranks& ranks) {
     std::string error;  // every rank finds the frames; any rank's failure stops all alike
     int code = tools::kBadInput;
     try {
-        setup = makeSetup(cli);
+        setup = makeSetup(cli, ranks.root());
         if (!cli.scan.empty()) {
             if (cli.labels.empty()) throw std::invalid_argument("--scan needs --labels");
             frames.push_back({"scan", fs::path(cli.scan).stem().string(), cli.scan, cli.labels});

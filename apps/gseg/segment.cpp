@@ -34,6 +34,7 @@ void printPhase(const char* name, const PhaseReport& r) {
 int run(const Cli& cli) {
     using tools::say;
     const mrpt::LoadedConfig cfg = mrpt::loadConfigOrDefault(cli.config);  // the one default without -c
+    tools::noteWarnings("gseg segment", cfg.warnings);
     tools::detail("parameters (%s):\n%s", cli.config.empty() ? "the default" : cli.config.c_str(),
                   mrpt::toYaml(cfg).c_str());
     const mrpt::Scan scan = mrpt::loadScan(cli.scan, cli.index);

@@ -213,53 +213,28 @@ void Grid::zCells(const PointCloudView& cloud, const std::vector<std::uint32_t>&
 }
 
 void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
-                        std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool) {
+                        std::vector<std::uint32_t>& columnOf) {
     const std::size_t n = indices.size();
     columnOf.resize(n);
     coords_.resize(2 * n);
-    // Runs body(begin, end) over [0, n), in chunks on the pool's threads where there is one.
-    constexpr std::size_t kChunk = 8192;
-    const auto forPoints = [&](auto&& body) {
-        if (pool && pool->threads() > 1)
-            pool->forRange(n, kChunk, [&](std::size_t b, std::size_t e, unsigned) { body(b, e); });
-        else
-            body(std::size_t(0), n);
-    };
-    const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    bounds_.assign(4 * std::max<std::size_t>(chunks, 1), 0);
-    for (std::size_t c = 0; c < bounds_.size(); c += 4) {
-        bounds_[c] = bounds_[c + 1] = std::numeric_limits<std::int32_t>::max();
-        bounds_[c + 2] = bounds_[c + 3] = std::numeric_limits<std::int32_t>::min();
-    }
     xy_.resize(2 * n);
     z_.resize(n);
-    forPoints([&](std::size_t b, std::size_t e) {
-        // The coordinates gathered first, then the cells and the box in loops that vectorise.
-        float* const xs = xy_.data();
-        float* const ys = xy_.data() + n;
-        float* const zs = z_.data();
-        for (std::size_t k = b; k < e; ++k) {
-            const float* p = cloud.point(indices[k]);
-            xs[k] = p[0], ys[k] = p[1], zs[k] = p[2];
-        }
-        std::int32_t* const cxs = coords_.data();
-        std::int32_t* const cys = coords_.data() + n;
-        detail::cellCoords(xs + b, e - b, sx, 0.0, cxs + b);
-        detail::cellCoords(ys + b, e - b, sy, 0.0, cys + b);
-        std::int32_t lx = std::numeric_limits<std::int32_t>::max(), ly = lx;
-        std::int32_t hx = std::numeric_limits<std::int32_t>::min(), hy = hx;
-        detail::valueRange(cxs + b, e - b, lx, hx);
-        detail::valueRange(cys + b, e - b, ly, hy);
-        std::int32_t* box = &bounds_[4 * (b / kChunk)];  // lo x, lo y, hi x, hi y of this chunk
-        box[0] = std::min(box[0], lx), box[2] = std::max(box[2], hx);
-        box[1] = std::min(box[1], ly), box[3] = std::max(box[3], hy);
-    });
+    // The coordinates gathered first, then the cells and the box in loops that vectorise.
+    float* const xs = xy_.data();
+    float* const ys = xy_.data() + n;
+    float* const zs = z_.data();
+    for (std::size_t k = 0; k < n; ++k) {
+        const float* p = cloud.point(indices[k]);
+        xs[k] = p[0], ys[k] = p[1], zs[k] = p[2];
+    }
+    std::int32_t* const cxs = coords_.data();
+    std::int32_t* const cys = coords_.data() + n;
+    detail::cellCoords(xs, n, sx, 0.0, cxs);
+    detail::cellCoords(ys, n, sy, 0.0, cys);
     std::int32_t lo[2] = {std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max()};
     std::int32_t hi[2] = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min()};
-    for (std::size_t c = 0; c < bounds_.size(); c += 4) {
-        lo[0] = std::min(lo[0], bounds_[c]), lo[1] = std::min(lo[1], bounds_[c + 1]);
-        hi[0] = std::max(hi[0], bounds_[c + 2]), hi[1] = std::max(hi[1], bounds_[c + 3]);
-    }
+    detail::valueRange(cxs, n, lo[0], hi[0]);
+    detail::valueRange(cys, n, lo[1], hi[1]);
     keys_.clear();
     if (n == 0) {
         dense_ = true, lo_[0] = lo_[1] = 0, extY_ = 1, size_ = 0;
@@ -271,14 +246,9 @@ void ColumnIndex::build(const PointCloudView& cloud, const std::vector<std::uint
         lo_[0] = lo[0], lo_[1] = lo[1];
         extY_ = std::int64_t(hi[1]) - lo[1] + 1;
         size_ = std::uint32_t(area);
-        forPoints([&](std::size_t b, std::size_t e) {
-            const std::int32_t* const cxs = coords_.data();
-            const std::int32_t* const cys = coords_.data() + n;
-            // Dense ids fit 32 bits (the box holds at most 4 n + 65536 columns).
-            const std::uint32_t ey = std::uint32_t(extY_), lx = std::uint32_t(lo[0]), ly = std::uint32_t(lo[1]);
-            for (std::size_t k = b; k < e; ++k)
-                columnOf[k] = (std::uint32_t(cxs[k]) - lx) * ey + (std::uint32_t(cys[k]) - ly);
-        });
+        // Dense ids fit 32 bits (the box holds at most 4 n + 65536 columns).
+        const std::uint32_t ey = std::uint32_t(extY_), lx = std::uint32_t(lo[0]), ly = std::uint32_t(lo[1]);
+        for (std::size_t k = 0; k < n; ++k) columnOf[k] = (std::uint32_t(cxs[k]) - lx) * ey + (std::uint32_t(cys[k]) - ly);
         return;
     }
     keys_.resize(n);

@@ -1,5 +1,4 @@
 #include <gseg/below_ground.hpp>
-#include <gseg/fork_join_pool.hpp>
 #include <gseg/cell_classifier.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/ground_segmenter.hpp>
@@ -168,22 +167,8 @@ struct detail::Workspace {
     std::vector<Eigen::Vector3f> phase1GroundPoints;  // the points of phase1Ground (Phase II's input), in its order
     std::vector<std::uint32_t> phase1GroundColumns;   // their column ids
     std::vector<std::uint8_t> inlier;  // plane inlier flag, aligned with grid.order()
-    // Per thread (Params::threads; [0]: the calling thread): the plane fit's scratch.
-    struct ThreadScratch {
-        std::vector<std::uint8_t> mask;  // a cell's inlier mask
-        PlaneFitScratch planeFit;
-    };
-    std::vector<ThreadScratch> perThread;
-    std::unique_ptr<ForkJoinPool> pool;  // Params::threads > 1: the threads of one scan's cells (persistent)
-
-    // Runs body(begin, end, thread) over [0, n): in chunks on the pool's threads, or all at once.
-    template <class Body>
-    void forCells(std::size_t n, Body&& body) {
-        if (pool)
-            pool->forRange(n, 128, body);
-        else
-            body(std::size_t(0), n, 0u);
-    }
+    std::vector<std::uint8_t> cellMask;  // the plane fit's scratch: a cell's inlier mask
+    PlaneFitScratch planeFit;
     std::vector<CellState> cells;
     std::vector<PointMoments> moments;  // per cell that the plane fit takes: its points' mean and scatter matrix (the classification's)
     std::vector<std::uint32_t> candidateCell;  // candidate -> cell
@@ -202,8 +187,6 @@ struct detail::Workspace {
 
 GroundSegmenter::GroundSegmenter(const Params& params) : params_(params), ws_(std::make_unique<detail::Workspace>()) {
     params_.validate();
-    ws_->perThread.resize(std::size_t(params_.threads));
-    if (params_.threads > 1) ws_->pool = std::make_unique<ForkJoinPool>(unsigned(params_.threads));
 }
 GroundSegmenter::~GroundSegmenter() = default;
 GroundSegmenter::GroundSegmenter(GroundSegmenter&&) noexcept = default;
@@ -322,9 +305,7 @@ private:
         ws.cells.assign(ws.grid->cells().size(), CellState());
         ws.moments.resize(ws.cells.size());  // written for the cells the plane fit takes, read for those only
         // Cells are independent: each writes its own state and its own points' flags.
-        ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned) {
-            for (std::size_t c = begin; c < end; ++c) classifyOne(ws, c);
-        });
+        for (std::size_t c = 0; c < ws.cells.size(); ++c) classifyOne(ws, c);
     }
 
     void classifyOne(detail::Workspace& ws, std::size_t c) const {
@@ -350,12 +331,10 @@ private:
     // otherwise the cell is dominated by something steeper (a wall, a car side) and is not ground.
     // Each cell's RANSAC generator is seeded from the cell's index, so the fits are independent.
     void fitPlanes(detail::Workspace& ws) const {
-        ws.forCells(ws.cells.size(), [&](std::size_t begin, std::size_t end, unsigned thread) {
-            for (std::size_t c = begin; c < end; ++c) fitOne(ws, c, ws.perThread[thread]);
-        });
+        for (std::size_t c = 0; c < ws.cells.size(); ++c) fitOne(ws, c);
     }
 
-    void fitOne(detail::Workspace& ws, std::size_t c, detail::Workspace::ThreadScratch& scratch) const {
+    void fitOne(detail::Workspace& ws, std::size_t c) const {
         CellState& s = ws.cells[c];
         if (s.cellClass != CellClass::Plane) return;
         const GridCell& g = ws.grid->cells()[c];
@@ -364,14 +343,14 @@ private:
             return;
         }
         const PlaneFitResult fit = fitPlane(&ws.grid->points()[g.begin], g.size(), p_, cellSeed(p_.ransacSeed, g, set_.number),
-                                            scratch.mask, scratch.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio,
+                                            ws.cellMask, ws.planeFit, p_.slopeThresholdDegrees, p_.minGroundInlierRatio,
                                             &ws.moments[c]);
         if (!fit.valid || double(fit.numInliers) <= p_.minGroundInlierRatio * double(g.size())) {
             s.outcome = CellOutcome::Steep;
             return;
         }
         // (Pointers at hand: a byte store may alias anything, and would have them reloaded per point.)
-        const std::uint8_t* const mask = scratch.mask.data();
+        const std::uint8_t* const mask = ws.cellMask.data();
         const Eigen::Vector3f* const pts = ws.grid->points().data() + g.begin;
         std::copy(mask, mask + g.size(), ws.inlier.begin() + g.begin);
         const Eigen::Vector3f sum = fit.numInliers == g.size() ? floatSum(pts, g.size(), nullptr) : floatSum(pts, g.size(), mask);
@@ -443,7 +422,6 @@ private:
         es.seedGate = p_.seedHeightTolerance;  // both phases: the seed is ground level with the robot
         es.seedSlope = std::tan(p_.slopeThresholdDegrees * M_PI / 180.0);
         es.fewSeeds = 4;  // real scans give dozens (KITTI: 85-169); one or two may be a car's wheels
-        es.pool = ws.pool.get();
         // Only the ambiguous-cell rule reads the neighbours (the lowest of them).
         es.needsNeighbours = [&](std::uint32_t cand) { return ws.cells[ws.candidateCell[cand]].ambiguous; };
         const auto accept = [&](std::uint32_t cand, const std::vector<std::uint32_t>& nb) {
@@ -480,12 +458,10 @@ private:
             ws.groundInColumn.assign(ws.columns.size(), 0);
             for (std::size_t c = 0; c < grid.size(); ++c)
                 if (ws.cells[c].outcome == CellOutcome::Ground) ws.groundInColumn[ws.grid->cellColumns()[c]] = 1;
-            ws.forCells(grid.size(), [&](std::size_t begin, std::size_t end, unsigned) {
-                for (std::size_t c = begin; c < end; ++c)
-                    if (ws.cells[c].outcome != CellOutcome::Ground &&
-                        (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
-                        recover(ws, c);
-            });
+            for (std::size_t c = 0; c < grid.size(); ++c)
+                if (ws.cells[c].outcome != CellOutcome::Ground &&
+                    (!set_.recoverSparseOnly || ws.cells[c].outcome == CellOutcome::TooFewPoints))
+                    recover(ws, c);
         }
         // The accepted points replace the outputs' contents, written in place without a check per
         // point: room for every point of the ground and recovered cells (and one more: the
@@ -752,7 +728,7 @@ Result GroundSegmenter::run(const PointCloudView& cloud, const Params& params, b
     ws.input.resize(cloud.size());
     ws.input.resize(finiteIndices(cloud, ws.input.data()));
     r.numNonFinite = cloud.size() - ws.input.size();
-    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns, ws.pool.get());
+    ws.columns.build(cloud, ws.input, params.cellSizeX, params.cellSizeY, ws.inputColumns);
 
     // Phase I: tall cells over the whole cloud, no height gate.
     PhaseInput all{ws.input, ws.inputColumns.data()};

@@ -48,7 +48,6 @@ const OptionTable<Params>& table() {
         {"floatingMaxDepth", &Params::floatingMaxDepth},
         {"floatingIgnoresLowOutliers", &Params::floatingIgnoresLowOutliers},
         {"belowGroundMargin", &Params::belowGroundMargin},
-        {"threads", &Params::threads},
     });
     return t;
 }
@@ -110,7 +109,6 @@ void Params::validate() const {
     require(finite(floatingMaxDepth) && floatingMaxDepth >= 0, "floatingMaxDepth", floatingMaxDepth, "must be >= 0");
     require(finite(belowGroundMargin) && belowGroundMargin >= 0, "belowGroundMargin", belowGroundMargin,
             "must be >= 0");
-    require(threads >= 1 && threads <= 256, "threads", threads, "must be between 1 and 256");
     require(finite(maxGroundHeightDeviation) && maxGroundHeightDeviation >= 0, "maxGroundHeightDeviation",
             maxGroundHeightDeviation, "must be >= 0");
 }

@@ -281,8 +281,8 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
         if (!queue.empty()) break;
     }
 
-    // Each candidate's neighbours (the search's order, itself excluded, within the gate): searched
-    // when the walk reaches it, or all before the walk on several threads (independent searches).
+    // Each candidate's neighbours (the search's order, itself excluded, within the gate), searched
+    // when the walk reaches it.
     // The order of a candidate's neighbours (by column, then index) decides only the order of the
     // walk (and so Result's reachedFrom), never which candidates are accepted: accept() depends on
     // the candidate and the set of its neighbours alone, and every candidate connected to the seed
@@ -293,31 +293,6 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
             if (j != c && gated(c, j)) out.push_back(j);
         });
     };
-    std::vector<std::uint32_t> listStart, lists;  // CSR of the precomputed neighbours
-    if (s.pool && s.pool->threads() > 1) {
-        constexpr std::size_t chunk = 64;
-        const std::size_t n = centroids.size(), parts = (n + chunk - 1) / chunk;
-        std::vector<std::vector<std::uint32_t>> partLists(parts), partCounts(parts);
-        std::vector<std::vector<std::uint32_t>> out(s.pool->threads());
-        s.pool->forRange(n, chunk, [&](std::size_t b, std::size_t e, unsigned t) {
-            auto& list = partLists[b / chunk];
-            auto& counts = partCounts[b / chunk];
-            for (std::size_t c = b; c < e; ++c) {
-                if (s.needsNeighbours && !s.needsNeighbours(std::uint32_t(c)))
-                    out[t].clear();  // searched during the walk, if ever
-                else
-                    neighboursOf(std::uint32_t(c), out[t]);
-                list.insert(list.end(), out[t].begin(), out[t].end());
-                counts.push_back(std::uint32_t(out[t].size()));
-            }
-        });
-        listStart.reserve(n + 1);
-        listStart.push_back(0);
-        for (std::size_t p = 0; p < parts; ++p) {
-            lists.insert(lists.end(), partLists[p].begin(), partLists[p].end());
-            for (std::uint32_t k : partCounts[p]) listStart.push_back(listStart.back() + k);
-        }
-    }
 
     const auto reach = [&](std::uint32_t c, std::uint32_t j) {
         state[j] = 1;
@@ -333,10 +308,7 @@ std::vector<std::uint8_t> expandRegion(const std::vector<Eigen::Vector3f>& centr
             const std::uint32_t c = queue.front();
             queue.pop_front();
             if (!s.needsNeighbours || s.needsNeighbours(c)) {
-                if (!listStart.empty())
-                    neighbours.assign(lists.begin() + listStart[c], lists.begin() + listStart[c + 1]);
-                else
-                    neighboursOf(c, neighbours);
+                neighboursOf(c, neighbours);
             } else {
                 // accept() does not look at this candidate's neighbours: decide first, then visit only
                 // the neighbours not reached yet (the same ones, in the same order, as from the list).

@@ -307,6 +307,7 @@ int runBatch(const Cli& cli, gseg::tools::Ranks& ranks) {
         } catch (const std::invalid_argument& e) {  // a bad file is bad input, not bad usage
             throw std::runtime_error(e.what());
         }
+        if (ranks.root()) gseg::tools::noteWarnings("rawlog-gseg", config.warnings);
         if (ranks.root() && !cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
                                 gseg::mrpt::toYaml(config).c_str());

@@ -14,7 +14,7 @@
 #include "common/cli.hpp"
 
 #include <gseg/io/atomic_file.hpp>
-#include <gseg/map/memory_estimate.hpp>
+#include <gseg/map/memory_policy.hpp>
 #include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/errors.hpp>
@@ -195,143 +195,13 @@ void printReport(const RunReport& r, double resolution) {
     for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
 }
 
-/// " (at --resolution 0.01 m, --max-range 50 m)": the options memory follows, for messages.
-std::string memoryOptions(const Cli& cli) {
-    char text[120];
-    std::snprintf(text, sizeof text, " (at --resolution %g m, --max-range %g m)", cli.options.resolution, cli.options.maxRange);
-    return text;
-}
-
-/// What checkMemory() found, for the check after every scan (LayerGuard).
-struct MemoryBudget {
-    bool known = false;       ///< false: nothing to estimate from (the first scan could not be used)
-    gseg::map::MemoryEstimate estimate;
-    std::size_t inFlight = 0, scans = 0;  ///< as estimated (scans from the rawlog's bytes per scan)
-    gseg::map::MemoryLimit limit;
-    /// [bytes] the whole run with the layers' `layers` bytes
-    double need(double layers) const { return estimate.peakWithWriting(inFlight, scans, layers); }
-};
-
-/// Memory, before any work (#18): the maps and the scans in flight, estimated from the first
-/// scan's rays at these options, against the limit (--max-memory, else what the machine and the
-/// process's limits leave). Throws std::runtime_error naming the options and the estimate.
-MemoryBudget checkMemory(const Cli& cli, const ScanJob& first, const ScanJob* second, std::size_t inFlight) {
-    std::vector<float> points;
-    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-    try {
-        for (const auto* part : {&first.raw, &first.ground, &first.obstacles})
-            if (*part && (part != &first.raw || !first.presegmented()))
-                origin = gseg::map::appendWorldPoints(**part, first.robotPose, points);
-    } catch (const std::invalid_argument&) {
-        return {};  // a scan the builder will skip and name (e.g. a 2D scan): nothing to estimate from
-    }
-    const gseg::map::RayFootprint f =
-        gseg::map::rayFootprint(gseg::PointCloudView(points.data(), points.size() / 3), origin, cli.options);
-    // The scans of the drive, from the bytes of the rawlog the second scan took.
-    const double step = second ? second->fraction - first.fraction : 0;
-    const std::size_t scans = !second ? 1 : step > 0 ? std::size_t(std::lround(std::min(1e9, 2 + (1 - second->fraction) / step))) : 2;
-    const gseg::map::MemoryEstimate estimate = gseg::map::estimateMemory(f);
-    const double need = estimate.peak(inFlight, std::max<std::size_t>(1, scans));
-    gseg::map::MemoryLimit limit = gseg::map::memoryLimit();
-    if (cli.maxMemory > 0 && (cli.maxMemory < limit.bytes || limit.machine))  // the user's word, within ulimit's
-        limit = {cli.maxMemory, "--max-memory", false};
-    gseg::tools::detail("rawlog-octomap: memory estimated from %s: %s for about %zu scans%s; limit %s (%s)\n",
-                        first.describe().c_str(), gseg::map::formatBytes(need).c_str(), scans, memoryOptions(cli).c_str(),
-                        gseg::map::formatBytes(limit.bytes).c_str(), limit.what.c_str());
-    if (need > limit.bytes) {
-        char text[400];
-        std::snprintf(text, sizeof text, "--resolution %g m needs about %s for the maps and ray casting (estimated from "
-                      "%s: %zu points, rays up to --max-range %g m, about %zu scans), more than %s (%s); use a coarser "
-                      "--resolution or a shorter --max-range%s", cli.options.resolution, gseg::map::formatBytes(need).c_str(),
-                      first.describe().c_str(), f.rays, cli.options.maxRange, scans, limit.what.c_str(),
-                      gseg::map::formatBytes(limit.bytes).c_str(), limit.what == "--max-memory" ? "" : ", or give --max-memory");
-        throw std::runtime_error(text);
-    }
-    return {true, estimate, inFlight, std::max<std::size_t>(1, scans), limit};
-}
-
-/// The 2.5D layers are sparse in tiles of 64 x 64 cells where scans saw something (#35); a map
-/// written untiled adds dense grids over its box (the costmap, the GeoTIFF), a tiled one an
-/// overview and one costmap tile. After every scan, the maps' estimate plus the layers so far
-/// against the limit: refused at the scan that makes it too big, naming the option to change.
-class LayerGuard {
-public:
-    LayerGuard(const Cli& cli, const MemoryBudget& budget) : cli_(cli), budget_(budget) {}
-
-    /// Throws std::runtime_error when the layers, with the maps, exceed the limit.
-    void add(std::size_t k, const ScanResult& r) {
-        if (!budget_.known || !r.skipped.empty()) return;
-        const double before = box_.cells(), tilesBefore = box_.tiles();
-        box_.add(r.update);
-        if (haveOrigin_) {
-            const double jump = (r.update.origin - lastOrigin_).norm();
-            if (jump > jump_) jump_ = jump, jumpScan_ = k;
-        }
-        haveOrigin_ = true, lastOrigin_ = r.update.origin;
-        if (box_.cells() == before && box_.tiles() == tilesBefore) return;
-        const double layers = layerBytes(), need = budget_.need(layers);
-        if (need <= budget_.limit.bytes) return;
-        const double res = cli_.options.resolution;
-        char text[800];
-        std::snprintf(text, sizeof text, "the scans up to %s cover %.0f m x %.0f m (x from %.1f m, y from %.1f m; %.0f tiles "
-                      "of 64 x 64 cells seen): the 2.5D layers need about %s at --resolution %g m%s (%s with the maps), more "
-                      "than %s (%s); the largest step between two scans is %.0f m (to scan %zu): %s",
-                      r.describe.c_str(), box_.cellsX() * res, box_.cellsY() * res, box_.minX(res), box_.minY(res), box_.tiles(),
-                      gseg::map::formatBytes(layers).c_str(), res, tiled() ? ", written as tiles" : ", written as one grid of the box",
-                      gseg::map::formatBytes(need).c_str(), budget_.limit.what.c_str(),
-                      gseg::map::formatBytes(budget_.limit.bytes).c_str(), jump_, jumpScan_, advice().c_str());
-        throw std::runtime_error(std::string(text) + (budget_.limit.what == "--max-memory" ? "" : ", or give --max-memory"));
-    }
-
-    /// "..." for the detail line: the estimate with the layers of the whole drive.
-    std::string summary() const {
-        char text[240];
-        std::snprintf(text, sizeof text, "%s with writing (%s while integrating, maps %s, layers in %.0f tiles over a box of "
-                      "%.0f x %.0f cells, %s: %s)", gseg::map::formatBytes(budget_.need(layerBytes())).c_str(),
-                      gseg::map::formatBytes(budget_.estimate.peak(budget_.inFlight, budget_.scans)).c_str(),
-                      gseg::map::formatBytes(budget_.estimate.maps(budget_.scans)).c_str(), box_.tiles(), box_.cellsX(),
-                      box_.cellsY(), tiled() ? "tiled" : "one grid", gseg::map::formatBytes(layerBytes()).c_str());
-        return text;
-    }
-
-private:
-    bool tiled() const { return cli_.outputs.tiled(std::int64_t(box_.cellsX()), std::int64_t(box_.cellsY())); }
-    /// [bytes] the layers' tiles and the dense grids written from them
-    double layerBytes() const {
-        const gseg::map::MapOutputOptions& o = cli_.outputs;
-        const double dense = tiled() ? double(o.pictureSide) * o.pictureSide + double(o.costmapTile) * o.costmapTile : box_.cells();
-        return gseg::map::layerBytes(box_.tiles(), dense);
-    }
-    /// What to change: the box written as one grid is too big (tiles), or the tiles themselves.
-    std::string advice() const {
-        const gseg::map::MapOutputOptions& o = cli_.outputs;
-        const double dense = gseg::map::layerBytes(0, tiled() ? 0 : box_.cells());
-        if (!tiled() && dense > gseg::map::layerBytes(box_.tiles(), 0)) {
-            char text[200];
-            std::snprintf(text, sizeof text, "write the map as tiles (--tiles, or --tiled-above below %d cells, the box's %.0f "
-                          "x %.0f cells)", o.tiledAbove, box_.cellsX(), box_.cellsY());
-            return text;
-        }
-        return jump_ > 100 ? "do the poses jump? Fix them, or map the parts of the drive separately, or use a coarser --resolution"
-                           : "use a coarser --resolution, or map the drive in parts";
-    }
-
-    const Cli& cli_;
-    MemoryBudget budget_;
-    gseg::map::LayerBox box_;
-    bool haveOrigin_ = false;
-    Eigen::Vector3d lastOrigin_ = Eigen::Vector3d::Zero();
-    double jump_ = 0;
-    std::size_t jumpScan_ = 0;
-};
-
 /// Runs `f`, turning an allocation failure into an error that says what was being done.
 template <class F>
 auto phase(const std::string& what, const Cli& cli, F&& f) -> decltype(f()) {
     try {
         return f();
     } catch (const std::bad_alloc&) {
-        throw std::runtime_error("out of memory while " + what + memoryOptions(cli) + "; nothing written");
+        throw std::runtime_error(gseg::map::outOfMemoryMessage(what, cli.options));
     }
 }
 
@@ -358,11 +228,15 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
     // Memory, before any work: the first two scans (the second gives the rawlog's bytes per scan).
     const std::deque<ScanJob>& first = phase("reading the first scans", cli, [&]() -> const std::deque<ScanJob>& { return stream.prefetch(2); });
-    MemoryBudget budget;
-    if (!first.empty()) budget = checkMemory(cli, first[0], first.size() > 1 ? &first[1] : nullptr, gseg::map::MapBuilder::inFlight(how));
-    LayerGuard layerGuard(cli, budget);
+    gseg::map::MemoryGuard memory;
+    if (!first.empty()) {
+        memory = gseg::map::MemoryGuard(first[0], first.size() > 1 ? &first[1] : nullptr, gseg::map::MapBuilder::inFlight(how),
+                                        cli.options, cli.outputs, cli.maxMemory);
+        if (!memory.estimateLine().empty()) gseg::tools::detail("rawlog-octomap: %s\n", memory.estimateLine().c_str());
+        memory.refuseIfTooBig();
+    }
     how.onScan = [&](std::size_t k, const ScanResult& r) {
-        layerGuard.add(k, r);
+        memory.add(k, r);
         if (!r.skipped.empty()) {
             const std::string& skipped = builder.tally().skipped.back();
             if (!quiet) progress.message("rawlog-octomap: skipped " + skipped);
@@ -376,12 +250,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         if (!quiet) progress.update(k + 1, r.fraction);
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
-    try {
-        builder.run(stream, how);
-    } catch (const gseg::map::OutOfMemory& e) {
-        throw std::runtime_error(e.what() + memoryOptions(cli) + "; nothing written");
-    }
-    if (budget.known) gseg::tools::detail("rawlog-octomap: memory estimated for the drive: %s\n", layerGuard.summary().c_str());
+    builder.run(stream, how);  // gseg::map::OutOfMemory says what was being done and the options memory follows
+    if (memory.known()) gseg::tools::detail("rawlog-octomap: memory estimated for the drive: %s\n", memory.summary().c_str());
     const gseg::map::TraversabilityMap& map = builder.map();
     const gseg::map::BuildTally& tally = builder.tally();
     const std::size_t total = map.path().size() + tally.skipped.size();
@@ -434,6 +304,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     RemoteWorkers remote(ranks);  // told to stop when this returns, whatever happened
     gseg::io::installTemporaryCleanup("rawlog-octomap");  // an interrupted run leaves no temporary
     try {
+        gseg::tools::noteWarnings("rawlog-octomap", cli.loaded.warnings);
         if (!cli.config.empty())
             gseg::tools::detail("parameters (%s):\n%s", cli.config.c_str(),
                                 gseg::mrpt::toYaml(cli.loaded).c_str());

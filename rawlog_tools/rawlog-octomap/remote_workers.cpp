@@ -2,6 +2,7 @@
 
 #include <gseg/io/atomic_file.hpp>
 #include <gseg/io/bytes.hpp>
+#include <gseg/map/memory_policy.hpp>
 #include <gseg/map/scan_message.hpp>
 #include <gseg/mrpt/errors.hpp>
 
@@ -20,12 +21,6 @@ namespace {
 constexpr int kHelloTag = gseg::tools::Ranks::kFirstToolTag;  // rank r -> 0: its worker threads
 constexpr int kJobTag = kHelloTag + 1000;                      // + thread: 0 -> r, a scan ("" = stop)
 constexpr int kResultTag = kJobTag + 1000;                     // + thread: r -> 0, its result
-
-std::string number(double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", v);
-    return text;
-}
 
 }  // namespace
 
@@ -69,9 +64,8 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
                 r.rank = ranks.rank();
                 reply = gseg::map::encodeScanResult(r);
             } catch (const std::bad_alloc&) {
-                reply = gseg::map::encodeScanError("out of memory while segmenting and ray casting " + scan + " on rank " +
-                                    std::to_string(ranks.rank()) + " (at --resolution " + number(cli.options.resolution) +
-                                    " m, --max-range " + number(cli.options.maxRange) + " m); nothing written");
+                reply = gseg::map::encodeScanError(gseg::map::outOfMemoryMessage(
+                    "segmenting and ray casting " + scan + " on rank " + std::to_string(ranks.rank()), cli.options));
             } catch (const std::exception& e) {  // the worker's errors name the scan
                 const std::string reason = gseg::mrpt::errorReason(e);
                 reply = gseg::map::encodeScanError(reason.rfind(scan, 0) == 0 ? reason : scan + " on rank " + std::to_string(ranks.rank()) + ": " + reason);

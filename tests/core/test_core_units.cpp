@@ -2,7 +2,6 @@
 // ground in isolation.
 #include <gseg/below_ground.hpp>
 #include <gseg/cell_classifier.hpp>
-#include <gseg/fork_join_pool.hpp>
 #include <gseg/grid.hpp>
 #include <gseg/params.hpp>
 #include <gseg/plane_fit.hpp>
@@ -20,7 +19,6 @@
 #include <cstring>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <stdexcept>
 #include <random>
 
@@ -243,12 +241,6 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
                 EXPECT_EQ(g.points()[k], Eigen::Vector3f(p[0], p[1], p[2]));
             }
         };
-        gseg::ForkJoinPool pool(3);  // the same ids with the per-point work on three threads
-        std::vector<std::uint32_t> columnOfPooled;
-        gseg::ColumnIndex pooled;
-        pooled.build(cloud, idx, 1.5, 1.0, columnOfPooled, &pool);
-        EXPECT_EQ(columnOfPooled, columnOf) << far;
-        EXPECT_EQ(pooled.size(), columns.size()) << far;
         gseg::Grid plain, byColumn, byColumnZ;
         plain.build(cloud, idx, 1.5, 1.0, 0.2, -1.9);
         byColumn.build(cloud, idx, columns, columnOf.data(), 0.2, -1.9);
@@ -290,43 +282,6 @@ TEST(Grid, ColumnIndexFormMatchesThePlainFormDenseAndSparse) {
         EXPECT_NE(plainGrouped.order(), grouped) << far;
         for (const gseg::Grid* g : {&fromCloud, &fromPoints}) expectSameAsPlain(plainGrouped, *g);
     }
-}
-
-// --- the intra-scan pool -----------------------------------------------------------------------
-
-TEST(ForkJoinPool, RunsEveryPartOnceOnEveryThreadCountAndAgain) {
-    for (unsigned threads : {1u, 2u, 3u, 8u}) {
-        gseg::ForkJoinPool pool(threads);
-        EXPECT_EQ(pool.threads(), threads);
-        for (int round = 0; round < 50; ++round) {  // the same threads, run after run
-            std::vector<int> hits(1000, 0);
-            std::vector<unsigned> by(1000, 99);
-            pool.forRange(hits.size(), 7, [&](std::size_t b, std::size_t e, unsigned t) {
-                for (std::size_t i = b; i < e; ++i) ++hits[i], by[i] = t;
-            });
-            ASSERT_EQ(std::count(hits.begin(), hits.end(), 1), 1000) << threads;
-            ASSERT_TRUE(std::all_of(by.begin(), by.end(), [&](unsigned t) { return t < threads; }));
-        }
-        pool.run(0, [](std::size_t, unsigned) { FAIL() << "no part to run"; });
-    }
-}
-
-TEST(ForkJoinPool, RethrowsTheLowestFailingPartAfterAllParts) {
-    gseg::ForkJoinPool pool(3);
-    std::vector<int> ran(64, 0);
-    try {
-        pool.run(64, [&](std::size_t p, unsigned) {
-            ran[p] = 1;
-            if (p == 40 || p == 9 || p == 63) throw std::runtime_error("part " + std::to_string(p));
-        });
-        FAIL() << "no exception";
-    } catch (const std::runtime_error& e) {
-        EXPECT_STREQ(e.what(), "part 9");
-    }
-    EXPECT_EQ(std::count(ran.begin(), ran.end(), 1), 64);
-    int after = 0;
-    pool.run(5, [&](std::size_t, unsigned) { static std::mutex m; std::lock_guard<std::mutex> l(m); ++after; });
-    EXPECT_EQ(after, 5);  // usable after an error
 }
 
 // --- params ------------------------------------------------------------------------------------
@@ -443,27 +398,51 @@ TEST(PlaneFit, SingleRingIsALineNotATiltedPlane) {
 
 // The classification's moments (PointMoments) spare the least-squares refit its sums where RANSAC's
 // plane holds every point: the fit must be the same bit for bit, with and without outliers.
-TEST(PlaneFit, ClassificationMomentsGiveTheSameFitBitForBit) {
+/// The seed of a tilted plane (every third with outliers).
+class PlaneFitMoments : public ::testing::TestWithParam<std::uint32_t> {
+public:
+    static std::vector<Eigen::Vector3f> plane(std::uint32_t seed) {
+        return tiltedPlane(double(seed % 20), 20 + int(seed) * 7, seed % 3 == 0 ? int(seed) : 0, seed);
+    }
+};
+
+TEST_P(PlaneFitMoments, ClassificationMomentsGiveTheSameFitBitForBit) {
+    const std::uint32_t seed = GetParam();
     gseg::Params p;
     const gseg::SlopeLimit slope(p);
+    const auto pts = plane(seed);
+    gseg::PointMoments m;
+    gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
+    ASSERT_EQ(m.count, pts.size());
+    std::vector<std::uint8_t> in1, in2;
+    gseg::PlaneFitScratch s1, s2;
+    const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in1, s1, 30.0, 0.5);
+    const auto b = gseg::fitPlane(pts.data(), pts.size(), p, seed, in2, s2, 30.0, 0.5, &m);
+    ASSERT_EQ(a.valid, b.valid);
+    EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), sizeof(float) * 3), 0);
+    EXPECT_EQ(std::memcmp(&a.d, &b.d, sizeof(float)), 0);
+    EXPECT_EQ(a.numInliers, b.numInliers);
+    EXPECT_EQ(in1, in2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, PlaneFitMoments, ::testing::Range(std::uint32_t(1), std::uint32_t(41)));
+
+TEST(PlaneFit, TheSeedsOfPlaneFitMomentsMeetThePlaneThatHoldsEveryPoint) {
+    gseg::Params p;
     int allInliers = 0;
     for (std::uint32_t seed = 1; seed <= 40; ++seed) {
-        const auto pts = tiltedPlane(double(seed % 20), 20 + int(seed) * 7, seed % 3 == 0 ? int(seed) : 0, seed);
-        gseg::PointMoments m;
-        gseg::classifyCell(pts.data(), pts.size(), p, slope, &m);
-        ASSERT_EQ(m.count, pts.size());
-        std::vector<std::uint8_t> in1, in2;
-        gseg::PlaneFitScratch s1, s2;
-        const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in1, s1, 30.0, 0.5);
-        const auto b = gseg::fitPlane(pts.data(), pts.size(), p, seed, in2, s2, 30.0, 0.5, &m);
-        ASSERT_EQ(a.valid, b.valid) << seed;
-        EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), sizeof(float) * 3), 0) << seed;
-        EXPECT_EQ(std::memcmp(&a.d, &b.d, sizeof(float)), 0) << seed;
-        EXPECT_EQ(a.numInliers, b.numInliers) << seed;
-        EXPECT_EQ(in1, in2) << seed;
+        const auto pts = PlaneFitMoments::plane(seed);
+        std::vector<std::uint8_t> in;
+        gseg::PlaneFitScratch s;
+        const auto a = gseg::fitPlane(pts.data(), pts.size(), p, seed, in, s, 30.0, 0.5);
         allInliers += a.valid && a.numInliers == pts.size();
     }
     EXPECT_GE(allInliers, 10);  // the case the moments serve was met
+}
+
+TEST(PlaneFit, MomentsOfAnotherPointCountAreNotTaken) {
+    gseg::Params p;
+    const gseg::SlopeLimit slope(p);
     // Moments of another point count are not taken; moments of these points are (zeroed, the refit
     // finds no plane through them and RANSAC's plane stays).
     const auto pts = tiltedPlane(5, 100, 0, 7);

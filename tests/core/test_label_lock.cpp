@@ -1,8 +1,7 @@
 // The label lock (issue #21): the segmenter's labels, byte for byte, on every shared labelled scan
 // (semantickitti, semantickitti-extra, the 40 frames of semantickitti-drives), on mrpt-common's
 // VLP-16 rawlog scan and on every simulated scene of tests/support/scenes.cpp, each with a fixed
-// and with an estimated (`distToGround: auto`) sensor height, each with 1, 2 and 3 threads
-// (Params::threads: the labels must not depend on the count), against the golden FNV-1a 64 hashes
+// and with an estimated (`distToGround: auto`) sensor height, against the golden FNV-1a 64 hashes
 // in tests/label_hashes.txt (how to regenerate them: see that file's header). A speed-up must not
 // change a label; a deliberate change of the rules regenerates the file and says why in its commit.
 #include <gseg/ground_segmenter.hpp>
@@ -61,24 +60,19 @@ std::map<std::string, std::string> readGolden() {
     return out;
 }
 
-/// The thread counts every case is run with (Params::threads); the labels must not depend on it.
-const std::vector<int> kThreads = {1, 2, 3};
-
-/// Computes the labels' hashes of one case with every thread count; `label(params)` segments.
+/// Computes the labels' hash of one case; `segment()` segments.
 template <class Segment>
 void check(const std::string& name, const std::map<std::string, std::string>& golden, std::ostream* write,
            Segment segment) {
-    for (int threads : kThreads) {
-        const std::vector<std::uint8_t> labels = segment(threads);
-        const std::string got = std::to_string(labels.size()) + " " + hex(fnv1a64(labels));
-        if (write) {
-            if (threads == kThreads.front()) *write << name << " " << got << "\n";
-            continue;
-        }
-        const auto it = golden.find(name);
-        ASSERT_NE(it, golden.end()) << name << ": no golden hash in " << kGolden << " (regenerate it, see its header)";
-        EXPECT_EQ(got, it->second) << name << " with " << threads << " thread(s): the labels changed";
+    const std::vector<std::uint8_t> labels = segment();
+    const std::string got = std::to_string(labels.size()) + " " + hex(fnv1a64(labels));
+    if (write) {
+        *write << name << " " << got << "\n";
+        return;
     }
+    const auto it = golden.find(name);
+    ASSERT_NE(it, golden.end()) << name << ": no golden hash in " << kGolden << " (regenerate it, see its header)";
+    EXPECT_EQ(got, it->second) << name << ": the labels changed";
 }
 
 /// The labelled scans of the shared data (KITTI .bin with a .label beside), sorted.
@@ -107,9 +101,8 @@ std::string scanName(const std::string& bin) {
     return seq.parent_path().parent_path().filename().string() + "/" + seq.filename().string() + "/" + p.stem().string();
 }
 
-/// Segments a real scan as the tools do (gseg::mrpt::ScanSegmenter) with `config` and `threads`.
-std::vector<std::uint8_t> segmentReal(const gseg::mrpt::Scan& scan, gseg::mrpt::LoadedConfig config, int threads) {
-    config.params.threads = threads;
+/// Segments a real scan as the tools do (gseg::mrpt::ScanSegmenter) with `config`.
+std::vector<std::uint8_t> segmentReal(const gseg::mrpt::Scan& scan, const gseg::mrpt::LoadedConfig& config) {
     gseg::mrpt::ScanSegmenter seg(config);
     return seg.segment(gseg::PointCloudView(scan.xyzi.data(), scan.size(), 16), false, gseg::mrpt::HeightCheck::Never)
         .result.labels;
@@ -136,8 +129,8 @@ TEST(LabelLock, SharedLabelledScansFixedAndAutoHeight) {
     ASSERT_TRUE(autoHeight.distToGroundAuto);
     for (const auto& bin : scans) {
         const gseg::mrpt::Scan scan = gseg::mrpt::loadScan(bin);
-        check("kitti/" + scanName(bin) + "/fixed", golden, write, [&](int t) { return segmentReal(scan, fixed, t); });
-        check("kitti/" + scanName(bin) + "/auto", golden, write, [&](int t) { return segmentReal(scan, autoHeight, t); });
+        check("kitti/" + scanName(bin) + "/fixed", golden, write, [&] { return segmentReal(scan, fixed); });
+        check("kitti/" + scanName(bin) + "/auto", golden, write, [&] { return segmentReal(scan, autoHeight); });
     }
 }
 
@@ -149,8 +142,8 @@ TEST(LabelLock, MrptCommonVlp16ScanFixedAndAutoHeight) {
     const gseg::mrpt::Scan scan = gseg::mrpt::loadScan(kVlp16);
     const auto fixed = gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml");
     const auto vlp16 = gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/vlp16.yaml");
-    check("vlp16/kitti_hdl64/fixed", golden, write, [&](int t) { return segmentReal(scan, fixed, t); });
-    check("vlp16/vlp16/auto", golden, write, [&](int t) { return segmentReal(scan, vlp16, t); });
+    check("vlp16/kitti_hdl64/fixed", golden, write, [&] { return segmentReal(scan, fixed); });
+    check("vlp16/vlp16/auto", golden, write, [&] { return segmentReal(scan, vlp16); });
 }
 
 TEST(LabelLock, SimulatedScenesFixedAndAutoHeight) {
@@ -161,17 +154,15 @@ TEST(LabelLock, SimulatedScenesFixedAndAutoHeight) {
     EXPECT_GE(scenes.size(), 20u);
     for (const auto& n : scenes) {
         const gseg::PointCloudView view(n.scan.xyz.data(), n.scan.size());
-        check("scene/" + n.name + "/fixed", golden, write, [&](int threads) {
+        check("scene/" + n.name + "/fixed", golden, write, [&] {
             gseg::Params p;
             p.distToGround = n.sensorHeight;
             p.centroidSearchRadius = n.searchRadius;
-            p.threads = threads;
             return gseg::GroundSegmenter(p).segment(view).labels;
         });
-        check("scene/" + n.name + "/auto", golden, write, [&](int threads) {
+        check("scene/" + n.name + "/auto", golden, write, [&] {
             gseg::Params p;
             p.centroidSearchRadius = n.searchRadius;
-            p.threads = threads;
             return gseg::AutoHeightSegmenter(p).segment(view).result.labels;
         });
     }

@@ -4,6 +4,7 @@
 // (under --max-memory and under `ulimit -v`) in one line, before any work, leaving nothing.
 #include <gseg/io/kitti.hpp>
 #include <gseg/map/memory_estimate.hpp>
+#include <gseg/map/memory_policy.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <support/child.hpp>
 #include <support/paths.hpp>
@@ -46,6 +47,24 @@ double peakAt(const std::vector<float>& xyz, double resolution, double maxRange 
     o.resolution = resolution, o.maxRange = maxRange;
     const auto f = gseg::map::rayFootprint(gseg::PointCloudView(xyz.data(), xyz.size() / 3), Eigen::Vector3d::Zero(), o);
     return gseg::map::estimateMemory(f).peak(inFlight, scans);
+}
+
+// #32: the one wording of an allocation that failed, whatever route builds the maps (rawlog-octomap,
+// its MPI ranks, MapBuilder::run() and insert(): Python's MapBuilder and the plugin).
+TEST(MemoryPolicy, TheOutOfMemoryMessageNamesWhatWasDoneAndTheOptionsOnce) {
+    gseg::map::TraversabilityOptions o;
+    o.resolution = 0.01, o.maxRange = 50;
+    EXPECT_EQ(gseg::map::memoryOptionsText(o), " (at --resolution 0.01 m, --max-range 50 m)");
+    EXPECT_EQ(gseg::map::outOfMemoryMessage("reading the first scans", o),
+              "out of memory while reading the first scans (at --resolution 0.01 m, --max-range 50 m); nothing written");
+    // What MapBuilder's OutOfMemory already says is not said twice.
+    EXPECT_EQ(gseg::map::outOfMemoryMessage("out of memory while reading scan 3", o),
+              "out of memory while reading scan 3 (at --resolution 0.01 m, --max-range 50 m); nothing written");
+    // No first scan to estimate from: nothing refused, nothing said.
+    const gseg::map::MemoryGuard none;
+    EXPECT_FALSE(none.known());
+    EXPECT_NO_THROW(none.refuseIfTooBig());
+    EXPECT_TRUE(none.estimateLine().empty());
 }
 
 TEST(MemoryEstimate, CountsTheRaysAndTheirSolidAngle) {
@@ -180,7 +199,7 @@ TEST(MemoryEstimate, TheLayerBoxSpansTheGroundCellsAndTheObstacleColumnsOfEveryS
 }
 
 // The tool: the six sequence-00 scans through kitti2rawlog.
-class RawlogOctomapMemory : public ::testing::Test {
+class RawlogOctomapToolMemory : public ::testing::Test {
 protected:
     void SetUp() override {
         const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
@@ -206,7 +225,7 @@ protected:
     fs::path dir_;
 };
 
-TEST_F(RawlogOctomapMemory, MaxMemoryRefusesBeforeAnyWorkNamingTheOptionsAndTheEstimate) {
+TEST_F(RawlogOctomapToolMemory, MaxMemoryRefusesBeforeAnyWorkNamingTheOptionsAndTheEstimate) {
     double seconds = 0;
     auto r = run("--resolution 0.1 --max-memory 150", "", seconds);
     EXPECT_EQ(r.status, 1) << r.output;
@@ -230,7 +249,7 @@ TEST_F(RawlogOctomapMemory, MaxMemoryRefusesBeforeAnyWorkNamingTheOptionsAndTheE
               std::string::npos) << r.output;
 }
 
-TEST_F(RawlogOctomapMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKilled) {
+TEST_F(RawlogOctomapToolMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKilled) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
 #else
@@ -252,7 +271,7 @@ TEST_F(RawlogOctomapMemory, UnderUlimitVTheResolutionThatCannotFitIsRefusedNotKi
 // GB resident and was killed by the kernel after 147 s, writing nothing; then refused at the
 // second scan. Now mapped under ulimit -v 4 GB: the layers in tiles where the scans saw the
 // ground, the costmap as tiles and the layers as one COG (the box is about 21700 cells a side).
-TEST_F(RawlogOctomapMemory, APoseJumpMapsInMemoryOfTheGroundSeenAsTiles) {
+TEST_F(RawlogOctomapToolMemory, APoseJumpMapsInMemoryOfTheGroundSeenAsTiles) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
 #else

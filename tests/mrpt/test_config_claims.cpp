@@ -136,4 +136,15 @@ TEST(ConfigClaims, ThePluginDefinitionKeepsTheWholeConfigurationAndRefusesWhatYa
               std::string::npos);
     EXPECT_NE(errorOf(head + prefix + "sensorHeight]\nbanana = 1\n").find("unknown sensorHeight option 'banana'"),
               std::string::npos);
+    // #32: the retired key `threads` loads, and the plugin says once on stderr that it is ignored.
+    testing::internal::CaptureStderr();
+    const auto old = load(head + prefix + "gseg]\nheightGate = 0.2\nthreads = 4\n");
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(old.params.heightGate, 0.2);
+    ASSERT_EQ(old.warnings.size(), 1u);
+    const std::string said = "gseg map plugin: warning: " + old.warnings[0] + "\n";
+    EXPECT_NE(old.warnings[0].find(":5: [MappingApplication_gsegTraversabilityMap_00_gseg]: 'threads' is ignored"),
+              std::string::npos) << old.warnings[0];
+    EXPECT_NE(err.find(said), std::string::npos) << err;
+    EXPECT_EQ(err.find(said, err.find(said) + 1), std::string::npos) << "said once: " << err;
 }

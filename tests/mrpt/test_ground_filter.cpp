@@ -180,7 +180,7 @@ TEST(GroundFilter, IniAndYamlConfigsGiveIdenticalResults) {
     EXPECT_EQ(a.filter(*obs).result.labels, b.filter(*obs).result.labels);
 }
 
-TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
+TEST(RawlogGsegTool, Vlp16RawlogGetsGroundAndObstacleObservations) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "vlp16.rawlog").string();
@@ -211,7 +211,7 @@ TEST(RawlogGseg, Vlp16RawlogGetsGroundAndObstacleObservations) {
 }
 
 // The KITTI defaults on the VLP-16 scan (2.27 m up) find 0.6 % ground: the run says why, once.
-TEST(RawlogGseg, AFixedHeightThatTheScanContradictsIsSaid) {
+TEST(RawlogGsegTool, AFixedHeightThatTheScanContradictsIsSaid) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "vlp16_kitti.rawlog").string();
@@ -232,7 +232,7 @@ TEST(RawlogGseg, AFixedHeightThatTheScanContradictsIsSaid) {
     EXPECT_EQ(quiet.output, "") << "--quiet prints errors only";
 }
 
-TEST(RawlogGseg, SensoryFrameLayoutPassesThroughEntryForEntry) {
+TEST(RawlogGsegTool, SensoryFrameLayoutPassesThroughEntryForEntry) {
     if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     const std::string out = (kDir / "kf.rawlog").string();
@@ -244,7 +244,7 @@ TEST(RawlogGseg, SensoryFrameLayoutPassesThroughEntryForEntry) {
     EXPECT_EQ(entryClasses(out), entryClasses(kKfSlam));  // 600 sensory frames + 600 actions, none dropped
 }
 
-TEST(RawlogGseg, CorruptInputNamesTheEntryAndLeavesNoOutput) {
+TEST(RawlogGsegTool, CorruptInputNamesTheEntryAndLeavesNoOutput) {
     if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
     fs::create_directories(kDir);
     // A plain copy of the demo rawlog, cut in the middle of an entry.
@@ -311,7 +311,7 @@ TEST(GroundFilter, VelodyneScanWithPointsButNoPacketsAtATilt) {
     EXPECT_GT(maxI, 0.f);
 }
 
-TEST(RawlogGseg, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
+TEST(RawlogGsegTool, StockRawlogEditReadsTheOutputWithThePluginLoaded) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     if (!fs::exists("/usr/bin/rawlog-edit")) GTEST_SKIP() << "rawlog-edit absent (package mrpt-apps)";
     fs::create_directories(kDir);
@@ -510,7 +510,7 @@ std::string fileBytes(const fs::path& p) { return gseg::test::readText(p.string(
 
 }  // namespace
 
-TEST(RawlogGsegHostile, InputAsOutputIsRefusedBeforeAnythingIsWritten) {
+TEST(RawlogGsegToolHostile, InputAsOutputIsRefusedBeforeAnythingIsWritten) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     const fs::path dir = freshDir("same");
     fs::copy_file(kVlp16, dir / "x.rawlog");
@@ -526,7 +526,7 @@ TEST(RawlogGsegHostile, InputAsOutputIsRefusedBeforeAnythingIsWritten) {
     EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ".tmp"), "");
 }
 
-TEST(RawlogGsegHostile, FullDiskIsAnErrorAndLeavesNothing) {
+TEST(RawlogGsegToolHostile, FullDiskIsAnErrorAndLeavesNothing) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     const fs::path dir = freshDir("full");
     // A file-size limit of 40 blocks: the output cannot be written completely, exactly as on a full
@@ -539,7 +539,7 @@ TEST(RawlogGsegHostile, FullDiskIsAnErrorAndLeavesNothing) {
     EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ""), "");
 }
 
-TEST(RawlogGsegHostile, OneBadScanDoesNotSinkTheRun) {
+TEST(RawlogGsegToolHostile, OneBadScanDoesNotSinkTheRun) {
     const fs::path dir = freshDir("badscan");
     const auto scan = streetScan();
     // Observation layout: a good scan, a scan with no-return NaNs, a Velodyne scan whose vectors
@@ -589,7 +589,7 @@ TEST(RawlogGsegHostile, OneBadScanDoesNotSinkTheRun) {
     EXPECT_EQ(std::count(replaced.begin(), replaced.end(), "GOOD"), 0);
 }
 
-TEST(RawlogGsegHostile, ItsOwnOutputIsNeverSplitAgain) {
+TEST(RawlogGsegToolHostile, ItsOwnOutputIsNeverSplitAgain) {
     if (!fs::exists(kVlp16) || !fs::exists(kKfSlam)) GTEST_SKIP() << "mrpt-common sample rawlogs absent";
     const fs::path dir = freshDir("twice");
     // Observation layout: scan, scan_ground, scan_obstacles read again.
@@ -621,7 +621,7 @@ TEST(RawlogGsegHostile, ItsOwnOutputIsNeverSplitAgain) {
     EXPECT_EQ(entryLabels((dir / "sf2.rawlog").string()), (std::vector<std::string>{"SIM+SIM_ground+SIM_obstacles"}));
 }
 
-TEST(RawlogGsegHostile, RotatingScansAreSegmented) {
+TEST(RawlogGsegToolHostile, RotatingScansAreSegmented) {
     if (!fs::exists(kRotScan)) GTEST_SKIP() << kRotScan << " absent (package mrpt-common)";
     const fs::path dir = freshDir("rot");
     const auto r = rawlogGseg("-i '" + kRotScan + "' -o " + q(dir / "rot.rawlog") + " -c '" GSEG_SOURCE_DIR
@@ -632,7 +632,7 @@ TEST(RawlogGsegHostile, RotatingScansAreSegmented) {
               (std::vector<std::string>{"Velodyne1_SCAN", "Velodyne1_SCAN_ground", "Velodyne1_SCAN_obstacles"}));
 }
 
-TEST(RawlogGsegHostile, InterruptedRunLeavesNoTemporary) {
+TEST(RawlogGsegToolHostile, InterruptedRunLeavesNoTemporary) {
     if (!fs::exists(kKfSlam)) GTEST_SKIP() << kKfSlam << " absent (package mrpt-common)";
     const fs::path dir = freshDir("interrupted");
     // The input is a pipe: the tool has created its temporary output and is reading (it cannot
@@ -687,7 +687,7 @@ void writeBytes(const fs::path& p, const std::vector<std::uint8_t>& b) {
 
 }  // namespace
 
-TEST(RawlogGsegHostile, ErrorsSayWhatIsWrongInOneLineWithTheEntry) {
+TEST(RawlogGsegToolHostile, ErrorsSayWhatIsWrongInOneLineWithTheEntry) {
     const fs::path dir = freshDir("errors");
     std::ofstream(dir / "text.rawlog") << "not a rawlog, just text";
     auto r = rawlogGseg("-i " + q(dir / "text.rawlog") + " -o " + q(dir / "o.rawlog"));
@@ -712,7 +712,7 @@ TEST(RawlogGsegHostile, ErrorsSayWhatIsWrongInOneLineWithTheEntry) {
     EXPECT_FALSE(fs::exists(dir / "o.rawlog"));
 }
 
-TEST(RawlogGsegHostile, ASizeFieldAskingForGigabytesNamesTheEntryAndLeavesNothing) {
+TEST(RawlogGsegToolHostile, ASizeFieldAskingForGigabytesNamesTheEntryAndLeavesNothing) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "ulimit -v and AddressSanitizer's shadow memory do not mix";
 #else
@@ -741,7 +741,7 @@ TEST(RawlogGsegHostile, ASizeFieldAskingForGigabytesNamesTheEntryAndLeavesNothin
 #endif
 }
 
-TEST(SegmentFromRawlog, AScanThatCannotBeReadNamesItsEntryInOneLine) {
+TEST(SegmentToolRawlog, AScanThatCannotBeReadNamesItsEntryInOneLine) {
     const fs::path dir = freshDir("segment_errors");
     {
         gseg::mrpt::RawlogWriter w((dir / "broken.rawlog").string());
@@ -762,7 +762,7 @@ TEST(SegmentFromRawlog, AScanThatCannotBeReadNamesItsEntryInOneLine) {
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }
 
-TEST(RawlogGsegHostile, AFileCutInsideASizeFieldIsTruncatedNotAGarbageSize) {
+TEST(RawlogGsegToolHostile, AFileCutInsideASizeFieldIsTruncatedNotAGarbageSize) {
     // Found by fuzz_rawlog: MRPT 2.5.8 accepts a short read, so a rawlog cut inside a 4-byte count
     // left 3 bytes of garbage in it (2.8 GB allocated for a 265-byte file). Now: truncated, named.
     const fs::path dir = freshDir("cut_field");
@@ -836,7 +836,7 @@ void expectBatchOutputs(const Batch& batch, const fs::path& out, const fs::path&
 
 }  // namespace
 
-TEST(RawlogGseg, ABatchIntoAFolderEqualsOneRunPerInputAndABadInputLosesNothingElse) {
+TEST(RawlogGsegTool, ABatchIntoAFolderEqualsOneRunPerInputAndABadInputLosesNothingElse) {
     if (!fs::exists(kVlp16) || !fs::exists(kKfSlam)) GTEST_SKIP() << "mrpt-common's datasets absent (package mrpt-common)";
     const fs::path dir = kDir / "batch";
     const Batch batch = makeBatch(dir);
@@ -850,7 +850,7 @@ TEST(RawlogGseg, ABatchIntoAFolderEqualsOneRunPerInputAndABadInputLosesNothingEl
     expectBatchOutputs(batch, dir / "out", dir / "single");
 }
 
-TEST(RawlogGseg, ABatchThatCannotBeWrittenIsRefusedBeforeAnyWork) {
+TEST(RawlogGsegTool, ABatchThatCannotBeWrittenIsRefusedBeforeAnyWork) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     const fs::path dir = kDir / "batch_usage";
     fs::remove_all(dir);
@@ -874,7 +874,7 @@ TEST(RawlogGseg, ABatchThatCannotBeWrittenIsRefusedBeforeAnyWork) {
     EXPECT_FALSE(fs::exists(dir / "out")) << "nothing made";
 }
 
-TEST(RawlogGseg, TwoMpiRanksSplitABatchAndWriteWhatOneProcessWrites) {
+TEST(RawlogGsegTool, TwoMpiRanksSplitABatchAndWriteWhatOneProcessWrites) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     if (!fs::exists(kVlp16) || !fs::exists(kKfSlam)) GTEST_SKIP() << "mrpt-common's datasets absent (package mrpt-common)";
     const fs::path dir = kDir / "batch_mpi";
@@ -903,7 +903,7 @@ TEST(RawlogGseg, TwoMpiRanksSplitABatchAndWriteWhatOneProcessWrites) {
     expectBatchOutputs(batch, dir / "out", dir / "single");
 }
 
-TEST(RawlogGseg, UnderMpiAScanSkippedOnAnotherRankIsNamedByRankZeroAndExitsThree) {
+TEST(RawlogGsegTool, UnderMpiAScanSkippedOnAnotherRankIsNamedByRankZeroAndExitsThree) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     const fs::path dir = freshDir("batch_mpi_skip");
@@ -929,7 +929,7 @@ TEST(RawlogGseg, UnderMpiAScanSkippedOnAnotherRankIsNamedByRankZeroAndExitsThree
 
 // #18 point 10: a --sensor label that matches nothing (a typo) is named with the labels the
 // rawlog has, and the run ends with exit 3 (done, but not what was asked), even with -q.
-TEST(RawlogGsegHostile, ASensorFilterThatMatchesNothingIsNamedWithTheLabelsThereAre) {
+TEST(RawlogGsegToolHostile, ASensorFilterThatMatchesNothingIsNamedWithTheLabelsThereAre) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     const fs::path dir = freshDir("sensor_typo");
     auto r = rawlogGseg("-q -i " + q(kVlp16) + " -o " + q(dir / "out.rawlog") + " --sensor Velodyne1_SCA");
@@ -984,7 +984,7 @@ std::string drive09Rawlog(bool poses, const std::string& name) {
 
 }  // namespace
 
-TEST(RawlogGseg, ADriveWithPosesIsLabelledWithItsTerrainModelAndWithoutAsEachScanAlone) {
+TEST(RawlogGsegTool, ADriveWithPosesIsLabelledWithItsTerrainModelAndWithoutAsEachScanAlone) {
     const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
     if (gseg::test::sharedData(rel).empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
     const std::string withPoses = drive09Rawlog(true, "d09"), noPoses = drive09Rawlog(false, "d09_no_poses");

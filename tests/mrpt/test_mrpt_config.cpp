@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -48,12 +49,9 @@ TEST(Config, ShippedKittiFileIsTheLibraryDefaultsWithEveryKey) {
     const gseg::Params defaults;
     for (const auto& key : gseg::Params::keys()) EXPECT_EQ(cfg.params.get(key), defaults.get(key)) << key;
     const std::string text = gseg::test::readText(path);
-    // Every key of the algorithm; `threads` (how many threads, not what is computed: same labels)
-    // stays out, so that builds before it (tests/compare_builds.sh's reference) read these files.
+    // Every key of the algorithm.
     for (const auto& key : gseg::Params::keys())
-        if (key != "threads") {
-            EXPECT_NE(text.find("\n" + key + ":"), std::string::npos) << key << " missing from " << path;
-        }
+        EXPECT_NE(text.find("\n" + key + ":"), std::string::npos) << key << " missing from " << path;
     // config/auto_height.yaml: the same with distToGround: auto (the numeric value is the fallback).
     const auto autoCfg = gseg::mrpt::loadConfig(std::string(GSEG_SOURCE_DIR) + "/config/auto_height.yaml");
     EXPECT_TRUE(autoCfg.distToGroundAuto);
@@ -274,6 +272,34 @@ TEST(ConfigIniYamlAgree, UnknownKeysAndSectionsAreRefusedInBothFormats) {
     EXPECT_NE(map.find("map.yaml:1:"), std::string::npos) << map;
     const std::string twice = errorOf(writeTemp("map2.yaml", "traversability:\n  resolution: 0.1\ntraversability:\n  maxRange: 9\n"));
     EXPECT_NE(twice.find("map2.yaml:3: a second 'traversability:' map (also on line 1)"), std::string::npos) << twice;
+}
+
+// #32: a key gseg no longer reads (`threads`, one scan over several threads) loads in every format
+// and route with one warning naming where and why, and changes nothing else; elsewhere it is unknown.
+TEST(ConfigIniYamlAgree, ARetiredKeyLoadsWithOneWarningInEveryFormat) {
+    const auto plain = gseg::mrpt::loadConfig(writeTemp("plain.yaml", "heightGate: 0.2\n"));
+    EXPECT_TRUE(plain.warnings.empty());
+    const auto yaml = gseg::mrpt::loadConfig(writeTemp("retired.yaml", "heightGate: 0.2\nthreads: 4\n"));
+    ASSERT_EQ(yaml.warnings.size(), 1u);
+    EXPECT_NE(yaml.warnings[0].find("retired.yaml:2: 'threads' is ignored: one scan is no longer split over threads"),
+              std::string::npos) << yaml.warnings[0];
+    EXPECT_NE(yaml.warnings[0].find("--threads"), std::string::npos) << "says what to use instead: " << yaml.warnings[0];
+    EXPECT_EQ(gseg::mrpt::toYaml(yaml), gseg::mrpt::toYaml(plain));
+    const auto nested = gseg::mrpt::loadConfig(writeTemp("nested.yaml", "gseg:\n  threads: 2\n  heightGate: 0.2\n"));
+    ASSERT_EQ(nested.warnings.size(), 1u);
+    EXPECT_NE(nested.warnings[0].find("nested.yaml:2: 'threads' is ignored"), std::string::npos) << nested.warnings[0];
+    const auto ini = gseg::mrpt::loadConfig(writeTemp("retired.ini", "[gseg]\nheightGate = 0.2\nthreads = 8\n"));
+    ASSERT_EQ(ini.warnings.size(), 1u);
+    EXPECT_NE(ini.warnings[0].find("retired.ini:3: [gseg]: 'threads' is ignored"), std::string::npos) << ini.warnings[0];
+    EXPECT_EQ(gseg::mrpt::toYaml(ini), gseg::mrpt::toYaml(plain));
+    const auto parsed = gseg::mrpt::loadConfigFromYaml(::mrpt::containers::yaml::FromText("threads: 3\n"), "map");
+    ASSERT_EQ(parsed.warnings.size(), 1u);
+    EXPECT_NE(parsed.warnings[0].find("map: 'threads' is ignored"), std::string::npos) << parsed.warnings[0];
+    // Ignored means not read: any value loads; in another section it is an unknown key as before.
+    EXPECT_EQ(gseg::mrpt::loadConfig(writeTemp("any.yaml", "threads: many\n")).warnings.size(), 1u);
+    EXPECT_NE(errorOf(writeTemp("elsewhere.yaml", "sensorHeight:\n  threads: 2\n")).find("unknown sensorHeight option 'threads'"),
+              std::string::npos);
+    EXPECT_EQ(std::count(gseg::Params::keys().begin(), gseg::Params::keys().end(), "threads"), 0);
 }
 
 // #17 item 5: every field of SensorHeightOptions and TraversabilityOptions from YAML and INI,

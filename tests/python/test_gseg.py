@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 import threading
+import warnings
 
 import numpy as np
 import pytest
@@ -209,6 +210,24 @@ def test_params_from_keywords_dicts_and_files_and_bad_keys_name_the_key(tmp_path
         gseg.Params(str(tmp_path / "absent.yaml"))
     with pytest.raises(TypeError):
         gseg.Params(42)
+
+
+def test_the_retired_key_threads_still_loads_with_one_warning(tmp_path):
+    # #32: one scan over several threads is gone; an old call or file that sets it is warned, not refused.
+    plain = gseg.Params(heightGate=0.2)
+    with pytest.warns(UserWarning, match="'threads' is ignored: one scan is no longer split over threads") as caught:
+        p = gseg.Params(heightGate=0.2, threads=4)
+    assert len(caught) == 1 and not str(caught[0].message).startswith("parameters")
+    assert p == plain and "threads" not in gseg.Params.keys() and "threads" not in p.to_dict()
+    (tmp_path / "old.yaml").write_text("heightGate: 0.2\nthreads: 2\n")
+    with pytest.warns(UserWarning, match="old.yaml:2: 'threads' is ignored") as caught:
+        assert gseg.Params(str(tmp_path / "old.yaml")) == plain
+    assert len(caught) == 1
+    with pytest.warns(UserWarning, match="'threads' is ignored"):
+        assert plain.with_(threads=2) == plain
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning where the key is not given
+        gseg.Params(plain, heightGate=0.3)
 
 
 @pytest.mark.parametrize("points, error, match", [

@@ -43,7 +43,7 @@ std::string rowOf(const std::string& out, const std::string& name) {
 
 }  // namespace
 
-TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
+TEST(BenchToolPerScan, OneRowPerScanAndAutoHeightPerScan) {
     const fs::path dir = kDir / "rows";
     fs::remove_all(dir);
     fs::create_directories(dir);
@@ -55,7 +55,7 @@ TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
     ASSERT_EQ(status, 0) << out;
     EXPECT_NE(out.find("low.bin: distToGround auto 1.7"), std::string::npos) << out;
     EXPECT_NE(out.find("high.bin: distToGround auto 2.5"), std::string::npos) << out;
-    EXPECT_NE(out.find("warm-up + 2 repeats, 1 thread(s), 1 thread(s) per scan; build: "), std::string::npos) << out;
+    EXPECT_NE(out.find("warm-up + 2 repeats, 1 thread(s); build: "), std::string::npos) << out;
     // scan, points, median, p90, min, Mpoints/s with min <= median <= p90.
     for (const char* name : {"low.bin", "high.bin", "all scans"}) {
         std::istringstream row(rowOf(out, name).substr(std::string(name).size()));
@@ -71,7 +71,7 @@ TEST(BenchPerScan, OneRowPerScanAndAutoHeightPerScan) {
     EXPECT_NE(out.find("throughput: "), std::string::npos) << out;
 }
 
-TEST(BenchPerScan, BadConfigAndArguments) {
+TEST(BenchToolPerScan, BadConfigAndArguments) {
     const fs::path dir = kDir / "bad";
     fs::create_directories(dir);
     std::ofstream(dir / "bad.yaml") << "noSuchKey: 3\n";
@@ -85,14 +85,15 @@ TEST(BenchPerScan, BadConfigAndArguments) {
     EXPECT_NE(out.find("noSuchKey"), std::string::npos) << out;
     out = runGseg("bench", "'" + scan + "' --threads 0", status);
     EXPECT_EQ(status, 2) << out;
-    out = runGseg("bench", "'" + scan + "' --threads-per-scan 0", status);
+    // One scan over several threads is gone (#32): the option is unknown.
+    out = runGseg("bench", "'" + scan + "' --threads-per-scan 2", status);
     EXPECT_EQ(status, 2) << out;
-    EXPECT_NE(out.find("--threads-per-scan must be between 1 and 256"), std::string::npos) << out;
+    EXPECT_NE(out.find("unknown option '--threads-per-scan'"), std::string::npos) << out;
     out = runGseg("bench", "", status);
     EXPECT_EQ(status, 2) << out;
 }
 
-TEST(BenchHostile, NanPointsAndEmptyScansNeverAbort) {
+TEST(BenchToolHostile, NanPointsAndEmptyScansNeverAbort) {
     // Before: an exception escaped a worker thread and aborted the process (issue #9 item 4).
     const fs::path dir = kDir / "hostile";
     fs::remove_all(dir);
@@ -109,10 +110,14 @@ TEST(BenchHostile, NanPointsAndEmptyScansNeverAbort) {
     int status = -1;
     std::string out = runGseg("bench", "'" + scan + "' --repeat 1 --threads 2", status);
     EXPECT_EQ(status, 0) << out;
-    // Scan-level and intra-scan threads together (#21): two segmenters of three threads each.
-    const std::string both = runGseg("bench", "'" + scan + "' --repeat 1 --threads 2 --threads-per-scan 3", status);
-    EXPECT_EQ(status, 0) << both;
-    EXPECT_NE(both.find("2 thread(s), 3 thread(s) per scan"), std::string::npos) << both;
+    EXPECT_NE(out.find("warm-up + 1 repeats, 2 thread(s); build: "), std::string::npos) << out;
+    // An old configuration with the retired key `threads` still runs, warned about once (#32).
+    std::ofstream(dir / "old.yaml") << "distToGround: 1.73\nthreads: 3\n";
+    const std::string old = runGseg("bench", "'" + scan + "' --repeat 1 -c '" + (dir / "old.yaml").string() + "'", status);
+    EXPECT_EQ(status, 0) << old;
+    const std::string warning = "gseg bench: warning: " + (dir / "old.yaml").string() + ":2: 'threads' is ignored: ";
+    ASSERT_NE(old.find(warning), std::string::npos) << old;
+    EXPECT_EQ(old.find(warning, old.find(warning) + 1), std::string::npos) << "said once: " << old;
     EXPECT_NE(out.find("nan.bin: 1 non-finite point(s) left out"), std::string::npos) << out;
     out = runGseg("bench", "'" + scan + "' '" + (dir / "empty.ply").string() + "' --repeat 1 --threads 2", status);
     EXPECT_EQ(status, 3) << out;  // done, one scan could not be timed

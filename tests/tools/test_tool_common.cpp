@@ -64,23 +64,27 @@ TEST(Progress, PlainLinesAtASteadyRateWhenNotATerminal) {
               "tool: 40 scans, 1.0 scans/s, 40 s in all\n");
 }
 
-TEST(Progress, SteadyRateWhateverTheItemRate) {
-    // rawlog-gseg printed every 100th scan off a terminal: minutes apart on a slow input, many
-    // lines a second on a fast one. Now one line per interval, fast or slow items alike.
-    for (const double secondsPerItem : {0.01, 0.5, 7.0}) {
-        Captured out;
-        gseg::Progress p(out.f, "tool", "frames", 0, 10.0, [&] { return out.now; });
-        const int items = int(std::lround(120.0 / secondsPerItem));  // two minutes of work
-        for (int k = 1; k <= items; ++k) {
-            out.now = k * secondsPerItem;
-            p.update(std::size_t(k), -1, k % 3 ? "" : "1 skipped");
-        }
-        const std::string t = out.text();
-        const auto lines = std::count(t.begin(), t.end(), '\n');
-        EXPECT_GE(lines, 9) << secondsPerItem << " s per item:\n" << t;  // the first line + one per 10 s or so
-        EXPECT_LE(lines, 13) << secondsPerItem << " s per item:\n" << t;
+// rawlog-gseg printed every 100th scan off a terminal: minutes apart on a slow input, many lines
+// a second on a fast one. Now one line per interval, fast or slow items alike.
+/// Seconds per item.
+class ProgressRate : public ::testing::TestWithParam<double> {};
+
+TEST_P(ProgressRate, SteadyLinesWhateverTheItemRate) {
+    const double secondsPerItem = GetParam();
+    Captured out;
+    gseg::Progress p(out.f, "tool", "frames", 0, 10.0, [&] { return out.now; });
+    const int items = int(std::lround(120.0 / secondsPerItem));  // two minutes of work
+    for (int k = 1; k <= items; ++k) {
+        out.now = k * secondsPerItem;
+        p.update(std::size_t(k), -1, k % 3 ? "" : "1 skipped");
     }
+    const std::string t = out.text();
+    const auto lines = std::count(t.begin(), t.end(), '\n');
+    EXPECT_GE(lines, 9) << t;  // the first line + one per 10 s or so
+    EXPECT_LE(lines, 13) << t;
 }
+
+INSTANTIATE_TEST_SUITE_P(SecondsPerItem, ProgressRate, ::testing::Values(0.01, 0.5, 7.0));
 
 TEST(Progress, SkippedItemsAreSaidApartFromTheItemsDone) {
     Captured out;
@@ -352,6 +356,34 @@ std::vector<UsageCase> usageCases() {
     cases.push_back({"rawlog-gseg", gseg::test::tool("rawlog-gseg"), "-i x -o y z", "unexpected argument 'z' (this tool takes its inputs with options)"});
     cases.push_back({"rawlog-octomap", gseg::test::tool("rawlog-octomap"), "-i x -o y --quiet=yes", "option -q/--quiet takes no value"});
     return cases;
+}
+
+// #32: a configuration that still sets the retired key `threads` (one scan over several threads)
+// runs with every tool that reads one, each saying once on stderr that the key is ignored.
+TEST(EveryTool, AConfigurationWithTheRetiredKeyThreadsRunsWithOneWarning) {
+    if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " is missing (apt-get install mrpt-common)";
+    const fs::path dir = fs::path(GSEG_BINARY_DIR) / "tests" / "tool_common" / "retired_key";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string old = (dir / "old.yaml").string();
+    std::ofstream(old) << "distToGround: auto\nthreads: 2\n";
+    const std::string vlp16 = std::string(GSEG_SOURCE_DIR) + "/config/vlp16.yaml";
+    int n = 0;
+    for (const ToolCase& t : toolCases()) {
+        if (t.command.find("kitti2rawlog") != std::string::npos) continue;  // reads no configuration
+        std::string args = replaceOut(t.args, (dir / ("out" + std::to_string(n++))).string());
+        if (const std::size_t at = args.find(vlp16); at != std::string::npos) args.replace(at, vlp16.size(), old);
+        else args += " -c " + old;
+        const auto r = runCommand("{ " + t.command + " " + args + " 2>" + (dir / "err.txt").string() + " >/dev/null; }");
+        const std::string err = gseg::test::readText((dir / "err.txt").string());
+        EXPECT_EQ(r.status, 0) << t.command << ": " << err;
+        const std::string tool = t.command.substr(t.command.rfind('/') + 1);
+        const std::string warning = tool + ": warning: " + old + ":2: 'threads' is ignored: ";
+        const std::size_t at = err.find(warning);
+        EXPECT_NE(at, std::string::npos) << t.command << ": " << err;
+        EXPECT_EQ(err.find("'threads' is ignored", at + warning.size()), std::string::npos) << "said once: " << err;
+    }
+    EXPECT_EQ(n, 5);
 }
 
 TEST(EveryTool, AUsageMistakeIsOneLineNamingTheOptionInTheSameWordsEverywhere) {

@@ -55,7 +55,7 @@ std::vector<std::string> lines(const std::string& text) {
 
 }  // namespace
 
-TEST(EvalReport, SequenceSumsFrameMeansAndRangeMeanStd) {
+TEST(EvalToolReport, SequenceSumsFrameMeansAndRangeMeanStd) {
     const auto seqs = gseg::app::summarise(handMadeFrames());
     ASSERT_EQ(seqs.size(), 2u);
     const auto& s = seqs[0];
@@ -86,7 +86,7 @@ TEST(EvalReport, SequenceSumsFrameMeansAndRangeMeanStd) {
     EXPECT_DOUBLE_EQ(seqs[1].rangePStats.stddev, 0.0);
 }
 
-TEST(EvalReport, FramesCsvHasOneExactRowPerFrameInInputOrder) {
+TEST(EvalToolReport, FramesCsvHasOneExactRowPerFrameInInputOrder) {
     const auto rows = lines(gseg::app::framesCsv(handMadeFrames()));
     ASSERT_EQ(rows.size(), 4u);
     EXPECT_EQ(rows[0], "sequence,frame,points,TP,FP,FN,precision,recall,F1,precision_noveg,recall_noveg,ms");
@@ -95,7 +95,7 @@ TEST(EvalReport, FramesCsvHasOneExactRowPerFrameInInputOrder) {
     EXPECT_EQ(rows[3], "00,000001,7,1,0,1,100.0000,50.0000,66.6667,100.0000,50.0000,7.500");
 }
 
-TEST(EvalReport, SequencesCsvCarriesSumsMeansAndTheTenLimits) {
+TEST(EvalToolReport, SequencesCsvCarriesSumsMeansAndTheTenLimits) {
     const auto rows = lines(gseg::app::sequencesCsv(gseg::app::summarise(handMadeFrames())));
     ASSERT_EQ(rows.size(), 3u);
     EXPECT_EQ(rows[0].rfind("sequence,frames,TP,FP,FN,precision,recall,F1,", 0), 0u) << rows[0];
@@ -111,7 +111,7 @@ TEST(EvalReport, SequencesCsvCarriesSumsMeansAndTheTenLimits) {
     EXPECT_EQ(cells(rows[0]), cells(rows[2]));
 }
 
-TEST(EvalReport, MarkdownTableLikeThePapersTableII) {
+TEST(EvalToolReport, MarkdownTableLikeThePapersTableII) {
     const auto rows = lines(gseg::app::markdownTable(gseg::app::summarise(handMadeFrames())));
     ASSERT_GE(rows.size(), 5u);
     EXPECT_EQ(rows[0], "| Seq. | frames | Pr. (%) | Rc. (%) | F1 (%) | Pr. no range cut | Rc. no range cut | ms/scan |");
@@ -121,7 +121,7 @@ TEST(EvalReport, MarkdownTableLikeThePapersTableII) {
     EXPECT_EQ(rows[4], "| **mean** | 2 seq. | **83.75** | **93.75** | **87.50** | 85.00 | 85.00 | 6.5 |");
 }
 
-TEST(EvalReport, RowsSurviveTheBytesBetweenRanksExactly) {
+TEST(EvalToolReport, RowsSurviveTheBytesBetweenRanksExactly) {
     // What rank 0 gathers from the others under MPI: every count, the breakdown and the time, bit for bit.
     std::vector<FrameRow> rows = handMadeFrames();
     rows[0].ms = 0.1 + 0.2;  // not representable in decimal
@@ -149,7 +149,7 @@ TEST(EvalReport, RowsSurviveTheBytesBetweenRanksExactly) {
     EXPECT_THROW(for (int i = 0; i < 3; ++i) gseg::app::readRow(short_), std::runtime_error);
 }
 
-TEST(EvalReport, UndefinedFiguresShowAsNotAvailable) {
+TEST(EvalToolReport, UndefinedFiguresShowAsNotAvailable) {
     FrameRow f;  // nothing predicted ground, no ground: every ratio undefined
     f.sequence = "03", f.name = "000000";
     const auto seqs = gseg::app::summarise({f});
@@ -176,7 +176,7 @@ const fs::path kDir = fs::path(GSEG_BINARY_DIR) / "tests" / "tool_eval";
 
 // --help says: without --config, eval uses the one default (gseg::mrpt::defaultConfig(): the library
 // defaults with distToGround: auto), exactly config/auto_height.yaml; config/kitti_hdl64.yaml fixes 1.723 m.
-TEST(EvalConfig, DefaultEqualsAutoHeightYamlAndKittiHdl64Runs) {
+TEST(EvalToolConfig, DefaultEqualsAutoHeightYamlAndKittiHdl64Runs) {
     const std::string root = gseg::test::sharedData("semantickitti");
     if (root.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti");
     const fs::path dir = kDir / "config";
@@ -213,7 +213,7 @@ TEST(EvalConfig, DefaultEqualsAutoHeightYamlAndKittiHdl64Runs) {
     EXPECT_FALSE(fs::exists(dir / "bad_frames.csv"));
 }
 
-TEST(EvalConfig, EveryFrameSkippedIsAnError) {
+TEST(EvalToolConfig, EveryFrameSkippedIsAnError) {
     const fs::path seq = kDir / "allbad/sequences/02";
     fs::remove_all(kDir / "allbad");
     fs::create_directories(seq / "velodyne");
@@ -251,7 +251,7 @@ std::vector<std::string> cells(const std::string& line) {
 
 // One-frame sequence 08: the sequence figures (without vegetation, range-limited mean ± std) equal
 // what the independent python scorer prints for the same predictions (it rounds to 3 decimals).
-TEST(EvalConfig, SequenceFiguresMatchTheIndependentScorer) {
+TEST(EvalToolConfig, SequenceFiguresMatchTheIndependentScorer) {
     const std::string scan = gseg::test::sharedData("semantickitti/sequences/08/velodyne/000000.bin");
     const std::string label = gseg::test::sharedData("semantickitti/sequences/08/labels/000000.label");
     if (scan.empty() || label.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/08");

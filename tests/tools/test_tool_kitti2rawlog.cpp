@@ -112,7 +112,7 @@ std::string syntheticSequence(const std::string& name, int frames, int poseLines
     return dir;
 }
 
-TEST(Kitti2Rawlog, Sequence00WithPosesTimesAndSimplemap) {
+TEST(Kitti2RawlogTool, Sequence00WithPosesTimesAndSimplemap) {
     const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
     if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
     const std::string seqDir = fs::path(seq).parent_path().string(), dir = tempDir("seq00");
@@ -143,7 +143,7 @@ TEST(Kitti2Rawlog, Sequence00WithPosesTimesAndSimplemap) {
     fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, FrameRangeStartsTheWorldAtTheFirstScan) {
+TEST(Kitti2RawlogTool, FrameRangeStartsTheWorldAtTheFirstScan) {
     const std::string seq = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
     if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
     const std::string seqDir = fs::path(seq).parent_path().string(), dir = tempDir("range");
@@ -158,7 +158,7 @@ TEST(Kitti2Rawlog, FrameRangeStartsTheWorldAtTheFirstScan) {
     fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, WithoutTimesAndPosesWritesScansAt10Hz) {
+TEST(Kitti2RawlogTool, WithoutTimesAndPosesWritesScansAt10Hz) {
     const std::string seq = syntheticSequence("bare", 3, 0, false), dir = tempDir("bare_out");
     const ToolRun r = runKitti2rawlog(seq + " -o " + dir + "/b.rawlog", dir);
     ASSERT_EQ(r.status, 0) << r.err;
@@ -172,7 +172,7 @@ TEST(Kitti2Rawlog, WithoutTimesAndPosesWritesScansAt10Hz) {
     fs::remove_all(seq), fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, BadInputIsAClearErrorAndNoFile) {
+TEST(Kitti2RawlogTool, BadInputIsAClearErrorAndNoFile) {
     const std::string seq = syntheticSequence("few", 4, 2, true), dir = tempDir("few_out");
     ToolRun r = runKitti2rawlog(seq + " -o " + dir + "/f.rawlog", dir);
     EXPECT_NE(r.status, 0);
@@ -192,7 +192,7 @@ void expectNothingLeftBehind(const std::string& dir) {
         EXPECT_TRUE(e.path().filename() == "out.txt" || e.path().filename() == "err.txt") << "left behind: " << e.path();
 }
 
-TEST(Kitti2Rawlog, BadPosesCalibrationAndTimesNameFileAndLine) {
+TEST(Kitti2RawlogTool, BadPosesCalibrationAndTimesNameFileAndLine) {
     // #9 item 10: a scaled rotation, an all-zero Tr, NaN in times.txt.
     struct Case {
         const char* file;
@@ -219,7 +219,7 @@ TEST(Kitti2Rawlog, BadPosesCalibrationAndTimesNameFileAndLine) {
 }
 
 // #18 point 6: the last time stamp (--start-time + times.txt) must be a date a time stamp holds.
-TEST(Kitti2Rawlog, ATimeStampAfterTheYear9999IsRefusedNamingTimesTxt) {
+TEST(Kitti2RawlogTool, ATimeStampAfterTheYear9999IsRefusedNamingTimesTxt) {
     const std::string seq = syntheticSequence("latetime", 3, 3, true), dir = tempDir("latetime_out");
     std::ofstream(seq + "/times.txt") << "0\n1\n1e9\n";
     ToolRun r = runKitti2rawlog(seq + " -o " + dir + "/x.rawlog --start-time 9999-01-01", dir);
@@ -232,7 +232,7 @@ TEST(Kitti2Rawlog, ATimeStampAfterTheYear9999IsRefusedNamingTimesTxt) {
     fs::remove_all(seq), fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, AnInputAsOutputIsRefusedBeforeAnythingIsWritten) {
+TEST(Kitti2RawlogTool, AnInputAsOutputIsRefusedBeforeAnythingIsWritten) {
     // #9 item 7: `kitti2rawlog SEQ -o SEQ/velodyne/000001.bin` destroyed the scan.
     const std::string seq = syntheticSequence("same", 3, 3, true), dir = tempDir("same_out");
     for (const std::string& target : {seq + "/velodyne/000001.bin", seq + "/poses.txt"}) {
@@ -253,7 +253,7 @@ TEST(Kitti2Rawlog, AnInputAsOutputIsRefusedBeforeAnythingIsWritten) {
     fs::remove_all(seq), fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, DiskFullIsAnErrorAndNoFile) {
+TEST(Kitti2RawlogTool, DiskFullIsAnErrorAndNoFile) {
     // #9 item 6: a full disk gave "wrote ..." and exit 0 with a truncated rawlog. The file size
     // limit (EFBIG once the signal is ignored) stands in for a full disk.
     const std::string seq = syntheticSequence("full", 3, 3, true, 20000), dir = tempDir("full_out");
@@ -270,7 +270,7 @@ TEST(Kitti2Rawlog, DiskFullIsAnErrorAndNoFile) {
     fs::remove_all(seq), fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, RepeatContinuesTheTrajectory) {
+TEST(Kitti2RawlogTool, RepeatContinuesTheTrajectory) {
     // Poses: 1 m steps along camera z = velodyne x; times 0.5 s apart.
     const std::string seq = syntheticSequence("repeat", 3, 3, true), dir = tempDir("repeat_out");
     const ToolRun r = runKitti2rawlog(seq + " -o " + dir + "/r.rawlog --repeat 3", dir);
@@ -288,7 +288,7 @@ TEST(Kitti2Rawlog, RepeatContinuesTheTrajectory) {
     fs::remove_all(seq), fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, StartTimeSetsTheBaseDate) {
+TEST(Kitti2RawlogTool, StartTimeSetsTheBaseDate) {
     const std::string seq = syntheticSequence("start", 2, 2, true), dir = tempDir("start_out");
     ASSERT_EQ(runKitti2rawlog("-i " + seq + " -o " + dir + "/s.rawlog --start-time 2020-02-29T12:30:15.25Z", dir).status, 0);
     const auto entries = readBack(dir + "/s.rawlog");
@@ -307,7 +307,7 @@ TEST(Kitti2Rawlog, StartTimeSetsTheBaseDate) {
     fs::remove_all(seq), fs::remove_all(dir);
 }
 
-TEST(Kitti2Rawlog, InputOptionAndTheOldPositionalFormGiveTheSameRawlog) {
+TEST(Kitti2RawlogTool, InputOptionAndTheOldPositionalFormGiveTheSameRawlog) {
     const std::string seq = syntheticSequence("forms", 3, 3, true), dir = tempDir("forms_out");
     ASSERT_EQ(runKitti2rawlog("-i " + seq + " -o " + dir + "/a.rawlog", dir).status, 0);
     ASSERT_EQ(runKitti2rawlog(seq + " -o " + dir + "/b.rawlog", dir).status, 0);
@@ -333,7 +333,7 @@ TEST(Kitti2Rawlog, InputOptionAndTheOldPositionalFormGiveTheSameRawlog) {
 // is the check of the inputs before any output, the second the reading, after the temporary rawlog
 // was made (no sleeps). (The scan was a FIFO the tool waited on in open(); since #34 a FIFO is
 // refused before it is opened, which this test checks too.)
-TEST(Kitti2Rawlog, InterruptedRunLeavesNoTemporary) {
+TEST(Kitti2RawlogTool, InterruptedRunLeavesNoTemporary) {
     const fs::path dir = gseg::test::freshDir("kitti2rawlog", "interrupted");
     fs::create_directories(dir / "seq/velodyne");
     const fs::path scan = dir / "seq/velodyne/000000.bin";

@@ -103,7 +103,7 @@ void expectDriveMap(const std::string& prefix) {
     EXPECT_FALSE(obstacles.isNodeOccupied(between)) << "space between sensor and box";
 }
 
-TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
+TEST(RawlogOctomapTool, SimulatedDriveWithPosesInTheRawlog) {
     const std::string dir = driveDir("sim");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
     ASSERT_EQ(r.status, 0) << r.err;
@@ -140,7 +140,7 @@ TEST(RawlogOctomap, SimulatedDriveWithPosesInTheRawlog) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, HelpNamesEveryFileWritten) {
+TEST(RawlogOctomapTool, HelpNamesEveryFileWritten) {
     const gseg::test::CommandResult r = gseg::test::runToolCommand("rawlog-octomap", "--help");
     ASSERT_EQ(r.status, 0) << r.output;
     std::string help = r.output;  // TCLAP wraps the text: join its lines
@@ -154,7 +154,7 @@ TEST(RawlogOctomap, HelpNamesEveryFileWritten) {
     EXPECT_EQ(help.find("four"), std::string::npos) << r.output;
 }
 
-TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
+TEST(RawlogOctomapTool, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
     const std::string dir = tempDir("preseg");
     // A wrong sensor height: had the tool segmented these scans again, the road would be lost.
     std::ofstream(dir + "/gseg.yaml") << "distToGround: 9.0\n";
@@ -172,7 +172,7 @@ TEST(RawlogOctomap, PresegmentedGroundAndObstacleObservationsAreUsedAsTheyAre) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, SimulatedDriveWithTumPoses) {
+TEST(RawlogOctomapTool, SimulatedDriveWithTumPoses) {
     const std::string dir = tempDir("tum");
     Drive d;
     d.poses = false;
@@ -188,7 +188,7 @@ TEST(RawlogOctomap, SimulatedDriveWithTumPoses) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, KittiSequence00ThroughKitti2rawlog) {
+TEST(RawlogOctomapTool, KittiSequence00ThroughKitti2rawlog) {
     const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
     if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
     const std::string dir = tempDir("kitti");
@@ -220,7 +220,7 @@ TEST(RawlogOctomap, KittiSequence00ThroughKitti2rawlog) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, Drive00ClassPictureIsTheCostmapCellForCell) {
+TEST(RawlogOctomapTool, Drive00ClassPictureIsTheCostmapCellForCell) {
     // One map truth (#33) on real data: the ten labelled scans of SemanticKITTI drive 00.
     const std::string poses = gseg::test::sharedData("semantickitti-drives/sequences/00/poses.txt");
     if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti-drives/sequences/00/poses.txt");
@@ -235,7 +235,7 @@ TEST(RawlogOctomap, Drive00ClassPictureIsTheCostmapCellForCell) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, BadInputIsAClearErrorAndNoMapFiles) {
+TEST(RawlogOctomapTool, BadInputIsAClearErrorAndNoMapFiles) {
     const std::string dir = tempDir("bad");
     Drive noPoses;
     noPoses.poses = false;
@@ -272,7 +272,7 @@ TEST(RawlogOctomap, BadInputIsAClearErrorAndNoMapFiles) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, ChainKitti2rawlogRawlogGsegRawlogOctomapSegmentsEachScanOnce) {
+TEST(RawlogOctomapTool, ChainKitti2rawlogRawlogGsegRawlogOctomapSegmentsEachScanOnce) {
     const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
     if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
     const std::string dir = tempDir("chain"), config = std::string(GSEG_SOURCE_DIR) + "/config/kitti_hdl64.yaml";
@@ -288,7 +288,7 @@ TEST(RawlogOctomap, ChainKitti2rawlogRawlogGsegRawlogOctomapSegmentsEachScanOnce
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
+TEST(RawlogOctomapTool, SameMapsWithAnyNumberOfThreads) {
     const std::string dir = driveDir("threads");
     for (const char* threads : {"0", "1", "3"}) {
         const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/t" + threads + " -c " + dir +
@@ -302,7 +302,7 @@ TEST(RawlogOctomap, SameMapsWithAnyNumberOfThreads) {
 
 // The default worker count is the cores the process may use (taskset, cpusets, mpirun's binding
 // of a rank to a core), not the machine's: two threads bound to one core only take turns.
-TEST(RawlogOctomap, DefaultWorkersAreTheCoresTheProcessMayUse) {
+TEST(RawlogOctomapTool, DefaultWorkersAreTheCoresTheProcessMayUse) {
     if (std::system("taskset -c 0 true > /dev/null 2>&1") != 0) GTEST_SKIP() << "taskset (util-linux) is not available";
     const std::string dir = driveDir("affinity");
     const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
@@ -318,7 +318,7 @@ TEST(RawlogOctomap, DefaultWorkersAreTheCoresTheProcessMayUse) {
 }
 
 // The drive's sensor is 1.8 m up: a distToGround of 2.5 is said once (scan 0), on one or two ranks.
-TEST(RawlogOctomap, AFixedHeightThatTheFirstScanContradictsIsSaid) {
+TEST(RawlogOctomapTool, AFixedHeightThatTheFirstScanContradictsIsSaid) {
     const std::string dir = tempDir("height");
     writeDrive(dir + "/drive.rawlog");
     std::ofstream(dir + "/wrong.yaml") << "distToGround: 2.5\n";
@@ -343,7 +343,7 @@ TEST(RawlogOctomap, AFixedHeightThatTheFirstScanContradictsIsSaid) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, ProgressShowsScansPerSecondAndTimeLeft) {
+TEST(RawlogOctomapTool, ProgressShowsScansPerSecondAndTimeLeft) {
     const std::string dir = driveDir("progress");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir);
     ASSERT_EQ(r.status, 0) << r.err;
@@ -356,7 +356,7 @@ TEST(RawlogOctomap, ProgressShowsScansPerSecondAndTimeLeft) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, AScanThatCannotBeSegmentedIsSkippedNamedAndCounted) {
+TEST(RawlogOctomapTool, AScanThatCannotBeSegmentedIsSkippedNamedAndCounted) {
     const std::string dir = tempDir("skip");
     Drive d;
     d.emptyScan = 3;
@@ -371,7 +371,7 @@ TEST(RawlogOctomap, AScanThatCannotBeSegmentedIsSkippedNamedAndCounted) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, NoOccupiedVoxelIsNoCrash) {
+TEST(RawlogOctomapTool, NoOccupiedVoxelIsNoCrash) {
     // #9 item 3: SEGV in ColorOcTree when nothing ends up occupied.
     const std::string dir = driveDir("empty");
     // Every point beyond --max-range (the nearest is the road 1.8 m below the sensor).
@@ -406,7 +406,7 @@ TEST(RawlogOctomap, NoOccupiedVoxelIsNoCrash) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, PosesInUtmNeedAnOriginAndThenWork) {
+TEST(RawlogOctomapTool, PosesInUtmNeedAnOriginAndThenWork) {
     const std::string dir = tempDir("utm");
     Drive d;
     d.offset = Eigen::Vector3d(500000.0, 5000000.0, 250.0);
@@ -429,7 +429,7 @@ TEST(RawlogOctomap, PosesInUtmNeedAnOriginAndThenWork) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, AFileThatIsNoRawlogIsSaidToBeNone) {
+TEST(RawlogOctomapTool, AFileThatIsNoRawlogIsSaidToBeNone) {
     // Was "entry 0 is corrupt or truncated (Message: Exception while parsing typed object ...)".
     const std::string dir = tempDir("not_rawlog");
     std::ofstream(dir + "/x.rawlog") << "hello\n";
@@ -441,7 +441,7 @@ TEST(RawlogOctomap, AFileThatIsNoRawlogIsSaidToBeNone) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
+TEST(RawlogOctomapTool, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
     const std::string dir = tempDir("early");
     writeDrive(dir + "/drive.rawlog");
     for (const std::string& prefix : {dir + "/missing/m", std::string("/proc/gseg_maps_test/m"), std::string("/proc/m")}) {
@@ -461,7 +461,7 @@ TEST(RawlogOctomap, FailsBeforeAnyWorkOnAnOutputFolderItCannotWrite) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, DiskFullIsAnErrorAndNoMapFiles) {
+TEST(RawlogOctomapTool, DiskFullIsAnErrorAndNoMapFiles) {
     // #9 item 6. The file size limit (EFBIG once the signal is ignored) stands in for a full disk.
     const std::string dir = driveDir("full");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/m -c " + dir + "/gseg.yaml", dir,
@@ -476,7 +476,7 @@ TEST(RawlogOctomap, DiskFullIsAnErrorAndNoMapFiles) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
+TEST(RawlogOctomapTool, BenchTimesPlainOctomapAndItselfAlternately) {
     const std::string dir = driveDir("bench");
     const ToolRun r = runTool("rawlog-octomap", "-i " + dir + "/drive.rawlog -o " + dir + "/b -c " + dir +
                                                     "/gseg.yaml --max-range 15 --bench 2", dir);
@@ -491,7 +491,7 @@ TEST(RawlogOctomap, BenchTimesPlainOctomapAndItselfAlternately) {
 }
 
 // #12: the other ranks' threads are more workers of rank 0's pipeline; rank 0 alone maps, in order.
-TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
+TEST(RawlogOctomapTool, TwoMpiRanksWriteTheMapsOfOneProcess) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string dir = driveDir("mpi");
     const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
@@ -515,7 +515,7 @@ TEST(RawlogOctomap, TwoMpiRanksWriteTheMapsOfOneProcess) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, KittiSequence00MapsAreTheSameBytesOnTwoRanks) {
+TEST(RawlogOctomapTool, KittiSequence00MapsAreTheSameBytesOnTwoRanks) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string poses = gseg::test::sharedData("semantickitti/sequences/00/poses.txt");
     if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage("semantickitti/sequences/00/poses.txt");
@@ -532,7 +532,7 @@ TEST(RawlogOctomap, KittiSequence00MapsAreTheSameBytesOnTwoRanks) {
     fs::remove_all(dir);
 }
 
-TEST(RawlogOctomap, UnderMpiASkippedOrFailingScanOnAnotherRankIsNamedAndNothingHangs) {
+TEST(RawlogOctomapTool, UnderMpiASkippedOrFailingScanOnAnotherRankIsNamedAndNothingHangs) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);
     const std::string dir = tempDir("mpi_bad");
     std::ofstream(dir + "/gseg.yaml") << "distToGround: 1.8\n";

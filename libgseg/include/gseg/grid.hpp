@@ -2,7 +2,6 @@
 /// \file grid.hpp
 /// Binning of points into axis-aligned cells, indexed with floor (never truncation).
 
-#include <gseg/fork_join_pool.hpp>
 #include <gseg/point_cloud.hpp>
 
 #include <Eigen/Core>
@@ -51,9 +50,8 @@ class ColumnIndex {
 public:
     /// Numbers the columns of the points `indices` of `cloud`; `columnOf[k]` receives the column
     /// id of point indices[k] (resized to indices.size()).
-    /// `pool` (optional): the per-point work in parallel (the same ids).
     void build(const PointCloudView& cloud, const std::vector<std::uint32_t>& indices, double sx, double sy,
-               std::vector<std::uint32_t>& columnOf, ForkJoinPool* pool = nullptr);
+               std::vector<std::uint32_t>& columnOf);
 
     /// Number of column ids (ids are 0 .. size() - 1).
     std::uint32_t size() const { return size_; }
@@ -88,7 +86,6 @@ private:
     std::vector<std::int32_t> coords_;   // ix of every input position, then iy of every one (scratch)
     std::vector<float> xy_;              // [m] x of every input position, then y of every one (scratch)
     std::vector<float> z_;               // [m] z of every input position (z())
-    std::vector<std::int32_t> bounds_;   // per chunk of points: their columns' bounding box (scratch)
 };
 
 /// A 3-D grid of occupied cells, rebuilt per scan. Cells come sorted by (ix, iy, iz), so the cells

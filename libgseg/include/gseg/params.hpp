@@ -62,9 +62,6 @@ struct Params {
     bool floatingIgnoresLowOutliers = true;  ///< ... not counting the outliers of a Phase I ground cell that lie below its plane (lower ground beside it); false: every outlier counts
     double belowGroundMargin = 0.5;          ///< [m] non-ground points this far below the local ground are flagged as reflections (Result::belowGround; 0: never)
 
-    // --- execution --------------------------------------------------------------------------------
-    int threads = 1;  ///< [threads] threads working on one scan (intra-scan: cells, plane fits and the expansion's neighbour searches in parallel; 1..256); the labels are the same for any count. Not the tools' --threads, which segment several scans at once
-
     /// Throws std::invalid_argument naming the first invalid key and its value.
     void validate() const;
 

@@ -4,7 +4,6 @@
 /// radius search, done in columns of centroids (the same neighbours: the squared distance in float
 /// below the squared radius, as nanoflann's L2 metric).
 
-#include <gseg/fork_join_pool.hpp>
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -31,12 +30,7 @@ struct ExpansionSettings {
     /// sensor whose blind zone hides the ground near the robot); 0: the seed disc only.
     std::size_t fewSeeds = 0;
     double seedSlope = 0.0;  ///< [-] if no candidate passes the seed's gate, it widens by this much per metre of horizontal distance (the robot stands on a slope)
-    /// Optional: with two or more threads, the candidates' neighbours are searched in parallel
-    /// before the (sequential) breadth-first walk; the same neighbours in the same order, so the
-    /// same result as searching each reached candidate during the walk.
-    ForkJoinPool* pool = nullptr;
-    /// Optional: whether `accept` looks at a candidate's neighbours (only those get a list, searched
-    /// beforehand where there is a pool). A candidate
+    /// Optional: whether `accept` looks at a candidate's neighbours (only those get a list). A candidate
     /// for which it returns false is decided with an empty list, and only if accepted are its
     /// neighbours searched, skipping those already reached: the same walk, with less searching.
     std::function<bool(std::uint32_t candidate)> needsNeighbours;

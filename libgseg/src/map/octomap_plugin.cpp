@@ -7,6 +7,7 @@
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <iostream>
 #include <ostream>
 #include <stdexcept>
 
@@ -35,6 +36,7 @@ void CTraversabilityOctoMap::TMapDefinition::loadFromConfigFile_map_specific(con
     sections.sensorHeight = prefix + "_sensorHeight";
     sections.traversability = prefix + "_creationOpts";
     config = gseg::mrpt::loadConfigFromIni(source, sections);
+    for (const std::string& w : config.warnings) std::cerr << "gseg map plugin: warning: " << w << "\n";  // once per definition
 }
 
 void CTraversabilityOctoMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {

@@ -95,8 +95,9 @@ struct BuildOptions {
     std::function<void(std::size_t k, const ScanResult& result)> onScan;
 };
 
-/// An allocation failed while building: what() says what was being done ("out of memory while
-/// segmenting and ray casting scan 5 (...)"), for a message that adds the options memory follows.
+/// An allocation failed while building: what() says what was being done and the options memory
+/// follows ("out of memory while segmenting and ray casting scan 5 (...) (at --resolution 0.01 m,
+/// --max-range 50 m); nothing written": gseg::map::outOfMemoryMessage()).
 struct OutOfMemory : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
@@ -121,7 +122,8 @@ public:
     void integrate(const ScanResult& result);
     /// One observation, worked on and integrated here (the plugin's route): a 3D LiDAR scan, or
     /// one part of a rawlog-gseg pair (`_ground` / `_obstacles`, used as it is). False for other
-    /// observation kinds and for a scan that was skipped (its reason in tally().skipped).
+    /// observation kinds and for a scan that was skipped (its reason in tally().skipped). An
+    /// allocation failure throws OutOfMemory naming the observation.
     bool insert(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose);
     /// Forgets every scan (the same options and configuration).
     void clear();
@@ -131,6 +133,9 @@ public:
     const gseg::mrpt::LoadedConfig& config() const { return config_; }
 
 private:
+    /// `count` ScanWorkers for run(), and as many threads for the maps' updates.
+    void startWorkers(unsigned count);
+
     gseg::mrpt::LoadedConfig config_;
     TraversabilityMap map_;
     BuildTally tally_;

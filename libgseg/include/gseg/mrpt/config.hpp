@@ -30,7 +30,19 @@ struct LoadedConfig {
     bool distToGroundAuto = false;  ///< estimate the sensor height per scan (`distToGround: auto`)
     gseg::SensorHeightOptions sensorHeight;           ///< YAML `sensorHeight:`, INI `[sensorHeight]`; validated
     gseg::map::TraversabilityOptions traversability;  ///< YAML `traversability:`, INI `[traversability]`; validated
+    /// What the loader read but ignores, one line each naming where and why (a retired key, see
+    /// retiredKeys()). Not errors: every tool prints each once as "<tool>: warning: <line>", the
+    /// map plugin on stderr, Python as warnings.warn().
+    std::vector<std::string> warnings;
 };
+
+/// A key gseg read once and now ignores: a file (or a Python call) that still sets it loads, with
+/// a warning in LoadedConfig::warnings, so that old configurations keep working.
+struct RetiredKey {
+    const char* key;  ///< as in gseg::Params' table (the `gseg:` keys)
+    const char* why;  ///< why it is ignored, and what to use instead
+};
+const std::vector<RetiredKey>& retiredKeys();
 
 /// The configuration where no file sets a key: the library defaults (gseg::Params, the values of
 /// config/kitti_hdl64.yaml) with `distToGround: auto`, so that a tool or the map plugin run
