@@ -47,6 +47,7 @@ struct Cli {
     bool replace = false;
     bool overwrite = false;  ///< -w: replace outputs that exist
     bool driveContext = true;  ///< label with the whole drive's terrain model where the rawlog has poses (#31)
+    unsigned pass1Workers = 1;  ///< scans segmented at once in pass 1 (every usable core; 1 under MPI: the ranks share the inputs)
 };
 
 /// Exit codes (also in --help).
@@ -169,7 +170,8 @@ FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, c
     } else if (cli.driveContext) {
         gseg::Progress pass1(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name) + ": the drive's terrain (pass 1 of 2)",
                              "scans");
-        drive = gseg::map::driveModelOf(in, config, cli.sensors, [&](std::size_t scans, double) { pass1.update(scans, -1, ""); });
+        drive = gseg::map::driveModelOf(in, config, cli.sensors, [&](std::size_t scans, double) { pass1.update(scans, -1, ""); },
+                                        cli.pass1Workers);
         if (drive.model) pass1.finish(drive.scans);
         if (drive.model) {
             options.driveModel = drive.model;
@@ -377,8 +379,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
                                      "FILE", cmd);
     TCLAP::SwitchArg replace("", "replace", "drop the original scans (default: keep them)", cmd);
     TCLAP::SwitchArg noDrive("", "no-drive-context", "label each scan alone; by default, where the rawlog has a pose for "
-                             "every scan, a first pass builds the drive's terrain model and each scan is labelled with it "
-                             "(ground the scan alone missed; traversability: driveTerrain and terrain* keys)", cmd);
+                             "every scan, a first pass builds the drive's terrain model (segmenting scans on every core at once) and each scan is "
+                             "labelled with it (ground the scan alone missed; traversability: driveTerrain and terrain* keys)", cmd);
     TCLAP::MultiArg<std::string> sensor("", "sensor", "segment only observations with this sensorLabel "
                                         "(repeatable; default all LiDAR observations)", false, "LABEL", cmd);
     TCLAP::ValueArg<std::string> frame("", "frame", "output points in the sensor frame (default) or the vehicle "
@@ -386,7 +388,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     ranks.setTimeout("rawlog-gseg", line.mpiTimeout());
     const Cli cli = {in.getValue(),       list.getValue(),   outArg.getValue(), cfg.getValue(),
-                     frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite(), !noDrive.getValue()};
+                     frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite(), !noDrive.getValue(),
+                     ranks.size() > 1 ? 1u : gseg::tools::usableCores()};
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
         return runBatch(cli, ranks);

@@ -7,7 +7,9 @@
 // gseg eval's drive context.
 #include <gseg/io/ros_map.hpp>
 #include <gseg/eval/map_score.hpp>
+#include <gseg/map/drive_model.hpp>
 #include <gseg/map/terrain_layers.hpp>
+#include <gseg/mrpt/config.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/drive_terrain.hpp>
 #include <gseg/terrain_model.hpp>
@@ -18,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -614,6 +617,35 @@ TEST(DriveTerrainReal, OneThreeThreadsAndTwoRanksGiveTheSameLayersAndCostmap) {
                       gseg::test::readText((dir / (run + suffix)).string()))
                 << run << suffix;
     if (mpirun.empty()) GTEST_SKIP() << "threads compared; ranks not: " << whyNot;
+}
+
+TEST(DriveTerrainReal, RawlogGsegsFirstPassGivesTheSameModelOnOneOrThreeWorkers) {
+    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
+    const std::string poses = gseg::test::sharedData(rel);
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
+    const fs::path dir = gseg::test::freshDir("drive_terrain", "pass1");
+    const std::string rawlog = (dir / "d09.rawlog").string();
+    const auto k = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + fs::path(poses).parent_path().string() +
+                                          "' -o '" + rawlog + "'");
+    ASSERT_EQ(k.status, 0) << k.output;
+    const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml");
+    std::vector<double> fractions;
+    const gseg::map::DriveModel one = gseg::map::driveModelOf(rawlog, config, {}, {}, 1);
+    const gseg::map::DriveModel three =
+        gseg::map::driveModelOf(rawlog, config, {}, [&](std::size_t, double f) { fractions.push_back(f); }, 3);
+    ASSERT_TRUE(one.model && three.model) << one.why << three.why;
+    EXPECT_EQ(one.scans, 10u);
+    EXPECT_EQ(three.scans, one.scans);
+    EXPECT_EQ(three.poses.size(), one.poses.size());
+    EXPECT_EQ(fractions.size(), 10u);
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end())) << "progress in scan order";
+    EXPECT_GT(one.model->grown(), 1000u);
+    EXPECT_EQ(three.model->anchors(), one.model->anchors());
+    EXPECT_EQ(three.model->grown(), one.model->grown());
+    std::vector<float> a, b;
+    one.model->forEachModelled([&](std::int32_t ix, std::int32_t iy, const gseg::TerrainCell& c) { a.insert(a.end(), {float(ix), float(iy), c.elevation}); });
+    three.model->forEachModelled([&](std::int32_t ix, std::int32_t iy, const gseg::TerrainCell& c) { b.insert(b.end(), {float(ix), float(iy), c.elevation}); });
+    EXPECT_TRUE(a == b) << "the same cells, the same elevations";
 }
 
 TEST(DriveTerrainReal, GsegEvalScoresEachDriveAloneAndWithItsContext) {

@@ -49,7 +49,7 @@ void GroundFilter::useDriveModel(std::shared_ptr<const gseg::TerrainModel> model
     causal_.reset();
 }
 
-void GroundFilter::collectDriveModel(gseg::TerrainModel* model) { collect_ = model; }
+void GroundFilter::collectDriveEvidence(bool on) { collect_ = on; }
 
 void GroundFilter::relabelWithDrive(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& worldSensorPose,
                                     Output& out) {
@@ -59,7 +59,7 @@ void GroundFilter::relabelWithDrive(const std::vector<float>& sensorXyzi, const 
     const PointCloudView cloud(world.data(), world.size() / 3);
     const Eigen::Vector3d sensor(worldSensorPose.x(), worldSensorPose.y(), worldSensorPose.z());
     if (collect_) {
-        collect_->add(gseg::terrainSamples(cloud, out.result, collect_->options().cellSize, t.maxRange, sensor));
+        out.driveEvidence = gseg::terrainSamples(cloud, out.result, t.terrainOptions().cellSize, t.maxRange, sensor);
     } else if (driveModel_) {
         out.driveRelabelled = gseg::relabelWithModel(*driveModel_, cloud, out.result);
     } else {

@@ -41,8 +41,10 @@ struct DriveModel {
 /// LiDAR scan), labelled as GroundFilter labels them with `config`. A rawlog without a pose for
 /// every scan gives no model, `why` saying which scan had none; a scan that cannot be segmented
 /// adds nothing (the second pass names it). `progress(scans, fraction of the rawlog read)` after
-/// each scan. Throws std::runtime_error on an unreadable rawlog.
+/// each scan. `workers`: scans segmented at once (the rawlog is read in order and the evidence
+/// added in scan order: the same model for any number). Throws std::runtime_error on an
+/// unreadable rawlog.
 DriveModel driveModelOf(const std::string& rawlog, const gseg::mrpt::LoadedConfig& config, const std::vector<std::string>& sensors,
-                        const std::function<void(std::size_t scans, double fraction)>& progress = {});
+                        const std::function<void(std::size_t scans, double fraction)>& progress = {}, unsigned workers = 1);
 
 }  // namespace gseg::map

@@ -54,6 +54,9 @@ public:
         std::size_t nonFinitePoints = 0;  ///< input points with a NaN or infinite coordinate
         std::size_t reflections = 0;      ///< points more than belowGroundMargin below the ground (result.belowGround)
         std::size_t driveRelabelled = 0;  ///< points the drive's terrain model turned ground (filter() with a pose)
+        /// collectDriveEvidence(true): the scan's evidence for the drive's model (its single-scan
+        /// labels by cell of the configuration's terrain model, for TerrainModel::add() in scan order)
+        std::vector<gseg::TerrainSample> driveEvidence;
         gseg::Result result;      ///< labels (one per input point), counters and timing of the segmentation
     };
 
@@ -87,10 +90,12 @@ public:
     /// Relabels with `model` (built, e.g. from a whole drive) in filter(obs, pose) instead of the
     /// causal model; nullptr goes back to the causal one (started afresh).
     void useDriveModel(std::shared_ptr<const gseg::TerrainModel> model);
-    /// The first pass of the offline form: filter(obs, pose) adds each scan's evidence (its
-    /// single-scan labels) to `model` and relabels nothing; nullptr ends it. The caller builds
-    /// the model and gives it to useDriveModel() for the second pass.
-    void collectDriveModel(gseg::TerrainModel* model);
+    /// The first pass of the offline form: filter(obs, pose) gives each scan's evidence (its
+    /// single-scan labels) in Output::driveEvidence and relabels nothing; false ends it. The caller
+    /// adds the scans' evidence in scan order to a TerrainModel (config().traversability
+    /// .terrainOptions()), builds it and gives it to useDriveModel() for the second pass; scans
+    /// may be segmented by several filters at once (gseg::map::driveModelOf()).
+    void collectDriveEvidence(bool on);
 
 private:
     Output split(const std::vector<float>& sensorXyzi, const ::mrpt::poses::CPose3D& sensorPose,
@@ -102,7 +107,7 @@ private:
     gseg::mrpt::ScanSegmenter segmenter_;
     std::shared_ptr<const gseg::TerrainModel> driveModel_;  ///< offline: the whole drive's
     std::unique_ptr<gseg::DriveTerrain> causal_;            ///< a stream's, made at its first scan
-    gseg::TerrainModel* collect_ = nullptr;                 ///< the offline first pass's
+    bool collect_ = false;                                  ///< the offline first pass
 };
 
 /// Name under which MRPT's class factory knows GroundFilter.
