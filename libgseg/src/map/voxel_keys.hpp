@@ -152,6 +152,16 @@ public:
         word |= bit;
         return added;
     }
+    /// Adds the voxels codes[0, n) (a ray's: consecutive ones mostly share a brick).
+    void insertAll(const std::uint64_t* codes, std::size_t n) {
+        std::uint64_t brick = CodeIndex::kEmpty;
+        std::uint64_t* words = nullptr;
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint64_t c = codes[i];
+            if (c >> 9 != brick) brick = c >> 9, words = maskOf(brick).data();
+            words[(c >> 6) & 7] |= 1ULL << (c & 63);
+        }
+    }
     bool contains(std::uint64_t code) const {
         const long b = index_.find(code >> 9);
         return b >= 0 && (masks_[std::size_t(b)][(code >> 6) & 7] >> (code & 63) & 1);
