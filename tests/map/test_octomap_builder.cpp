@@ -13,6 +13,8 @@
 #include <support/scenes.hpp>
 #include <support/paths.hpp>
 
+#include "voxel_keys.hpp"
+
 #include <gtest/gtest.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/maps/CSimplePointsMap.h>
@@ -28,6 +30,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <unistd.h>
 
@@ -406,6 +409,61 @@ TEST(OctomapBuilder, FastPathEqualsASimpleReferenceIntegration) {
         EXPECT_GT(colouredOt.str().size(), 10000u);
         EXPECT_TRUE(fileBytes(dir + "/fast_traversability.ot") == colouredOt.str());
         std::filesystem::remove_all(dir);
+    }
+}
+
+/// castScan()'s free voxels against OctoMap's own computeRayKeys() for the same rays: random
+/// directions, rays along an axis or a diagonal (from a voxel's centre: ties between the axes), negative coordinates,
+/// points beyond maxRange (cut there), and rays of more voxels than the caster walks at once
+/// (4096: 1 cm voxels, 50 m rays).
+TEST(OctomapBuilder, RayCastingGivesExactlyTheVoxelsOfComputeRayKeys) {
+    std::mt19937 rng(35);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    for (const double resolution : {0.2, 0.15, 0.01}) {
+        gseg::map::TraversabilityOptions o;
+        o.resolution = resolution, o.maxRange = 50;
+        SCOPED_TRACE("resolution " + std::to_string(resolution));
+        const octomap::OcTree geometry(resolution);
+        // Off the grid, at negative coordinates, and at a voxel's centre (diagonal rays tie there).
+        const Eigen::Vector3d centre(geometry.keyToCoord(32770), geometry.keyToCoord(32765), geometry.keyToCoord(32778));
+        for (const Eigen::Vector3d& origin : {Eigen::Vector3d(0.03, -0.07, 1.73), Eigen::Vector3d(-123.45, -0.2, -7.9), centre}) {
+            const octomap::point3d from(float(origin.x()), float(origin.y()), float(origin.z()));
+            std::vector<float> pts;
+            auto add = [&](float dx, float dy, float dz) { pts.insert(pts.end(), {from.x() + dx, from.y() + dy, from.z() + dz}); };
+            for (int i = 0; i < (resolution < 0.1 ? 60 : 600); ++i) add(60 * u(rng), 60 * u(rng), 10 * u(rng));
+            for (const float r : {3.3f, 49.9f, 70.f})  // along each axis, both ways, and the diagonals
+                for (int sx = -1; sx <= 1; ++sx)
+                    for (int sy = -1; sy <= 1; ++sy)
+                        for (int sz = -1; sz <= 1; ++sz) add(r * float(sx), r * float(sy), r * float(sz));
+            const gseg::map::ScanUpdate cast = gseg::map::castScan(gseg::PointCloudView(pts.data(), pts.size() / 3), {}, origin, o);
+            // The reference: every ray as OctoMap casts it, one per endpoint voxel (its first point).
+            octomap::KeySet ends, hits, free;
+            octomap::KeyRay ray;
+            std::size_t longest = 0;
+            for (std::size_t i = 0; i < pts.size(); i += 3) {
+                octomap::point3d p(pts[i], pts[i + 1], pts[i + 2]);
+                const octomap::point3d d = p - from;
+                const double range = d.norm();
+                if (range > o.maxRange) p = from + d * float(o.maxRange / range);
+                octomap::OcTreeKey key;
+                ASSERT_TRUE(geometry.coordToKeyChecked(p, key));
+                if (range <= o.maxRange) hits.insert(key);
+                if (!ends.insert(key).second) continue;
+                ASSERT_TRUE(geometry.computeRayKeys(from, p, ray));
+                longest = std::max(longest, ray.size());
+                free.insert(ray.begin(), ray.end());
+            }
+            std::vector<std::uint64_t> expected;
+            for (const octomap::OcTreeKey& k : free)
+                if (!hits.count(k)) expected.push_back(gseg::map::detail::mortonCode(k));
+            std::sort(expected.begin(), expected.end());
+            EXPECT_EQ(cast.rays, ends.size());
+            EXPECT_EQ(cast.free.size(), expected.size());
+            EXPECT_TRUE(cast.free == expected) << "the free voxels differ from computeRayKeys()'s";
+            if (resolution < 0.1) {
+                EXPECT_GT(longest, 4096u) << "rays longer than one batch of the caster";
+            }
+        }
     }
 }
 

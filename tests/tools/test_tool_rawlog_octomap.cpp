@@ -490,6 +490,42 @@ TEST(RawlogOctomapTool, BenchTimesPlainOctomapAndItselfAlternately) {
     fs::remove_all(dir);
 }
 
+// #35: tools/bench_vs_octomap.sh (the README's Tools) makes the drive and times both side by side.
+TEST(RawlogOctomap, BenchScriptMakesTheDriveAndTimesPlainOctomapBesideIt) {
+    const std::string rel = "semantickitti/sequences/00";
+    const std::string seq = gseg::test::sharedData(rel);
+    if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
+    const std::string dir = tempDir("bench_script");
+    fs::create_directories(dir + "/two/velodyne");  // the first two frames of sequence 00
+    for (const char* f : {"000000.bin", "000001.bin"}) fs::create_symlink(seq + "/velodyne/" + f, dir + "/two/velodyne/" + f);
+    fs::copy_file(seq + "/calib.txt", dir + "/two/calib.txt");
+    for (const char* f : {"poses.txt", "times.txt"}) {
+        std::ifstream in(seq + "/" + f);
+        std::ofstream out(dir + "/two/" + f);
+        std::string line;
+        for (int i = 0; i < 2 && std::getline(in, line); ++i) out << line << "\n";
+    }
+    auto script = [&](const std::string& args) {
+        const std::string command = "'" + std::string(GSEG_SOURCE_DIR) + "/tools/bench_vs_octomap.sh' -b '" + GSEG_BINARY_DIR +
+                                    "' " + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt";
+        const int st = std::system(("bash -c \"" + command + "\"").c_str());
+        return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+    };
+    ASSERT_EQ(script("-s " + dir + "/two -r 1 -n 1 -w " + dir + "/work"), 0) << gseg::test::readText(dir + "/err.txt");
+    const std::string out = gseg::test::readText(dir + "/out.txt");
+    EXPECT_TRUE(fs::exists(dir + "/work/two_x1.rawlog")) << out;
+    EXPECT_NE(out.find("1      plain OctoMap"), std::string::npos) << out;
+    EXPECT_NE(out.find("insertPointCloud"), std::string::npos) << out;
+    EXPECT_NE(out.find("2 scans"), std::string::npos) << out;
+    EXPECT_NE(out.find("x faster"), std::string::npos) << out;
+    EXPECT_NE(out.find("load average before"), std::string::npos) << out;
+    EXPECT_EQ(script("-s " + dir + "/two -q"), 2);
+    EXPECT_NE(gseg::test::readText(dir + "/err.txt").find("usage: tools/bench_vs_octomap.sh"), std::string::npos);
+    EXPECT_EQ(script("-s " + dir + "/none"), 2);
+    EXPECT_NE(gseg::test::readText(dir + "/err.txt").find("not a KITTI sequence"), std::string::npos);
+    fs::remove_all(dir);
+}
+
 // #12: the other ranks' threads are more workers of rank 0's pipeline; rank 0 alone maps, in order.
 TEST(RawlogOctomapTool, TwoMpiRanksWriteTheMapsOfOneProcess) {
     GSEG_TEST_MPIRUN_OR_SKIP(mpirun, 2);

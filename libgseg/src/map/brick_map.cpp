@@ -58,35 +58,64 @@ inline void BrickMap::update(Words& t, unsigned local, float delta, bool skipOcc
     t.atMax[w] += value == l_.clampMax;
 }
 
+/// Calls f(word, bits, from, to) for each word of a brick's sorted voxels [from, to): its
+/// voxels are consecutive, `bits` has one per voxel.
+template <class F>
+inline void forEachWord(const std::uint64_t* from, const std::uint64_t* to, F&& f) {
+    for (const std::uint64_t* c = from; c != to;) {
+        const unsigned w = unsigned(*c >> 6) & 7;
+        std::uint64_t bits = 0;
+        const std::uint64_t* e = c;
+        for (; e != to && (unsigned(*e >> 6) & 7) == w; ++e) bits |= 1ULL << (*e & 63);
+        f(w, bits, c, e);
+        c = e;
+    }
+}
+
+inline bool BrickMap::unchangedBy(const Words& t, unsigned w, std::uint64_t bits, float delta) const {
+    return t.block[w] < 0 && t.uniform[w] == (delta <= 0 ? l_.clampMin : l_.clampMax) && !(bits & ~t.exists[w]);
+}
+
 void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const std::vector<Run>& groundHits,
                           const std::vector<Run>& obstacleHits) {
     Pool& groundPool = pools_[kGround * kShards + shard];
     Pool& obstaclePool = pools_[kObstacles * kShards + shard];
     const auto groundBits = std::int32_t((kGround * kShards + shard) << kPoolShift);
     const auto obstacleBits = std::int32_t((kObstacles * kShards + shard) << kPoolShift);
+    // Word by word; the two maps of a brick are apart (their own words and value pools), so each
+    // map's voxels are updated in list order, one map after the other. A word left as it is
+    // (unchangedBy()) is skipped: most of a long drive's free space, seen again and again.
     for (const Run& r : free) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        for (const std::uint64_t* c = r.from; c != r.to; ++c) {
-            update(b.map[kGround], unsigned(*c & 511), l_.miss, true, groundPool, groundBits);
-            update(b.map[kObstacles], unsigned(*c & 511), l_.miss, false, obstaclePool, obstacleBits);
-        }
+        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits, const std::uint64_t* from, const std::uint64_t* to) {
+            if (!unchangedBy(b.map[kGround], w, bits, l_.miss))
+                for (const std::uint64_t* c = from; c != to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.miss, true, groundPool, groundBits);
+            if (!unchangedBy(b.map[kObstacles], w, bits, l_.miss))
+                for (const std::uint64_t* c = from; c != to; ++c)
+                    update(b.map[kObstacles], unsigned(*c & 511), l_.miss, false, obstaclePool, obstacleBits);
+        });
         collapseIfUniform(b.map[kGround], groundPool);
         collapseIfUniform(b.map[kObstacles], obstaclePool);
     }
     for (const Run& r : groundHits) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        for (const std::uint64_t* c = r.from; c != r.to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.hit, false, groundPool, groundBits);
+        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits, const std::uint64_t* from, const std::uint64_t* to) {
+            if (!unchangedBy(b.map[kGround], w, bits, l_.hit))
+                for (const std::uint64_t* c = from; c != to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.hit, false, groundPool, groundBits);
+        });
         collapseIfUniform(b.map[kGround], groundPool);
     }
     for (const Run& r : obstacleHits) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        for (const std::uint64_t* c = r.from; c != r.to; ++c) {
-            update(b.map[kObstacles], unsigned(*c & 511), l_.hit, false, obstaclePool, obstacleBits);
-            b.everObstacle[(*c >> 6) & 7] |= 1ULL << (*c & 63);
-        }
+        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits, const std::uint64_t* from, const std::uint64_t* to) {
+            if (!unchangedBy(b.map[kObstacles], w, bits, l_.hit))
+                for (const std::uint64_t* c = from; c != to; ++c)
+                    update(b.map[kObstacles], unsigned(*c & 511), l_.hit, false, obstaclePool, obstacleBits);
+            b.everObstacle[w] |= bits;
+        });
         collapseIfUniform(b.map[kObstacles], obstaclePool);
     }
 }

@@ -145,6 +145,9 @@ private:
     void collapseIfUniform(Words& t, Pool& pool);
     /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics).
     void update(Words& t, unsigned local, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits);
+    /// True if update(t, v, delta) changes nothing for any voxel v of word w in `bits`: the word has
+    /// one value for all, at the bound `delta` pushes towards, and every such voxel exists.
+    bool unchangedBy(const Words& t, unsigned w, std::uint64_t bits, float delta) const;
     /// The voxels of one brick in one of a scan's lists (applyScan()).
     struct Run {
         std::uint32_t brick;       ///< position in bricks_

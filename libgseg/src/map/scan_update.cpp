@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <unordered_map>
 #include <algorithm>
+#include <array>
 
 namespace gseg::map {
 namespace {
@@ -23,6 +24,55 @@ using detail::BrickSet;
 using detail::mortonCode;
 
 constexpr std::uint64_t kAxisMask[3] = {0x249249249249ULL, 0x249249249249ULL << 1, 0x249249249249ULL << 2};
+
+/// The state of OctoMap's incremental ray loop (OcTree::computeRayKeys(), OctoMap 1.9.7).
+struct Ray {
+    double t[3];             ///< tMax: the ray parameter [m] at the next voxel border per axis
+    double delta[3];         ///< tDelta: between two borders per axis
+    std::uint64_t flip[3];   ///< the axis bits where the ray steps down (step -1), else 0
+    double length;           ///< [m] of the ray, as a float widened
+    std::uint64_t code, end;  ///< Morton codes of the current voxel and of the end's
+};
+
+/// The loop of OcTree::computeRayKeys(): the axis of the smallest tMax steps (ties: the later
+/// axis) and its tMax grows by its tDelta, until the end's voxel or min(tMax) > length. The same
+/// comparisons and additions in the same order, so the same voxels, written to path[0, n) (the
+/// origin's voxel not included). Stops early when `capacity` voxels are written: returns true
+/// then (call again to go on). A step along axis a counts the axis bits of the Morton code up
+/// (complemented before and after where the ray steps down), the other bits kept. Not inlined:
+/// without a call in its loop, the state stays in registers.
+[[gnu::noinline]] bool walkRay(Ray& r, std::uint64_t* path, std::size_t capacity, std::size_t& n) {
+    constexpr std::uint64_t m0 = kAxisMask[0], m1 = kAxisMask[1], m2 = kAxisMask[2];
+    const std::uint64_t f0 = r.flip[0], f1 = r.flip[1], f2 = r.flip[2];
+    const double d0 = r.delta[0], d1 = r.delta[1], d2 = r.delta[2], length = r.length;
+    double t0 = r.t[0], t1 = r.t[1], t2 = r.t[2];
+    std::uint64_t code = r.code;
+    const std::uint64_t end = r.end;
+    bool more = false;
+    std::size_t k = 0;
+    while (true) {
+        if (t0 < t1 && t0 < t2) {
+            code = ((((((code ^ f0) | ~m0) + 1) & m0) ^ f0) | (code & ~m0));
+            t0 += d0;
+        } else if (!(t0 < t1) && t1 < t2) {
+            code = ((((((code ^ f1) | ~m1) + 1) & m1) ^ f1) | (code & ~m1));
+            t1 += d1;
+        } else {
+            code = ((((((code ^ f2) | ~m2) + 1) & m2) ^ f2) | (code & ~m2));
+            t2 += d2;
+        }
+        if (code == end) break;
+        if (t0 > length && t1 > length && t2 > length) break;  // min(tMax) > length
+        path[k++] = code;
+        if (k == capacity) {
+            more = true;
+            break;
+        }
+    }
+    r.t[0] = t0, r.t[1] = t1, r.t[2] = t2, r.code = code;
+    n = k;
+    return more;
+}
 
 /// Ray casting of one scan. The voxels are exactly those OcTree::computeRayKeys() gives (the same
 /// traversal with the same floating-point operations), so the maps are OctoMap's; but the keys go
@@ -95,7 +145,9 @@ public:
 
     /// Every voxel from the origin's up to (not including) each ray end's.
     void castRays() {
-        for (std::size_t r = 0; r < endPoints_.size(); ++r) castRay(endPoints_[r], endCodes_[r]);
+        bool any = false;
+        for (std::size_t r = 0; r < endPoints_.size(); ++r) any |= castRay(endPoints_[r], endCodes_[r]);
+        if (any) crossed_.insert(originCode_);  // every ray that leaves the origin's voxel starts there
     }
     std::size_t rays() const { return endPoints_.size(); }
     const BrickSet& crossed() const { return crossed_; }
@@ -117,10 +169,10 @@ private:
         return geometry_->coordToKeyChecked(p, key);
     }
 
-    /// OcTree::computeRayKeys(origin, end) (OctoMap 1.9.7), marking each key in crossed_.
-    void castRay(const octomap::point3d& end, std::uint64_t endCode) {
-        if (endCode == originCode_) return;
-        crossed_.insert(originCode_);
+    /// OcTree::computeRayKeys(origin, end) (OctoMap 1.9.7) without the origin's voxel, marking each
+    /// key in crossed_; false if the end lies in the origin's voxel (no ray).
+    bool castRay(const octomap::point3d& end, std::uint64_t endCode) {
+        if (endCode == originCode_) return false;
         octomap::point3d direction = (end - origin_);
         const float length = float(direction.norm());
         direction /= length;
@@ -138,29 +190,25 @@ private:
                 tMax[i] = tDelta[i] = std::numeric_limits<double>::max();
             }
         }
-        // The same choices as OctoMap's loop, without branches on the axis (they mispredict).
-        // One voxel along axis a: the axis bits of the code counted up or down, the others kept.
-        std::uint64_t pick[3], fill[3], add[3];
-        for (int a = 0; a < 3; ++a) {
-            pick[a] = step[a] > 0 ? ~0ULL : kAxisMask[a];  // up: carry through the other bits (filled)
-            fill[a] = step[a] > 0 ? ~kAxisMask[a] : 0;     // down: borrow within the axis bits only
-            add[a] = step[a] > 0 ? 1 : ~0ULL;
-        }
-        std::uint64_t code = originCode_;
-        double t0 = tMax[0], t1 = tMax[1], t2 = tMax[2];
-        while (true) {
-            const int d01 = !(t0 < t1);  // OctoMap: tMax[0] < tMax[1] ? 0 : 1, then that one < tMax[2] ? it : 2
-            const int dim = (d01 ? t1 : t0) < t2 ? d01 : 2;
-            const std::uint64_t m = kAxisMask[dim];
-            code = ((((code & pick[dim]) | fill[dim]) + add[dim]) & m) | (code & ~m);
-            t0 += dim == 0 ? tDelta[0] : 0.0;  // + 0.0 leaves the other two exact
-            t1 += dim == 1 ? tDelta[1] : 0.0;
-            t2 += dim == 2 ? tDelta[2] : 0.0;
-            if (code == endCode) return;
-            if ((t0 > length) & (t1 > length) & (t2 > length)) return;  // min(tMax) > length
-            crossed_.insert(code);
+        walk(tMax, tDelta, step, double(length), endCode);
+        return true;
+    }
+
+    /// OctoMap's incremental loop, kPath voxels at a time (walkRay()), each batch then marked in
+    /// crossed_ brick by brick.
+    void walk(const double tMax[3], const double tDelta[3], const int step[3], const double length, const std::uint64_t endCode) {
+        Ray ray{{tMax[0], tMax[1], tMax[2]}, {tDelta[0], tDelta[1], tDelta[2]}, {}, length, originCode_, endCode};
+        for (int a = 0; a < 3; ++a) ray.flip[a] = step[a] < 0 ? kAxisMask[a] : 0;
+        bool more = true;
+        while (more) {
+            std::size_t n = 0;
+            more = walkRay(ray, path_.data(), kPath, n);
+            crossed_.insertAll(path_.data(), n);
         }
     }
+
+    static constexpr std::size_t kPath = 4096;
+    std::array<std::uint64_t, kPath> path_;  ///< the voxels of the ray being cast
 };
 
 // ---- byte encoding (gseg/io/bytes.hpp) ----

@@ -152,6 +152,16 @@ public:
         word |= bit;
         return added;
     }
+    /// Adds the voxels codes[0, n) (a ray's: consecutive ones mostly share a brick).
+    void insertAll(const std::uint64_t* codes, std::size_t n) {
+        std::uint64_t brick = CodeIndex::kEmpty;
+        std::uint64_t* words = nullptr;
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint64_t c = codes[i];
+            if (c >> 9 != brick) brick = c >> 9, words = maskOf(brick).data();
+            words[(c >> 6) & 7] |= 1ULL << (c & 63);
+        }
+    }
     bool contains(std::uint64_t code) const {
         const long b = index_.find(code >> 9);
         return b >= 0 && (masks_[std::size_t(b)][(code >> 6) & 7] >> (code & 63) & 1);
@@ -162,6 +172,7 @@ public:
         bricks_.clear();
         masks_.clear();
         cachedBrick_ = CodeIndex::kEmpty;
+        recentBricks_.fill(CodeIndex::kEmpty);
     }
     /// Every voxel of `other` into this set.
     void merge(const BrickSet& other) {
@@ -200,12 +211,29 @@ private:
     std::vector<std::array<std::uint64_t, 8>> masks_;  ///< 512 voxel bits per brick
     std::uint64_t cachedBrick_ = CodeIndex::kEmpty;
     std::size_t cachedIndex_ = 0;
+    /// The bricks used lately, by their lowest Morton bits (16 x 8 x 8 bricks around any one):
+    /// the rays of a scan are cast in the order of its points, so neighbouring rays cross the
+    /// same bricks, and most brick changes are found here instead of in index_.
+    static constexpr std::size_t kRecent = 1024;
+    std::array<std::uint64_t, kRecent> recentBricks_ = filledRecent();
+    std::array<std::uint32_t, kRecent> recentIndices_{};
+    static std::array<std::uint64_t, kRecent> filledRecent() {
+        std::array<std::uint64_t, kRecent> a;
+        a.fill(CodeIndex::kEmpty);
+        return a;
+    }
 
     std::array<std::uint64_t, 8>& maskOf(std::uint64_t brick) {
         if (brick != cachedBrick_) {
-            bool inserted = false;
-            cachedIndex_ = index_.insert(brick, inserted);
-            if (inserted) bricks_.push_back(brick), masks_.push_back({});
+            const std::size_t r = brick & (kRecent - 1);
+            if (recentBricks_[r] == brick) {
+                cachedIndex_ = recentIndices_[r];
+            } else {
+                bool inserted = false;
+                cachedIndex_ = index_.insert(brick, inserted);
+                if (inserted) bricks_.push_back(brick), masks_.push_back({});
+                recentBricks_[r] = brick, recentIndices_[r] = std::uint32_t(cachedIndex_);
+            }
             cachedBrick_ = brick;
         }
         return masks_[cachedIndex_];
