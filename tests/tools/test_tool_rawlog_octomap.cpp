@@ -491,7 +491,7 @@ TEST(RawlogOctomapTool, BenchTimesPlainOctomapAndItselfAlternately) {
 }
 
 // #35: tools/bench_vs_octomap.sh (the README's Tools) makes the drive and times both side by side.
-TEST(RawlogOctomap, BenchScriptMakesTheDriveAndTimesPlainOctomapBesideIt) {
+TEST(RawlogOctomapTool, BenchScriptMakesTheDriveAndTimesPlainOctomapBesideIt) {
     const std::string rel = "semantickitti/sequences/00";
     const std::string seq = gseg::test::sharedData(rel);
     if (seq.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
