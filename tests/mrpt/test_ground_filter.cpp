@@ -180,6 +180,16 @@ TEST(GroundFilter, IniAndYamlConfigsGiveIdenticalResults) {
     EXPECT_EQ(a.filter(*obs).result.labels, b.filter(*obs).result.labels);
 }
 
+TEST(GroundFilter, ARetiredKeyLoadsAndItsWarningStaysForTheCaller) {
+    fs::create_directories(kDir);
+    std::ofstream(kDir / "retired.yaml") << "distToGround: 2.2\nthreads: 4\n";
+    gseg::GroundFilter f;
+    f.loadConfig((kDir / "retired.yaml").string());
+    EXPECT_DOUBLE_EQ(f.config().params.distToGround, 2.2);
+    ASSERT_EQ(f.config().warnings.size(), 1u);
+    EXPECT_NE(f.config().warnings[0].find("'threads' is ignored"), std::string::npos) << f.config().warnings[0];
+}
+
 TEST(RawlogGsegTool, Vlp16RawlogGetsGroundAndObstacleObservations) {
     if (!fs::exists(kVlp16)) GTEST_SKIP() << kVlp16 << " absent (package mrpt-common)";
     fs::create_directories(kDir);

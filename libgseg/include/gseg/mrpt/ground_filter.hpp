@@ -64,7 +64,8 @@ public:
     GroundFilter();
     explicit GroundFilter(const gseg::mrpt::LoadedConfig& config, OutputFrame frame = OutputFrame::Sensor);
 
-    /// Configuration from a YAML or INI file (see gseg/mrpt/config.hpp); throws on bad keys.
+    /// Configuration from a YAML or INI file (see gseg/mrpt/config.hpp); throws on bad keys. A
+    /// retired key (e.g. `threads`) loads, its warning in config().warnings for the caller to show.
     void loadConfig(const std::string& path);
     const gseg::mrpt::LoadedConfig& config() const { return segmenter_.config(); }
     OutputFrame outputFrame = OutputFrame::Sensor;
