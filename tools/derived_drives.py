@@ -37,11 +37,22 @@ def rings(p, n, min_ring_points=200):
     return out
 
 
-def derive(seq, out, mode):
-    os.makedirs(os.path.join(out, 'velodyne'), exist_ok=True)
-    os.makedirs(os.path.join(out, 'labels'), exist_ok=True)
+def derive(seq, final, mode):
+    """Writes the derived drive into a temporary folder beside `final`, renamed at the end: a failed
+    run leaves no half drive."""
+    for need in ('velodyne', 'labels', 'poses.txt', 'calib.txt'):
+        if not os.path.exists(os.path.join(seq, need)):
+            sys.exit(f'{seq}: no {need} (a labelled KITTI drive folder has velodyne/, labels/, poses.txt, calib.txt)')
+    if os.path.exists(final):
+        sys.exit(f'{final} exists: remove it or give another OUT')
+    out = final + '.partial'
+    shutil.rmtree(out, ignore_errors=True)
+    os.makedirs(os.path.join(out, 'velodyne'))
+    os.makedirs(os.path.join(out, 'labels'))
     frames = sorted(f[:-4] for f in os.listdir(os.path.join(seq, 'velodyne')) if f.endswith('.bin'))
-    poses = open(os.path.join(seq, 'poses.txt')).read().splitlines()
+    poses = [l for l in open(os.path.join(seq, 'poses.txt')).read().splitlines() if l.strip()]
+    if len(poses) < len(frames):
+        sys.exit(f'{seq}: {len(frames)} frames but {len(poses)} poses')
     keep = frames[::2] if mode == 'f2' else frames
     shutil.copy(os.path.join(seq, 'calib.txt'), os.path.join(out, 'calib.txt'))
     with open(os.path.join(out, 'poses.txt'), 'w') as f:
@@ -71,6 +82,7 @@ def derive(seq, out, mode):
                 p[4 * i + 2] += 0.5
         open(os.path.join(out, 'velodyne', f'{n:06d}.bin'), 'wb').write(p.tobytes())
         open(os.path.join(out, 'labels', f'{n:06d}.label'), 'wb').write(lab.tobytes())
+    os.rename(out, final)
 
 
 def make(out, seqs):

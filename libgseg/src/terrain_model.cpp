@@ -33,19 +33,7 @@ struct TerrainModel::Tile {
     /// build()'s working copy of the modelled elevations (NaN: not modelled), dense so that the
     /// least-squares sums over a candidate's disc read 4 bytes a cell, not a whole TerrainCell.
     std::array<float, std::size_t(kTileSize * kTileSize)> modelled;
-    /// build(): modelled cells per block of 8 x 8 cells (4 x 4 blocks a tile), an upper bound of a
-    /// candidate's support read from a few blocks before its disc is summed.
-    std::array<std::uint16_t, 16> blockModelled;
 };
-
-namespace {
-constexpr int kBlockBits = 3;  ///< blocks of 2^3 x 2^3 cells
-/// The block counter of cell j of a tile.
-std::size_t blockOf(std::int32_t j) {
-    return std::size_t((((j >> TerrainModel::kTileBits) >> kBlockBits) << (TerrainModel::kTileBits - kBlockBits)) |
-                       ((j & ((1 << TerrainModel::kTileBits) - 1)) >> kBlockBits));
-}
-}  // namespace
 
 void TerrainOptions::validate() const {
     auto positive = [](double v, const char* name) {
@@ -178,7 +166,6 @@ void TerrainModel::build() {
         std::int32_t ix, iy;
         TerrainCell* cell;
         float* modelled;  ///< its slot in the tile's working copy
-        std::uint16_t* block;  ///< its block's count of modelled cells
         float z;
     };
     std::vector<Candidate> candidates;
@@ -187,7 +174,6 @@ void TerrainModel::build() {
     for (const auto& [key, tile] : tiles) {
         const std::int32_t tx = std::int32_t(std::uint32_t(key >> 32)), ty = std::int32_t(std::uint32_t(key));
         tile->modelled.fill(std::numeric_limits<float>::quiet_NaN());
-        tile->blockModelled.fill(0);
         for (std::int32_t j = 0; j < kTileSize * kTileSize; ++j) {
             TerrainCell& c = tile->cells[std::size_t(j)];
             if (c.lowScans == 0) continue;
@@ -195,11 +181,10 @@ void TerrainModel::build() {
             if (c.groundScans >= std::uint32_t(options_.minScans) && c.groundCount >= std::uint64_t(options_.minAnchorPoints)) {
                 c.state = TerrainCell::Anchor, c.elevation = float(c.groundSumZ / double(c.groundCount));
                 tile->modelled[std::size_t(j)] = c.elevation;
-                ++tile->blockModelled[blockOf(j)];
                 ++anchors_;
             } else if (c.lowScans >= std::uint32_t(options_.minScans) && c.lowMax - c.lowMin <= spreadLimit) {
                 const std::int32_t ix = tx * kTileSize + (j & kTileMask), iy = ty * kTileSize + (j >> kTileBits);
-                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], &tile->blockModelled[blockOf(j)], float(c.lowSum / double(c.lowScans))});
+                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], float(c.lowSum / double(c.lowScans))});
             }
         }
     }
@@ -238,18 +223,6 @@ void TerrainModel::build() {
                     if (it != model.tiles_.end()) tiles[std::size_t((j + span) * side + i + span)] = it->second.get();
                 }
         }
-        /// The modelled cells in the blocks that hold the square of cells within `r` of (ix, iy): at
-        /// least as many as within the disc of radius r (the centre's tile and `r` within its span).
-        std::uint32_t bound(std::int32_t ix, std::int32_t iy, int r) const {
-            constexpr int perTile = kTileBits - kBlockBits;
-            std::uint32_t n = 0;
-            for (std::int32_t by = (iy - r) >> kBlockBits; by <= (iy + r) >> kBlockBits; ++by)
-                for (std::int32_t bx = (ix - r) >> kBlockBits; bx <= (ix + r) >> kBlockBits; ++bx) {
-                    const Tile* t = tiles[std::size_t(((by >> perTile) - ty + span) * side + (bx >> perTile) - tx + span)];
-                    if (t) n += t->blockModelled[std::size_t(((by & ((1 << perTile) - 1)) << perTile) | (bx & ((1 << perTile) - 1)))];
-                }
-            return n;
-        }
         /// The modelled elevations from cell (ix, iy) to the end of its tile's row, nullptr where the
         /// tile has no evidence (within the span of the centre's tile).
         const float* row(std::int32_t ix, std::int32_t iy) const {
@@ -279,7 +252,6 @@ void TerrainModel::build() {
             const Candidate& cand = candidates[k];
             if (cand.cell->state != TerrainCell::None) continue;
             near.centre(cand.ix, cand.iy);
-            if (near.bound(cand.ix, cand.iy, r) < std::uint32_t(options_.minSupport)) continue;  // too few modelled cells around
             bool level = true;  // no step to a modelled cell beside it (judged first: 8 cells, not the disc)
             for (int dy = -1; dy <= 1 && level; ++dy)
                 for (int dx = -1; dx <= 1 && level; ++dx) {
@@ -325,7 +297,6 @@ void TerrainModel::build() {
         }
         for (const std::size_t k : joined) {
             candidates[k].cell->state = TerrainCell::Grown, candidates[k].cell->elevation = *candidates[k].modelled = candidates[k].z;
-            ++*candidates[k].block;
             ++grown_;
         }
         // The next wave: the candidates still out within the radius of a cell that joined.

@@ -56,3 +56,16 @@ def test_a_frame_whose_labels_do_not_match_its_points_is_refused(tmp_path):
     np.zeros(5, np.uint32).tofile(seq / "labels" / "000000.label")
     r = subprocess.run([sys.executable, str(TOOL), "make", str(tmp_path / "d"), str(seq)], capture_output=True, text=True)
     assert r.returncode != 0 and "1200 points but 5 labels" in r.stderr
+    assert not (tmp_path / "d" / "05r2").exists(), "no half drive left behind"
+    again = subprocess.run([sys.executable, str(TOOL), "make", str(tmp_path / "d"), str(tmp_path / "none")], capture_output=True, text=True)
+    assert again.returncode != 0 and "no velodyne" in again.stderr
+
+
+def test_an_existing_derived_drive_is_not_replaced(tmp_path):
+    seq = tmp_path / "00"
+    _drive(seq, frames=1)
+    (tmp_path / "d" / "00r2").mkdir(parents=True)
+    (tmp_path / "d" / "00r2" / "keep").write_text("x")
+    r = subprocess.run([sys.executable, str(TOOL), "make", str(tmp_path / "d"), str(seq)], capture_output=True, text=True)
+    assert r.returncode != 0 and "exists" in r.stderr
+    assert (tmp_path / "d" / "00r2" / "keep").read_text() == "x"
