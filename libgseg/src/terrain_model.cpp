@@ -33,6 +33,7 @@ struct TerrainModel::Tile {
     /// build()'s working copy of the modelled elevations (NaN: not modelled), dense so that the
     /// least-squares sums over a candidate's disc read 4 bytes a cell, not a whole TerrainCell.
     std::array<float, std::size_t(kTileSize * kTileSize)> modelled;
+    std::array<std::uint8_t, std::size_t(kTileSize)> modelledInRow;  ///< build(): modelled cells per row of `modelled` (empty rows skipped)
 };
 
 void TerrainOptions::validate() const {
@@ -45,6 +46,10 @@ void TerrainOptions::validate() const {
     positive(pointTolerance, "pointTolerance [m]");
     if (!(standHeight > pointTolerance && std::isfinite(standHeight)))
         throw std::invalid_argument("TerrainOptions.standHeight = " + std::to_string(standHeight) + ": must exceed pointTolerance");
+    positive(sparseRadius, "sparseRadius [m]");
+    if (sparseRadius / cellSize > 100)
+        throw std::invalid_argument("TerrainOptions.sparseRadius = " + std::to_string(sparseRadius) +
+                                    " m: at most 100 cells of cellSize (" + std::to_string(cellSize) + " m)");
     if (supportRadius / cellSize > 100)
         throw std::invalid_argument("TerrainOptions.supportRadius = " + std::to_string(supportRadius) +
                                     " m: at most 100 cells of cellSize (" + std::to_string(cellSize) + " m)");
@@ -166,6 +171,7 @@ void TerrainModel::build() {
         std::int32_t ix, iy;
         TerrainCell* cell;
         float* modelled;  ///< its slot in the tile's working copy
+        std::uint8_t* modelledInRow;  ///< its row's count
         float z;
     };
     std::vector<Candidate> candidates;
@@ -174,6 +180,7 @@ void TerrainModel::build() {
     for (const auto& [key, tile] : tiles) {
         const std::int32_t tx = std::int32_t(std::uint32_t(key >> 32)), ty = std::int32_t(std::uint32_t(key));
         tile->modelled.fill(std::numeric_limits<float>::quiet_NaN());
+        tile->modelledInRow.fill(0);
         for (std::int32_t j = 0; j < kTileSize * kTileSize; ++j) {
             TerrainCell& c = tile->cells[std::size_t(j)];
             if (c.lowScans == 0) continue;
@@ -181,28 +188,39 @@ void TerrainModel::build() {
             if (c.groundScans >= std::uint32_t(options_.minScans) && c.groundCount >= std::uint64_t(options_.minAnchorPoints)) {
                 c.state = TerrainCell::Anchor, c.elevation = float(c.groundSumZ / double(c.groundCount));
                 tile->modelled[std::size_t(j)] = c.elevation;
+                ++tile->modelledInRow[std::size_t(j >> kTileBits)];
                 ++anchors_;
             } else if (c.lowScans >= std::uint32_t(options_.minScans) && c.lowMax - c.lowMin <= spreadLimit) {
                 const std::int32_t ix = tx * kTileSize + (j & kTileMask), iy = ty * kTileSize + (j >> kTileBits);
-                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], float(c.lowSum / double(c.lowScans))});
+                candidates.push_back({ix, iy, &c, &tile->modelled[std::size_t(j)], &tile->modelledInRow[std::size_t(j >> kTileBits)],
+                                      float(c.lowSum / double(c.lowScans))});
             }
         }
     }
     // Waves: each judged against the model at its start; only candidates near a new cell again.
-    const int r = int(std::ceil(options_.supportRadius / options_.cellSize - 1e-9));
-    const double r2 = (options_.supportRadius / options_.cellSize) * (options_.supportRadius / options_.cellSize) * (1 + 1e-9);
     const double cs = options_.cellSize;
     const double neighbourStep = options_.tolerance + cs * std::tan(options_.maxSlope * 3.14159265358979323846 / 180.0);
-    // The disc of offsets within the radius (the candidate's own cell left out), in the order the
-    // sums run (dy, then dx): the same sums, in the same order, for every candidate.
-    std::vector<std::pair<int, int>> disc;
-    for (int dy = -r; dy <= r; ++dy)
-        for (int dx = -r; dx <= r; ++dx)
-            if (double(dx * dx + dy * dy) <= r2 && (dx || dy)) disc.emplace_back(dx, dy);
-    std::vector<int> halfWidth(std::size_t(2 * r + 1), -1);  // the disc's row dy spans dx = -w..w (-1: no cell)
-    for (int dy = -r; dy <= r; ++dy)
-        for (int dx = 0; dx <= r; ++dx)
-            if (double(dx * dx + dy * dy) <= r2) halfWidth[std::size_t(dy + r)] = dx;
+    // The two discs of support: within supportRadius, and within sparseRadius where the first holds
+    // fewer than minSupport modelled cells. A disc row dy spans dx = -w..w (w = -1: no cell).
+    struct Disc {
+        int r = 0;                   ///< [cells] half the side of its square
+        double r2 = 0;               ///< [cells^2] squared radius (with a margin for rounding)
+        std::vector<int> halfWidth;  ///< per row dy + r
+        bool holds(int dx, int dy) const { return double(dx * dx + dy * dy) <= r2; }
+    };
+    auto discOf = [&](double radius) {
+        Disc d;
+        d.r = int(std::ceil(radius / cs - 1e-9)), d.r2 = (radius / cs) * (radius / cs) * (1 + 1e-9);
+        d.halfWidth.assign(std::size_t(2 * d.r + 1), -1);
+        for (int dy = -d.r; dy <= d.r; ++dy)
+            for (int dx = 0; dx <= d.r; ++dx)
+                if (d.holds(dx, dy)) d.halfWidth[std::size_t(dy + d.r)] = dx;
+        return d;
+    };
+    const Disc inner = discOf(options_.supportRadius), outer = discOf(std::max(options_.supportRadius, options_.sparseRadius));
+    const int r = outer.r;
+    // A cell that joins may change the candidates within the inner disc around it, and beyond it
+    // those whose inner support is too small (`sparse`): they are judged again in the next wave.
     // The tiles around a candidate's tile, found once per tile (candidates come tile by tile), so
     // a cell near it is an index, not a hash lookup.
     const int span = (r + kTileSize - 1) / kTileSize, side = 2 * span + 1;
@@ -224,10 +242,11 @@ void TerrainModel::build() {
                 }
         }
         /// The modelled elevations from cell (ix, iy) to the end of its tile's row, nullptr where the
-        /// tile has no evidence (within the span of the centre's tile).
+        /// tile has no evidence or the row no modelled cell (within the span of the centre's tile).
         const float* row(std::int32_t ix, std::int32_t iy) const {
             const Tile* t = tiles[std::size_t(((iy >> kTileBits) - ty + span) * side + (ix >> kTileBits) - tx + span)];
-            return t ? &t->modelled[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))] : nullptr;
+            return t && t->modelledInRow[std::size_t(iy & kTileMask)] ? &t->modelled[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))]
+                                                                       : nullptr;
         }
         /// The modelled elevation of cell (ix, iy) within the span of the centre's tile (NaN: none).
         float operator()(std::int32_t ix, std::int32_t iy) const {
@@ -235,6 +254,61 @@ void TerrainModel::build() {
             return t ? t->modelled[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))] : std::numeric_limits<float>::quiet_NaN();
         }
     } near{*this, span, side, 0, 0, false, {}};
+    // The highest minus the lowest modelled elevation within the radius of a candidate (only for
+    // a support along a line, where the plane is not defined).
+    auto spanOfDisc = [&](const Disc& d, std::int32_t cx, std::int32_t cy) {
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        for (int dy = -d.r; dy <= d.r; ++dy) {
+            const int w = d.halfWidth[std::size_t(dy + d.r)];
+            for (int dx = -w; dx <= w; ++dx) {
+                const float e = near(cx + dx, cy + dy);
+                if (!std::isnan(e)) lo = std::min(lo, e), hi = std::max(hi, e);
+            }
+        }
+        return double(hi) - double(lo);
+    };
+    // Least squares z = a + b dx + c dy over the modelled cells of a disc around (cx, cy) (centred
+    // sums), row by row (dy, then dx), each row's cells read from at most two tiles' contiguous
+    // rows; within a row the offsets' sums are integers (exact), the heights' in double. The
+    // candidate's own cell is not modelled (NaN) while it is a candidate.
+    struct Sums {
+        double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
+    };
+    // `hole`: the sums of a smaller disc already taken (its cells left out here), or nullptr.
+    auto sumsOver = [&](const Disc& d, std::int32_t cx, std::int32_t cy, const Disc* hole) {
+        Sums s;
+        for (int dy = -d.r; dy <= d.r; ++dy) {
+            const int w = d.halfWidth[std::size_t(dy + d.r)];
+            const int skip = hole && std::abs(dy) <= hole->r ? hole->halfWidth[std::size_t(dy + hole->r)] : -1;  // dx = -skip..skip taken (-1: none)
+            const std::int32_t y = cy + dy;
+            int rowN = 0, rowX = 0, rowXX = 0;
+            double rowZ = 0, rowXZ = 0;
+            for (int dx = -w; dx <= w;) {
+                if (skip >= 0 && dx == -skip) {
+                    dx = skip + 1;
+                    continue;
+                }
+                const std::int32_t x = cx + dx;
+                const int end = skip >= 0 && dx < -skip ? -skip - 1 : w;  // the run stops before the hole
+                const int run = std::min(end - dx + 1, int(kTileSize - (x & kTileMask)));  // cells left in this tile's row
+                const float* row = near.row(x, y);
+                if (!row) {
+                    dx += run;
+                    continue;
+                }
+                for (int i = 0; i < run; ++i, ++dx) {
+                    const float e = row[i];
+                    if (std::isnan(e)) continue;
+                    rowN += 1, rowX += dx, rowXX += dx * dx, rowZ += e, rowXZ += dx * double(e);
+                }
+            }
+            if (rowN == 0) continue;
+            s.n += rowN, s.sx += rowX * cs, s.sy += rowN * dy * cs, s.sz += rowZ;
+            s.sxx += rowXX * cs * cs, s.sxy += rowX * dy * cs * cs, s.syy += rowN * dy * dy * cs * cs;
+            s.sxz += rowXZ * cs, s.syz += dy * cs * rowZ;
+        }
+        return s;
+    };
     // Candidates by cell (index + 1, 0: none), per tile, for the next wave's neighbourhood search.
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> candidateAt;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
@@ -246,6 +320,7 @@ void TerrainModel::build() {
     for (std::size_t k = 0; k < pending.size(); ++k) pending[k] = k;
     std::vector<std::size_t> joined;
     std::vector<std::uint8_t> queued(candidates.size(), 0);
+    std::vector<std::uint8_t> sparse(candidates.size(), 0);  ///< its inner disc held too few modelled cells (last judged)
     while (!pending.empty()) {
         joined.clear();
         for (const std::size_t k : pending) {
@@ -259,27 +334,18 @@ void TerrainModel::build() {
                     if (!std::isnan(e)) level = std::abs(double(cand.z) - double(e)) <= neighbourStep * std::hypot(double(dx), double(dy));
                 }
             if (!level) continue;
-            // Least squares z = a + b dx + c dy over the modelled cells within the radius (centred sums).
-            double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
-            float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-            // The disc row by row (the order of `disc`: dy, then dx), each row's cells read from at
-            // most two tiles' contiguous rows.
-            for (int dy = -r; dy <= r; ++dy) {
-                const int w = halfWidth[std::size_t(dy + r)];
-                const std::int32_t y = cand.iy + dy;
-                for (int dx = -w; dx <= w;) {
-                    const std::int32_t x = cand.ix + dx;
-                    const int run = std::min(w - dx + 1, int(kTileSize - (x & kTileMask)));  // cells left in this tile's row
-                    const float* row = near.row(x, y);
-                    for (int i = 0; i < run; ++i, ++dx) {
-                        const float e = row ? row[i] : std::numeric_limits<float>::quiet_NaN();
-                        if (std::isnan(e) || (dx == 0 && dy == 0)) continue;
-                        const double px = dx * cs, py = dy * cs, z = e;
-                        n += 1, sx += px, sy += py, sz += z, sxx += px * px, sxy += px * py, syy += py * py, sxz += px * z, syz += py * z;
-                        lo = std::min(lo, e), hi = std::max(hi, e);
-                    }
-                }
+            // Least squares z = a + b dx + c dy over the modelled cells of the inner disc, or of the
+            // outer one where the inner holds too few.
+            Sums s = sumsOver(inner, cand.ix, cand.iy, nullptr);
+            const Disc* support = &inner;
+            sparse[k] = s.n < options_.minSupport;
+            if (sparse[k] && outer.r > inner.r) {  // the ring beyond the inner disc added
+                const Sums ring = sumsOver(outer, cand.ix, cand.iy, &inner);
+                s.n += ring.n, s.sx += ring.sx, s.sy += ring.sy, s.sz += ring.sz, s.sxx += ring.sxx, s.sxy += ring.sxy;
+                s.syy += ring.syy, s.sxz += ring.sxz, s.syz += ring.syz;
+                support = &outer;
             }
+            const double n = s.n, sx = s.sx, sy = s.sy, sz = s.sz, sxx = s.sxx, sxy = s.sxy, syy = s.syy, sxz = s.sxz, syz = s.syz;
             if (n < options_.minSupport) continue;
             double predicted = sz / n;  // the support's mean where its cells do not span a plane
             const double cxx = sxx - sx * sx / n, cxy = sxy - sx * sy / n, cyy = syy - sy * sy / n;
@@ -289,7 +355,7 @@ void TerrainModel::build() {
                 const double cxz = sxz - sx * sz / n, cyz = syz - sy * sz / n;
                 const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
                 predicted = sz / n - b * sx / n - c * sy / n;  // the plane at the candidate (dx = dy = 0)
-            } else if (hi - lo > options_.tolerance) {
+            } else if (spanOfDisc(*support, cand.ix, cand.iy) > options_.tolerance) {
                 continue;  // a line of cells that is not level: no prediction across it
             }
             if (!(std::abs(double(cand.z) - predicted) <= options_.tolerance)) continue;
@@ -297,26 +363,41 @@ void TerrainModel::build() {
         }
         for (const std::size_t k : joined) {
             candidates[k].cell->state = TerrainCell::Grown, candidates[k].cell->elevation = *candidates[k].modelled = candidates[k].z;
+            ++*candidates[k].modelledInRow;
             ++grown_;
         }
         // The next wave: the candidates still out within the radius of a cell that joined.
         pending.clear();
         std::fill(queued.begin(), queued.end(), 0);
         if (joined.empty()) break;
+        // The outer disc row by row, each row's candidates read from at most two tiles' rows.
         std::uint64_t lastKey = ~std::uint64_t(0);
         const std::vector<std::uint32_t>* lastTile = nullptr;
         for (const std::size_t k : joined)
-            for (const auto& [dx, dy] : disc) {
-                const std::int32_t ix = candidates[k].ix + dx, iy = candidates[k].iy + dy;
-                const std::uint64_t key = tileKey(ix >> kTileBits, iy >> kTileBits);
-                if (key != lastKey) {
-                    lastKey = key;
-                    const auto it = candidateAt.find(key);
-                    lastTile = it == candidateAt.end() ? nullptr : &it->second;
+            for (int dy = -r; dy <= r; ++dy) {
+                const int w = outer.halfWidth[std::size_t(dy + r)];
+                const int wi = std::abs(dy) <= inner.r ? inner.halfWidth[std::size_t(dy + inner.r)] : -1;  // within: every candidate
+                const std::int32_t iy = candidates[k].iy + dy;
+                for (int dx = -w; dx <= w;) {
+                    const std::int32_t ix = candidates[k].ix + dx;
+                    const int run = std::min(w - dx + 1, int(kTileSize - (ix & kTileMask)));
+                    const std::uint64_t key = tileKey(ix >> kTileBits, iy >> kTileBits);
+                    if (key != lastKey) {
+                        lastKey = key;
+                        const auto it = candidateAt.find(key);
+                        lastTile = it == candidateAt.end() ? nullptr : &it->second;
+                    }
+                    if (!lastTile) {
+                        dx += run;
+                        continue;
+                    }
+                    const std::uint32_t* row = &(*lastTile)[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
+                    for (int i = 0; i < run; ++i, ++dx) {
+                        const std::uint32_t at = row[i];
+                        if (at && !queued[at - 1] && candidates[at - 1].cell->state == TerrainCell::None && (std::abs(dx) <= wi || sparse[at - 1]))
+                            queued[at - 1] = 1, pending.push_back(at - 1);
+                    }
                 }
-                if (!lastTile) continue;
-                const std::uint32_t at = (*lastTile)[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
-                if (at && candidates[at - 1].cell->state == TerrainCell::None && !queued[at - 1]) queued[at - 1] = 1, pending.push_back(at - 1);
             }
         std::sort(pending.begin(), pending.end());
     }

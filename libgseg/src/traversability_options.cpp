@@ -41,6 +41,9 @@ const OptionTable<TraversabilityOptions>& table() {
             {"terrainTolerance", &O::terrainTolerance, "m",
              "a cell's lowest returns within this of the ground predicted from the modelled cells around it join the model, > 0"},
             {"terrainRadius", &O::terrainRadius, "m", "modelled cells within this predict a cell's ground, > 0 (used as at least one cell and at most 50)"},
+            {"terrainSparseRadius", &O::terrainSparseRadius, "m",
+             "where fewer than 3 modelled cells lie within terrainRadius (a sparse sensor's rings far out), the modelled cells within "
+             "this predict a cell's ground, > 0 (used as at least terrainRadius and at most 50 cells)"},
             {"terrainMinScans", &O::terrainMinScans, "scans", "scans that must agree on a cell before it anchors or joins the terrain model, >= 1"},
             {"terrainPointTolerance", &O::terrainPointTolerance, "m",
              "labels with the drive's context (rawlog-gseg, gseg eval on drives, Python): a non-ground point within this of its "
@@ -121,6 +124,8 @@ void TraversabilityOptions::validate() const {
         throw std::invalid_argument("TraversabilityOptions.terrainTolerance = " + std::to_string(terrainTolerance) + ": must be > 0 m");
     if (!(terrainRadius > 0 && std::isfinite(terrainRadius)))
         throw std::invalid_argument("TraversabilityOptions.terrainRadius = " + std::to_string(terrainRadius) + ": must be > 0 m");
+    if (!(terrainSparseRadius > 0 && std::isfinite(terrainSparseRadius)))
+        throw std::invalid_argument("TraversabilityOptions.terrainSparseRadius = " + std::to_string(terrainSparseRadius) + ": must be > 0 m");
     if (terrainMinScans < 1)
         throw std::invalid_argument("TraversabilityOptions.terrainMinScans = " + std::to_string(terrainMinScans) + ": must be >= 1");
     if (!(terrainPointTolerance > 0 && std::isfinite(terrainPointTolerance)))

@@ -47,7 +47,7 @@ struct Cli {
     bool replace = false;
     bool overwrite = false;  ///< -w: replace outputs that exist
     bool driveContext = true;  ///< label with the whole drive's terrain model where the rawlog has poses (#31)
-    unsigned pass1Workers = 1;  ///< scans segmented at once in pass 1 (every usable core; 1 under MPI: the ranks share the inputs)
+    unsigned workers = 1;  ///< scans segmented at once, in both passes (every usable core; 1 under MPI: the ranks share the inputs)
 };
 
 /// Exit codes (also in --help).
@@ -171,7 +171,7 @@ FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, c
         gseg::Progress pass1(gseg::tools::progressOut(), "rawlog-gseg" + (name.empty() ? "" : ": " + name) + ": the drive's terrain (pass 1 of 2)",
                              "scans");
         drive = gseg::map::driveModelOf(in, config, cli.sensors, [&](std::size_t scans, double) { pass1.update(scans, -1, ""); },
-                                        cli.pass1Workers);
+                                        cli.workers);
         if (drive.model) pass1.finish(drive.scans);
         if (drive.model) {
             options.driveModel = drive.model;
@@ -187,15 +187,12 @@ FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, c
     gseg::mrpt::RawlogSegmenter segmenter(
         config, options, [&](const mrpt::serialization::CSerializable& o) { writer.write(o); },
         [&](const gseg::mrpt::ScanReport& r) { reporter(r); });
-    gseg::mrpt::forEachRawlogEntry(in, [&](std::size_t entry, const auto& obj) {
-        segmenter.push(entry, obj);
-        return true;
-    });
-    segmenter.finish();
+    gseg::mrpt::RawlogReader reader(in);
+    segmenter.run(reader, cli.workers);
     writer.commit();
     progress.finish(reporter.scans());
 
-    const gseg::mrpt::RawlogTotals& t = segmenter.totals();
+    const gseg::mrpt::RawlogTotals t = segmenter.totals();
     char text[300];
     std::snprintf(text, sizeof text, "%zu entries, %zu scans segmented, %zu points, %.1f %% ground, %.2f ms per scan",
                   t.entries, t.scans, t.points, 100.0 * double(t.ground) / double(std::max<std::size_t>(1, t.points)),
@@ -379,8 +376,8 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
                                      "FILE", cmd);
     TCLAP::SwitchArg replace("", "replace", "drop the original scans (default: keep them)", cmd);
     TCLAP::SwitchArg noDrive("", "no-drive-context", "label each scan alone; by default, where the rawlog has a pose for "
-                             "every scan, a first pass builds the drive's terrain model (segmenting scans on every core at once) and each scan is "
-                             "labelled with it (ground the scan alone missed; traversability: driveTerrain and terrain* keys)", cmd);
+                             "every scan, a first pass builds the drive's terrain model and each scan is labelled with it (ground the scan alone "
+                             "missed; traversability: driveTerrain and terrain* keys); either way scans are segmented on every core at once", cmd);
     TCLAP::MultiArg<std::string> sensor("", "sensor", "segment only observations with this sensorLabel "
                                         "(repeatable; default all LiDAR observations)", false, "LABEL", cmd);
     TCLAP::ValueArg<std::string> frame("", "frame", "output points in the sensor frame (default) or the vehicle "

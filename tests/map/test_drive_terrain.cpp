@@ -10,6 +10,8 @@
 #include <gseg/map/drive_model.hpp>
 #include <gseg/map/terrain_layers.hpp>
 #include <gseg/mrpt/config.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
+#include <gseg/mrpt/rawlog_segmenter.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <gseg/drive_terrain.hpp>
 #include <gseg/terrain_model.hpp>
@@ -19,6 +21,9 @@
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
+
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
 #include <cmath>
@@ -164,6 +169,31 @@ TEST(TerrainModel, ByDefaultOneScanThatAgreesWithTheModelAroundJoinsButACarDoesN
     EXPECT_EQ(m.find(4, -1)->state, TerrainCell::None);
 }
 
+TEST(TerrainModel, AFarRingBeyondTheRadiusJoinsWhereTheSparseRadiusReachesIt) {
+    // A 16-ring sensor's rings far out lie metres apart: a ring of lowest returns 2.4 m beyond the
+    // modelled patch (cells 0..19, 0.2 m) has no modelled cell within terrainRadius (2 m), but
+    // the patch within sparseRadius (3 m) predicts it; the ring then grows along itself. A car's
+    // returns as far out (0.5 m up) stay out, and with sparseRadius = supportRadius so does the ring.
+    auto build = [](const TerrainOptions& o) {
+        TerrainModel m = flatPatch(1, o);
+        std::vector<TerrainSample> s;
+        for (int iy = 0; iy < 20; ++iy) s.push_back(sample(31, iy, 0, 0, 0.02f, 0.05f));   // the ring, x = 6.2 m
+        for (int iy = 25; iy < 35; ++iy) s.push_back(sample(32, iy, 0, 0, 0.5f, 1.5f));   // a car's side
+        m.add(s);
+        m.build();
+        return m;
+    };
+    const TerrainModel sparse = build(TerrainOptions());
+    EXPECT_DOUBLE_EQ(TerrainOptions().sparseRadius, 3.0);
+    for (int iy = 0; iy < 20; ++iy) EXPECT_EQ(sparse.find(31, iy)->state, TerrainCell::Grown) << iy;
+    for (int iy = 25; iy < 35; ++iy) EXPECT_EQ(sparse.find(32, iy)->state, TerrainCell::None) << iy;
+    TerrainOptions off;
+    off.sparseRadius = off.supportRadius;
+    const TerrainModel dense = build(off);
+    EXPECT_EQ(dense.grown(), 0u);
+    EXPECT_EQ(dense.find(31, 5)->state, TerrainCell::None);
+}
+
 TEST(TerrainModel, ASlopeGrowsAlongItsPlaneAndAStepDoesNot) {
     TerrainOptions o;
     TerrainModel m(o);
@@ -232,6 +262,8 @@ TEST(TerrainModel, InvalidOptionsAreRefusedByName) {
     refused([](TerrainOptions& o) { o.cellSize = 0; }, "cellSize");
     refused([](TerrainOptions& o) { o.tolerance = -1; }, "tolerance");
     refused([](TerrainOptions& o) { o.supportRadius = 1e6; }, "supportRadius");
+    refused([](TerrainOptions& o) { o.sparseRadius = 1e6; }, "sparseRadius");
+    refused([](TerrainOptions& o) { o.sparseRadius = -1; }, "sparseRadius");
     refused([](TerrainOptions& o) { o.minScans = 0; }, "minScans");
     refused([](TerrainOptions& o) { o.standHeight = 0.01; }, "standHeight");
     TraversabilityOptions t;
@@ -250,7 +282,14 @@ TEST(TerrainModel, InvalidOptionsAreRefusedByName) {
     t.resolution = 0.01, t.maxGapWidth = 1000;
     EXPECT_NO_THROW(t.validate());
     EXPECT_DOUBLE_EQ(t.terrainOptions().supportRadius, 0.5);
+    EXPECT_DOUBLE_EQ(t.terrainOptions().sparseRadius, 0.5);
     EXPECT_DOUBLE_EQ(t.gapWidth(), 0.5);
+    t = TraversabilityOptions();
+    t.terrainRadius = 4;  // the sparse radius is used as at least terrainRadius
+    EXPECT_NO_THROW(t.validate());
+    EXPECT_DOUBLE_EQ(t.terrainOptions().sparseRadius, 4.0);
+    t.terrainSparseRadius = 0;
+    EXPECT_THROW(t.validate(), std::invalid_argument);
     t = TraversabilityOptions();
     t.set("driveTerrain", "false");
     EXPECT_FALSE(t.driveTerrain);
@@ -507,19 +546,22 @@ TEST(DriveTerrain, GapFillingBridgesNeitherADitchNorAKerb) {
     auto bothLevels = [](double dx, double dy, double) { return dx * dx + dy * dy < 144; };
     const std::vector<LayerGrid> maps = drive(w, 8, {TraversabilityOptions(), off, scansOnly}, Lidar::hdl32(), 0, bothLevels);
     int filled = 0;
+    // The ditch's last column (x 21.8-22.0) holds the returns on its far wall's face, the top of
+    // which the model may take as the edge of the road beyond (terrainSparseRadius reaches across
+    // the 2 m ditch from the near side): the cells from the near edge to it stay unknown.
     for (const LayerGrid* g : {&maps[0], &maps[2]})
         for (int cy = 0; cy < g->height(); ++cy)
             for (int cx = 0; cx < g->width(); ++cx) {
                 if (g->layer("source").values[g->index(cx, cy)] != 2.0f) continue;
                 ++filled;
                 const double x = g->centreX(cx), y = g->centreY(cy);
-                EXPECT_FALSE(x > 19.9 && x < 22.1) << "the ditch was bridged at " << x << ", " << y;
+                EXPECT_FALSE(x > 19.9 && x < 21.8) << "the ditch was bridged at " << x << ", " << y;
                 if (g == &maps[2]) {  // ... and gap filling alone never joins the two levels
                     EXPECT_NEAR(g->layer("elevation").values[g->index(cx, cy)], w.ground(x, y), 0.1) << x << ", " << y;
                 }
             }
     EXPECT_GT(filled, 0);
-    for (double x = 20.1; x < 22; x += 0.2)
+    for (double x = 20.1; x < 21.8; x += 0.2)
         for (double y = -3.9; y < 3.9; y += 0.2) EXPECT_NE(at(maps[0], "class", x, y), kTraversable) << "ditch at " << x << ", " << y;
     for (float s : maps[1].layer("source").values) EXPECT_NE(s, 2.0f);
 }
@@ -646,6 +688,64 @@ TEST(DriveTerrainReal, RawlogGsegsFirstPassGivesTheSameModelOnOneOrThreeWorkers)
     one.model->forEachModelled([&](std::int32_t ix, std::int32_t iy, const gseg::TerrainCell& c) { a.insert(a.end(), {float(ix), float(iy), c.elevation}); });
     three.model->forEachModelled([&](std::int32_t ix, std::int32_t iy, const gseg::TerrainCell& c) { b.insert(b.end(), {float(ix), float(iy), c.elevation}); });
     EXPECT_TRUE(a == b) << "the same cells, the same elevations";
+}
+
+/// Drive 09 segmented by gseg::mrpt::RawlogSegmenter::run() (rawlog-gseg's second pass), with the
+/// drive's model or without, by `workers` scans at once: the output rawlog's bytes and the totals.
+struct SegmentedRawlog {
+    std::string bytes;
+    gseg::mrpt::RawlogTotals totals;
+    std::vector<std::size_t> reportEntries;
+};
+SegmentedRawlog segmentRawlog(const std::string& rawlog, const gseg::mrpt::LoadedConfig& config, const gseg::map::DriveModel* drive,
+                              unsigned workers) {
+    gseg::mrpt::RawlogSegmenterOptions options;
+    if (drive) {
+        options.driveModel = drive->model;
+        options.poseOf = [drive](std::size_t entry, const std::string& label) { return drive->poseOf(entry, label); };
+    }
+    SegmentedRawlog out;
+    mrpt::io::CMemoryStream stream;
+    auto archive = mrpt::serialization::archiveFrom(stream);
+    gseg::mrpt::RawlogSegmenter segmenter(
+            config, options, [&](const mrpt::serialization::CSerializable& o) { archive << o; },
+            [&](const gseg::mrpt::ScanReport& r) { out.reportEntries.push_back(r.entry); });
+    gseg::mrpt::RawlogReader reader(rawlog);
+    segmenter.run(reader, workers);
+    out.bytes.assign(static_cast<const char*>(stream.getRawBufferData()), std::size_t(stream.getTotalBytesCount()));
+    out.totals = segmenter.totals();
+    return out;
+}
+
+TEST(DriveTerrainReal, RawlogGsegsSecondPassGivesTheSameRawlogOnOneOrThreeWorkers) {
+    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
+    const std::string poses = gseg::test::sharedData(rel);
+    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
+    const fs::path dir = gseg::test::freshDir("drive_terrain", "pass2");
+    const std::string rawlog = (dir / "d09.rawlog").string();
+    const auto k = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + fs::path(poses).parent_path().string() +
+                                          "' -o '" + rawlog + "'");
+    ASSERT_EQ(k.status, 0) << k.output;
+    const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml");
+    const gseg::map::DriveModel drive = gseg::map::driveModelOf(rawlog, config, {}, {}, 2);
+    ASSERT_TRUE(drive.model) << drive.why;
+    for (const gseg::map::DriveModel* d : {&drive, static_cast<const gseg::map::DriveModel*>(nullptr)}) {
+        SCOPED_TRACE(d ? "with the drive's model" : "scans alone");
+        const SegmentedRawlog one = segmentRawlog(rawlog, config, d, 1), three = segmentRawlog(rawlog, config, d, 3);
+        EXPECT_EQ(one.totals.scans, 10u);
+        EXPECT_EQ(one.totals.withDrive, d ? 10u : 0u);
+        if (d) {
+            EXPECT_GT(one.totals.driveRelabelled, 1000u);
+        }
+        EXPECT_GT(one.bytes.size(), 1000000u);
+        EXPECT_TRUE(one.bytes == three.bytes) << "the same output rawlog, byte for byte";
+        EXPECT_EQ(three.totals.scans, one.totals.scans);
+        EXPECT_EQ(three.totals.entries, one.totals.entries);
+        EXPECT_EQ(three.totals.ground, one.totals.ground);
+        EXPECT_EQ(three.totals.driveRelabelled, one.totals.driveRelabelled);
+        EXPECT_EQ(three.reportEntries, one.reportEntries);
+        EXPECT_TRUE(std::is_sorted(three.reportEntries.begin(), three.reportEntries.end())) << "reports in entry order";
+    }
 }
 
 TEST(DriveTerrainReal, GsegEvalScoresEachDriveAloneAndWithItsContext) {

@@ -319,6 +319,7 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
         {"minGroundPoints", "4"}, {"maxSlope", "15"}, {"maxStep", "0.3"}, {"maxRoughness", "0.15"},
         {"maxGroundRise", "0.5"}, {"groundRiseRadius", "1.2"}, {"obstacleClearProbability", "0.2"},
         {"minObstacleHeight", "0.25"}, {"driveTerrain", "false"}, {"terrainTolerance", "0.08"}, {"terrainRadius", "1.5"},
+        {"terrainSparseRadius", "2.5"},
         {"terrainMinScans", "3"}, {"terrainPointTolerance", "0.04"}, {"terrainStandHeight", "0.4"}, {"fillGaps", "false"},
         {"maxGapWidth", "1"}};
     ASSERT_EQ(heightValues.size(), gseg::SensorHeightOptions::keys().size());

@@ -12,7 +12,8 @@
 ///   mean of those lowest returns (GroundGrid's evidence: the lowest return per cell over scans).
 ///
 /// build() grows the model from the anchors: a candidate joins where the least-squares plane of the
-/// modelled cells within `supportRadius` (at least `minSupport` of them) predicts its height within
+/// modelled cells within `supportRadius` (at least `minSupport` of them; where fewer lie there,
+/// those within `sparseRadius`) predicts its height within
 /// `tolerance` and it lies within tolerance + cellSize x tan(maxSlope) of each modelled cell among
 /// its 8 neighbours, in waves (each wave judged against the model at its start, so the result does not
 /// depend on the order cells are visited), until no candidate joins. A hedge, a car or a wall has
@@ -43,6 +44,7 @@ struct TerrainOptions {
     double cellSize = 0.2;       ///< [m] cell edge (the map route uses the map resolution)
     double tolerance = 0.1;      ///< [m] a candidate within this of the predicted ground joins the model
     double supportRadius = 2.0;  ///< [m] modelled cells within this predict a candidate's height
+    double sparseRadius = 3.0;   ///< [m] where fewer than `minSupport` modelled cells lie within supportRadius (a sparse sensor's rings far out), those within this predict (used as at least supportRadius)
     int minScans = 1;            ///< [scans] scans that must agree on a cell (anchor or candidate), >= 1
     int minAnchorPoints = 3;     ///< [points] ground points (all scans) an anchor needs, >= 1
     int minSupport = 3;          ///< [cells] modelled cells a prediction needs, >= 1

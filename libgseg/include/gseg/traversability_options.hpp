@@ -36,6 +36,7 @@ struct TraversabilityOptions {
     bool driveTerrain = true;         ///< cells without ground points get the ground the drive's terrain model grows from confident ground and the scans' lowest returns
     double terrainTolerance = 0.1;    ///< [m] a cell's lowest returns (or a point) within this of the ground predicted from the model around it join the model, > 0
     double terrainRadius = 2.0;       ///< [m] modelled cells within this predict a cell's ground, > 0 (used as at least one cell and at most 50: terrainOptions())
+    double terrainSparseRadius = 3.0; ///< [m] where fewer than 3 modelled cells lie within terrainRadius (a sparse sensor's rings far out), those within this predict, > 0 (used as at least terrainRadius and at most 50 cells: terrainOptions())
     int terrainMinScans = 1;          ///< [scans] scans that must agree on a cell before it anchors or joins the model, >= 1
     double terrainPointTolerance = 0.05;  ///< [m] labels with the drive's context (rawlog-gseg, gseg eval on drives, Python): a non-ground point within this of its cell's modelled ground becomes ground, > 0
     double terrainStandHeight = 0.3;  ///< [m] ... unless a return of any scan in its cell or the 8 around stands more than this above that ground (the foot of a wall, fence, car or bush), > terrainPointTolerance
@@ -63,6 +64,7 @@ struct TraversabilityOptions {
         gseg::TerrainOptions t;
         t.cellSize = resolution, t.tolerance = terrainTolerance, t.minScans = terrainMinScans;
         t.supportRadius = std::min(std::max(terrainRadius, resolution), 50 * resolution);  // the search window's cost is bounded
+        t.sparseRadius = std::min(std::max(terrainSparseRadius, t.supportRadius), 50 * resolution);
         t.pointTolerance = terrainPointTolerance, t.standHeight = terrainStandHeight;
         t.minAnchorPoints = minGroundPoints, t.maxSlope = maxSlope;
         return t;

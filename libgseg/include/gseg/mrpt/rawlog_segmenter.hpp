@@ -24,6 +24,8 @@ class CSerializable;
 
 namespace gseg::mrpt {
 
+class RawlogReader;
+
 /// Options of RawlogSegmenter (rawlog-gseg's command line).
 struct RawlogSegmenterOptions {
     std::vector<std::string> sensors;  ///< segment only these sensorLabels (empty: every LiDAR observation)
@@ -68,6 +70,8 @@ struct RawlogTotals {
 
 /// Turns input entries into output entries. Output order is input order; an observation-layout
 /// scan is held until the next entry shows whether its pair follows, so call finish() at the end.
+/// run() does the same to a whole rawlog with several scans segmented at once: the same output,
+/// reports and totals for any number of workers.
 class RawlogSegmenter {
 public:
     using Emit = std::function<void(const ::mrpt::serialization::CSerializable&)>;
@@ -81,23 +85,38 @@ public:
     void push(std::size_t entry, const std::shared_ptr<::mrpt::serialization::CSerializable>& object);
     /// Emits what is still held; call once after the last entry.
     void finish();
+    /// Every entry of `reader` (then finish()), read on the calling thread while `workers` scans are
+    /// segmented at once (gseg::runOrdered); `emit` and `onScan` are called in entry order, from one
+    /// thread at a time. Scans labelled with a stream's causal model (`poseOf` without
+    /// `driveModel`) are segmented one at a time, in order. Throws as RawlogReader::next(), after
+    /// emitting every entry before the bad one.
+    void run(RawlogReader& reader, unsigned workers);
 
-    const RawlogTotals& totals() const { return totals_; }
+    RawlogTotals totals() const;
 
 private:
-    struct Pending;
+    struct Item;
+    struct Segmented;
     bool wanted(const ::mrpt::obs::CObservation& obs) const;
+    /// Input order: one entry read; the items it makes ready (the held scan, then this entry
+    /// unless it is held) appended to `ready`.
+    void plan(std::size_t entry, const std::shared_ptr<::mrpt::serialization::CSerializable>& object, std::vector<Item>& ready);
+    /// Any worker: the item's scans segmented by `filter`.
+    static std::vector<Segmented> segment(gseg::GroundFilter& filter, const RawlogSegmenterOptions& options, const Item& item);
+    /// Input order: the item's reports, totals and output entries.
+    void emitItem(const Item& item, std::vector<Segmented>& segmented);
     /// The entries that replace `obs`: itself (unless replaced) and its two halves, or itself alone.
-    std::vector<std::shared_ptr<::mrpt::obs::CObservation>> process(const std::shared_ptr<::mrpt::obs::CObservation>& obs,
-                                                                    std::size_t entry);
-    void flushPending(const ::mrpt::obs::CObservation* next);
+    std::vector<std::shared_ptr<::mrpt::obs::CObservation>> outputOf(const std::shared_ptr<::mrpt::obs::CObservation>& obs,
+                                                                     std::size_t entry, Segmented& s);
 
     RawlogSegmenterOptions options_;
     Emit emit_;
     OnScan onScan_;
     gseg::GroundFilter filter_;
-    RawlogTotals totals_;
-    std::unique_ptr<Pending> pending_;
+    RawlogTotals totals_;  ///< emitItem()'s (scans, points, reports)
+    RawlogTotals read_;    ///< plan()'s (entries, LiDAR observations, halves, already split)
+    bool heightChecked_ = false;  ///< a scan with points was emitted (its height check is the run's)
+    std::unique_ptr<Item> held_;
 };
 
 /// True for a `<label>_ground` or `<label>_obstacles` point cloud (a half made by gseg).
