@@ -423,6 +423,46 @@ TEST(LayerTiles, ThePoseJumpCogIsABigTiffOfTheBlocksSeen) {
     VSIUnlink(name.c_str());
 }
 
+/// The bytes of the file at `path`.
+std::string fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Two writers (the pictures encoded on a second thread while the other files are written, as
+// rawlog-octomap does with two or more threads): the same files, byte for byte, as one writer,
+// for a map written as one grid and as tiles.
+TEST(LayerTiles, TwoWritersWriteTheSameFilesAsOne) {
+    const fs::path dir = gseg::test::freshDir("layer_tiles", "writers");
+    TraversabilityMap map;
+    insertScan(map, 0, 0);
+    insertScan(map, 30, 0);
+    for (const int tiledAbove : {4096, 100}) {
+        MapOutputOptions how;
+        how.tiledAbove = tiledAbove;
+        const std::string suffix = std::to_string(tiledAbove);
+        fs::create_directories(dir / ("one" + suffix));
+        fs::create_directories(dir / ("two" + suffix));
+        how.writers = 1;
+        const std::vector<std::string> one = map.write((dir / ("one" + suffix) / "m").string(), how);
+        how.writers = 2;
+        const std::vector<std::string> two = map.write((dir / ("two" + suffix) / "m").string(), how);
+        ASSERT_EQ(one.size(), two.size());
+        EXPECT_GE(one.size(), 17u);
+        for (std::size_t i = 0; i < one.size(); ++i) {
+            EXPECT_EQ(fs::path(one[i]).filename(), fs::path(two[i]).filename());
+            const std::string a = fileBytes(one[i]);
+            EXPECT_FALSE(a.empty()) << one[i];
+            EXPECT_TRUE(a == fileBytes(two[i])) << two[i];
+        }
+    }
+    MapOutputOptions bad;
+    bad.writers = 3;
+    EXPECT_THROW(bad.validate(), std::invalid_argument);
+    bad.writers = 0;
+    EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(LayerTiles, ABigMapIsWrittenAsTilesWithPicturesOfAnOverviewASmallOneAsBefore) {
     const fs::path dir = gseg::test::freshDir("layer_tiles", "switch");
     TraversabilityMap map;
