@@ -131,6 +131,9 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         if (maxMemory.isSet()) c.maxMemory = gseg::tools::parseMemorySize("--max-memory", maxMemory.getValue());
         c.mpiTimeout = line.mpiTimeout();
         c.outputs.tiles = tiles.getValue();
+        // After the last scan the workers are idle: with two or more, a second thread encodes the
+        // pictures while the other files are written (--threads 1: one file at a time).
+        c.outputs.writers = c.threads >= 2 ? 2 : 1;
         if (tiledAbove.isSet()) c.outputs.tiledAbove = int(parseCount("--tiled-above", tiledAbove.getValue(), 1u << 20));
         c.outputs.validate();
         c.poses.input = c.input;

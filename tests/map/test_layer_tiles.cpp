@@ -13,11 +13,13 @@
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 
+#include <cpl_vsi.h>
 #include <gdal.h>
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -277,6 +279,190 @@ TEST(LayerTiles, TheLayersAreOneCogWhoseCellsAndOverviewsGdalReads) {
     GDALClose(ds);
 }
 
+/// Two layers with a patch of cells around (0, 0) and one around (far, far): a box of far + 1
+/// cells a side, empty between them.
+LayerTiles twoPatches(std::int64_t far) {
+    LayerTiles t = twoLayers(0.2);
+    for (std::int64_t i = 0; i < 100; ++i) {
+        t.at(0, i, 2 * i) = float(i) * 0.25f, t.at(1, i, 2 * i) = 1;
+        t.at(0, far - i, far - 3 * i) = -float(i), t.at(1, far - i, far - 3 * i) = 2;
+    }
+    t.at(0, 5, 0) = std::numeric_limits<float>::infinity();
+    t.setBox(0, 0, far, far);
+    return t;
+}
+
+/// The value of layer band `b` at cell (ix, iy) of the COG at `path` (gt: its geotransform).
+float cogCell(GDALDatasetH ds, int b, std::int64_t ix, std::int64_t iy, double res) {
+    double gt[6];
+    EXPECT_EQ(GDALGetGeoTransform(ds, gt), CE_None);
+    const int col = int(std::lround(((double(ix) + 0.5) * res - gt[0]) / gt[1] - 0.5));
+    const int row = int(std::lround(((double(iy) + 0.5) * res - gt[3]) / gt[5] - 0.5));
+    float v = 0;
+    EXPECT_EQ(GDALRasterIO(GDALGetRasterBand(ds, b), GF_Read, col, row, 1, 1, &v, 1, 1, GDT_Float32, 0, 0), CE_None);
+    return v;
+}
+
+// #35: the COG of a sparse box (a pose jump) has the blocks with cells and nothing else: the
+// empty blocks are absent from the file (GDAL reports them empty) and read as nodata (NaN), at
+// full resolution and in the overviews; and the file is exactly what GDAL's COG driver writes
+// from it (the driver that wrote the layers before, reading every block of the box: 15 s for a
+// pose jump of 6 km, where gseg now copies the compressed blocks it wrote).
+TEST(LayerTiles, TheCogOfASparseBoxLeavesItsEmptyBlocksOutAndIsWhatGdalsCogDriverWrites) {
+    const LayerTiles t = twoPatches(3000);
+    const std::string bytes = gseg::map::encodeLayersCog(t, 256);
+    GDALAllRegister();
+    const std::string name = "/vsimem/test_layer_tiles_sparse.tif";
+    VSILFILE* f = VSIFileFromMemBuffer(name.c_str(), reinterpret_cast<GByte*>(const_cast<char*>(bytes.data())), vsi_l_offset(bytes.size()), FALSE);
+    ASSERT_NE(f, nullptr);
+    VSIFCloseL(f);
+    GDALDatasetH ds = GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+    ASSERT_NE(ds, nullptr);
+    EXPECT_STREQ(GDALGetMetadataItem(ds, "LAYOUT", "IMAGE_STRUCTURE"), "COG");
+    EXPECT_EQ(bytes.substr(0, 4), std::string("II*\0", 4)) << "a classic TIFF: under 2 GB of values";
+    const int levels = gseg::map::cogOverviewCount(t.boxWidth(), t.boxHeight(), 256);
+    EXPECT_EQ(levels, 4);
+    const int w = GDALGetRasterXSize(ds), h = GDALGetRasterYSize(ds);
+    EXPECT_EQ(w, 3008);  // 3001 cells widened to whole cells of the coarsest overview (16)
+    EXPECT_EQ(h, 3008);
+    // The cells read back, +inf as kNoLimit; a cell between the patches is nodata.
+    EXPECT_EQ(cogCell(ds, 1, 40, 80, 0.2), 10.0f);
+    EXPECT_EQ(cogCell(ds, 2, 40, 80, 0.2), 1.0f);
+    EXPECT_EQ(cogCell(ds, 1, 3000 - 7, 3000 - 21, 0.2), -7.0f);
+    EXPECT_EQ(cogCell(ds, 2, 3000 - 7, 3000 - 21, 0.2), 2.0f);
+    EXPECT_EQ(cogCell(ds, 1, 5, 0, 0.2), gseg::map::kNoLimit);
+    EXPECT_TRUE(std::isnan(cogCell(ds, 1, 1500, 1500, 0.2)));
+    for (int b = 1; b <= 2; ++b) {
+        GDALRasterBandH band = GDALGetRasterBand(ds, b);
+        int hasNodata = 0;
+        EXPECT_TRUE(std::isnan(GDALGetRasterNoDataValue(band, &hasNodata)));
+        EXPECT_TRUE(hasNodata);
+        ASSERT_EQ(GDALGetOverviewCount(band), levels);
+        for (int k = -1; k < levels; ++k) {
+            GDALRasterBandH level = k < 0 ? band : GDALGetOverview(band, k);
+            const int lw = GDALGetRasterBandXSize(level), lh = GDALGetRasterBandYSize(level);
+            int bx = 0, by = 0;
+            GDALGetBlockSize(level, &bx, &by);
+            EXPECT_EQ(bx, 256);
+            EXPECT_EQ(by, 256);
+            int empty = 0, withData = 0;
+            std::vector<float> v(256 * 256);
+            for (int r = 0; r < lh; r += 256)
+                for (int c = 0; c < lw; c += 256) {
+                    const int bw = std::min(256, lw - c), bh = std::min(256, lh - r);
+                    if (GDALGetDataCoverageStatus(level, c, r, bw, bh, 0, nullptr) != GDAL_DATA_COVERAGE_STATUS_EMPTY) {
+                        ++withData;
+                        continue;
+                    }
+                    ++empty;
+                    ASSERT_EQ(GDALRasterIO(level, GF_Read, c, r, bw, bh, v.data(), bw, bh, GDT_Float32, 0, 0), CE_None);
+                    EXPECT_TRUE(std::all_of(v.begin(), v.begin() + bw * bh, [](float x) { return std::isnan(x); }));
+                }
+            if (k < 0) {
+                EXPECT_GE(withData, 2) << "the blocks of the tiles around each patch";
+                EXPECT_LE(withData, 6);
+                EXPECT_EQ(empty + withData, 12 * 12);
+            } else {
+                EXPECT_GE(withData, 1);
+            }
+        }
+    }
+    GDALClose(ds);
+    // GDAL's COG driver, given this COG with its overviews, writes the same bytes.
+    const char* options[] = {"COMPRESS=DEFLATE", "PREDICTOR=YES", "BLOCKSIZE=256", "OVERVIEWS=FORCE_USE_EXISTING", "SPARSE_OK=TRUE",
+                             "BIGTIFF=IF_SAFER", nullptr};
+    ds = GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+    ASSERT_NE(ds, nullptr);
+    const std::string copy = "/vsimem/test_layer_tiles_sparse_copy.tif";
+    GDALDatasetH c = GDALCreateCopy(GDALGetDriverByName("COG"), copy.c_str(), ds, FALSE, const_cast<char**>(options), nullptr, nullptr);
+    ASSERT_NE(c, nullptr);
+    GDALClose(c);
+    GDALClose(ds);
+    vsi_l_offset size = 0;
+    const GByte* data = VSIGetMemFileBuffer(copy.c_str(), &size, FALSE);
+    ASSERT_NE(data, nullptr);
+    const std::string gdalBytes(reinterpret_cast<const char*>(data), std::size_t(size));
+    VSIUnlink(copy.c_str());
+    VSIUnlink(name.c_str());
+    EXPECT_EQ(gdalBytes.size(), bytes.size());
+    EXPECT_TRUE(gdalBytes == bytes) << "byte for byte";
+}
+
+// #35: a pose jump's box (21760 cells a side, 3.8 GB of two float layers): a BigTIFF COG of a
+// few blocks, the rest absent and read as nodata.
+TEST(LayerTiles, ThePoseJumpCogIsABigTiffOfTheBlocksSeen) {
+    const LayerTiles t = twoPatches(21700);
+    const std::string bytes = gseg::map::encodeLayersCog(t);
+    EXPECT_EQ(bytes.substr(0, 4), std::string("II+\0", 4)) << "BigTIFF: over 2 GB of values, as GDAL's BIGTIFF=IF_SAFER";
+    EXPECT_LT(bytes.size(), 200000u) << "the blocks seen";
+    GDALAllRegister();
+    const std::string name = "/vsimem/test_layer_tiles_jump.tif";
+    VSILFILE* f = VSIFileFromMemBuffer(name.c_str(), reinterpret_cast<GByte*>(const_cast<char*>(bytes.data())), vsi_l_offset(bytes.size()), FALSE);
+    ASSERT_NE(f, nullptr);
+    VSIFCloseL(f);
+    GDALDatasetH ds = GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+    ASSERT_NE(ds, nullptr);
+    EXPECT_STREQ(GDALGetMetadataItem(ds, "LAYOUT", "IMAGE_STRUCTURE"), "COG");
+    EXPECT_EQ(GDALGetRasterXSize(ds), 21760);
+    EXPECT_EQ(cogCell(ds, 1, 40, 80, 0.2), 10.0f);
+    EXPECT_EQ(cogCell(ds, 2, 21700 - 7, 21700 - 21, 0.2), 2.0f);
+    EXPECT_TRUE(std::isnan(cogCell(ds, 1, 10000, 10000, 0.2)));
+    GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+    EXPECT_EQ(GDALGetOverviewCount(band), 6);
+    double percent = 0;
+    EXPECT_EQ(GDALGetDataCoverageStatus(band, 0, 0, 21760, 21760, 0, &percent) & GDAL_DATA_COVERAGE_STATUS_EMPTY, GDAL_DATA_COVERAGE_STATUS_EMPTY);
+    EXPECT_LT(percent, 1.0) << "2 blocks of 1849";
+    GDALRasterBandH coarsest = GDALGetOverview(band, 5);
+    std::vector<float> v(std::size_t(GDALGetRasterBandXSize(coarsest)) * std::size_t(GDALGetRasterBandYSize(coarsest)));
+    ASSERT_EQ(GDALRasterIO(coarsest, GF_Read, 0, 0, GDALGetRasterBandXSize(coarsest), GDALGetRasterBandYSize(coarsest), v.data(),
+                           GDALGetRasterBandXSize(coarsest), GDALGetRasterBandYSize(coarsest), GDT_Float32, 0, 0),
+              CE_None);
+    EXPECT_GT(std::count_if(v.begin(), v.end(), [](float x) { return !std::isnan(x); }), 0);
+    EXPECT_GT(std::count_if(v.begin(), v.end(), [](float x) { return std::isnan(x); }), 1000);
+    GDALClose(ds);
+    VSIUnlink(name.c_str());
+}
+
+/// The bytes of the file at `path`.
+std::string fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Two writers (the pictures encoded on a second thread while the other files are written, as
+// rawlog-octomap does with two or more threads): the same files, byte for byte, as one writer,
+// for a map written as one grid and as tiles.
+TEST(LayerTiles, TwoWritersWriteTheSameFilesAsOne) {
+    const fs::path dir = gseg::test::freshDir("layer_tiles", "writers");
+    TraversabilityMap map;
+    insertScan(map, 0, 0);
+    insertScan(map, 30, 0);
+    for (const int tiledAbove : {4096, 100}) {
+        MapOutputOptions how;
+        how.tiledAbove = tiledAbove;
+        const std::string suffix = std::to_string(tiledAbove);
+        fs::create_directories(dir / ("one" + suffix));
+        fs::create_directories(dir / ("two" + suffix));
+        how.writers = 1;
+        const std::vector<std::string> one = map.write((dir / ("one" + suffix) / "m").string(), how);
+        how.writers = 2;
+        const std::vector<std::string> two = map.write((dir / ("two" + suffix) / "m").string(), how);
+        ASSERT_EQ(one.size(), two.size());
+        EXPECT_GE(one.size(), 17u);
+        for (std::size_t i = 0; i < one.size(); ++i) {
+            EXPECT_EQ(fs::path(one[i]).filename(), fs::path(two[i]).filename());
+            const std::string a = fileBytes(one[i]);
+            EXPECT_FALSE(a.empty()) << one[i];
+            EXPECT_TRUE(a == fileBytes(two[i])) << two[i];
+        }
+    }
+    MapOutputOptions bad;
+    bad.writers = 3;
+    EXPECT_THROW(bad.validate(), std::invalid_argument);
+    bad.writers = 0;
+    EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(LayerTiles, ABigMapIsWrittenAsTilesWithPicturesOfAnOverviewASmallOneAsBefore) {
     const fs::path dir = gseg::test::freshDir("layer_tiles", "switch");
     TraversabilityMap map;
@@ -362,8 +548,8 @@ TEST(LayerTiles, ATenKilometreLoopMapsUnderFourGigabytesOfAddressSpace) {
     const Eigen::Vector2d corners[5] = {{-5000, -5000}, {5000, -5000}, {5000, 5000}, {-5000, 5000}, {-5000, -5000}};
     for (int side = 0; side < 4; ++side)
         for (int k = 0; k < 20; ++k) loop.push_back(corners[side] + (corners[side + 1] - corners[side]) * (k / 20.0));
-    // At 0.5 m: a box of 20000 cells a side (13 GB as one grid of 8 float layers). GDAL's COG
-    // driver reads every block of the box once, so the writing time follows the box's area.
+    // At 0.5 m: a box of 20000 cells a side (13 GB as one grid of 8 float layers), written as a
+    // COG of the blocks seen.
     gseg::map::TraversabilityOptions coarse;
     coarse.resolution = 0.5;
     long peakMb = 0;

@@ -191,6 +191,10 @@ TEST(MemoryEstimate, TheLayerBoxSpansTheGroundCellsAndTheObstacleColumnsOfEveryS
     EXPECT_GE(gseg::map::layerBytes(0, 1000), 32 * 1000);
     EXPECT_GT(gseg::map::layerBytes(500, 30000.0 * 30000.0), 40e9);
     EXPECT_LT(gseg::map::layerBytes(500, 2048.0 * 2048.0 + 1024.0 * 1024.0), 1e9);
+    // Two writers: a layer picture beside the GeoTIFF (a page of 640 to 2048 pixels a side).
+    EXPECT_GE(gseg::map::layerBytes(0, 1000, 2) - gseg::map::layerBytes(0, 1000, 1), 640.0 * 640.0 * 3);
+    EXPECT_LE(gseg::map::layerBytes(0, 1e8, 2) - gseg::map::layerBytes(0, 1e8, 1), 2048.0 * 2048.0 * 16 + 10e6);
+    EXPECT_GE(gseg::map::layerBytes(0, 1e8, 2) - gseg::map::layerBytes(0, 1e8, 1), 2048.0 * 2048.0 * 3);
     // The whole run's peak: more than while integrating, by the writing and the layers.
     const gseg::map::MemoryEstimate e = gseg::map::estimateMemory(gseg::map::rayFootprint(
         gseg::PointCloudView(spinningScan().data(), spinningScan().size() / 3), Eigen::Vector3d::Zero(), {}));

@@ -126,8 +126,17 @@ constexpr double kBytesPerTileLayer = LayerTiles::kTileBytes * 1.1;
 // costmap and its PGM (2 B).
 constexpr double kBytesPerDenseCell = 32 + 32 + 4 + 2;
 
-double layerBytes(double tiles, double denseCells) {
-    return std::max(14 * kBytesPerTileLayer * tiles, 8 * kBytesPerTileLayer * tiles + kBytesPerDenseCell * denseCells);
+// A layer picture being encoded on the second writer (MapOutputOptions::writers 2) while the
+// GeoTIFF is: per pixel of its map area the canvas (3 B), the block values and colours (8 B) and
+// the PNG's share, and the second thread's malloc arena. (The top-down picture is encoded beside
+// the voxel maps' files, whose memory the estimate already adds to the layers'.) Measured on the
+// 60-scan drive (0.27 M cells): the peak with writing 273-277 MB with one writer, 286-288 MB with two.
+constexpr double kBytesPerPicturePixel = 16;
+constexpr double kSecondWriterBytes = 8e6;
+
+double layerBytes(double tiles, double denseCells, int writers) {
+    const double picture = writers >= 2 ? kSecondWriterBytes + kBytesPerPicturePixel * std::clamp(denseCells, 640.0 * 640.0, 2048.0 * 2048.0) : 0;
+    return std::max(14 * kBytesPerTileLayer * tiles, 8 * kBytesPerTileLayer * tiles + kBytesPerDenseCell * denseCells + picture);
 }
 
 // Calibration (peak RSS of rawlog-octomap with writing against the one before writing, sequence

@@ -104,7 +104,7 @@ bool MemoryGuard::tiled() const { return outputs_.tiled(std::int64_t(box_.cellsX
 double MemoryGuard::layerBytes() const {
     const MapOutputOptions& o = outputs_;
     const double dense = tiled() ? double(o.pictureSide) * o.pictureSide + double(o.costmapTile) * o.costmapTile : box_.cells();
-    return gseg::map::layerBytes(box_.tiles(), dense);
+    return gseg::map::layerBytes(box_.tiles(), dense, o.writers);
 }
 
 std::string MemoryGuard::advice() const {

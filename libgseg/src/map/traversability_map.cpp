@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -351,6 +352,7 @@ void MapOutputOptions::validate() const {
     if (tiledAbove < 1) throw std::invalid_argument("map outputs: tiledAbove must be at least 1 cell");
     if (costmapTile < 64 || costmapTile > 16384) throw std::invalid_argument("map outputs: costmapTile must be 64 to 16384 cells");
     if (pictureSide < 16) throw std::invalid_argument("map outputs: pictureSide must be at least 16 cells");
+    if (writers < 1 || writers > 2) throw std::invalid_argument("map outputs: writers must be 1 or 2");
 }
 
 std::vector<std::string> TraversabilityMap::write(const std::string& prefix, const MapOutputOptions& how) const {
@@ -376,6 +378,15 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix, con
     // One file at a time, straight to its temporary: the peak memory is the map plus one file.
     gseg::io::AtomicFileSet files(paths);
     const double res = configured_->getResolution();
+    // With two writers the pictures are encoded on a second thread (from data of their own: the
+    // top-down grid, the layers' grid) while this one writes the voxel maps, the scene, the costmap
+    // and the GeoTIFF; the files are written in the same order, with the same bytes.
+    const bool second = how.writers >= 2;
+    std::string topDownPng;
+    auto encodeTopDown = [this, &topDownPng](const TopDownGrid& top) { topDownPng = encodeTopDownPng(top, path_, pictureTitle()); };
+    std::future<void> topDownDone;
+    if (second) topDownDone = std::async(std::launch::async, [encodeTopDown, top = topDown()] { encodeTopDown(top); });
+    else encodeTopDown(topDown());
     files[0].write([&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
     files[1].write([&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
     files[2].write([&](std::ostream& out) {
@@ -384,8 +395,9 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix, con
         const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
         voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
     });
-    const std::string png = encodeTopDownPng(topDown(), path_, pictureTitle());
-    files[3].write(png.data(), png.size());
+    if (topDownDone.valid()) topDownDone.get();
+    files[3].write(topDownPng.data(), topDownPng.size());
+    topDownPng = std::string();
     const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
     const std::string ply = mapPlyBytes(v, res);
     files[4].write(ply.data(), ply.size());
@@ -394,6 +406,19 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix, con
     // A small map: one dense grid of its box; a tiled one: an overview for the scene and pictures.
     const int factor = tiled ? int((std::max(tiles.boxWidth(), tiles.boxHeight()) + how.pictureSide - 1) / how.pictureSide) : 1;
     const LayerGrid grid = tiled ? tiles.overview(factor).dense() : tiles.dense();
+    const std::vector<std::string>& names = terrainLayerNames();
+    auto encodeLayer = [&](std::size_t i) {
+        LayerPictureOptions o;
+        o.title = pictureTitle();
+        if (names[i] == "cost") o.min = 0, o.max = 100;
+        return encodeLayerPng(grid, names[i], o);
+    };
+    std::vector<std::string> layerPngs(names.size());
+    std::future<void> layersDone;
+    if (second)
+        layersDone = std::async(std::launch::async, [&] {
+            for (std::size_t i = 0; i < names.size(); ++i) layerPngs[i] = encodeLayer(i);
+        });
     detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid, v.groundUnderObstacles);
     if (!tiled) {
         writeCostmap(files, 6, costmapOf(grid));
@@ -409,14 +434,14 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix, con
         const std::string bytes = encodeLayersCog(tiles);
         files[tif].write(bytes.data(), bytes.size());
     }
-    LayerPictureOptions picture;
-    picture.title = pictureTitle();
-    for (std::size_t i = 0; i < terrainLayerNames().size(); ++i) {
-        const std::string& name = terrainLayerNames()[i];
-        LayerPictureOptions o = picture;
-        if (name == "cost") o.min = 0, o.max = 100;
-        const std::string png = encodeLayerPng(grid, name, o);
-        files[tif + 1 + i].write(png.data(), png.size());
+    if (layersDone.valid()) {
+        layersDone.get();
+        for (std::size_t i = 0; i < names.size(); ++i) files[tif + 1 + i].write(layerPngs[i].data(), layerPngs[i].size());
+    } else {
+        for (std::size_t i = 0; i < names.size(); ++i) {  // one at a time
+            const std::string png = encodeLayer(i);
+            files[tif + 1 + i].write(png.data(), png.size());
+        }
     }
     files.commit();
     return files.paths();

@@ -39,7 +39,8 @@ constexpr float kNoLimit = 1000.0f;
 /// std::runtime_error with GDAL's message if GDAL fails.
 std::string encodeLayersGeoTiff(const LayerGrid& grid);
 
-/// The layers of a big map (#35) as one Cloud-Optimized GeoTIFF (GDAL's COG driver): the bands,
+/// The layers of a big map (#35) as one Cloud-Optimized GeoTIFF (the bytes of GDAL's COG driver,
+/// written from the blocks with cells only: src/map/cog_layout.hpp): the bands,
 /// names, units, nodata, +-inf and CRS as encodeLayersGeoTiff(), in blocks of `block` x `block`
 /// cells (blocks without a cell of a tile are left out: sparse), with cogOverviewCount()
 /// overviews of factor 2, 4, 8, ... computed from the tiles (LayerTiles::overview()). The image

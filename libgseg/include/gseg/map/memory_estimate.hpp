@@ -92,7 +92,9 @@ private:
 /// layers of their computation, or, while written, the 8 layers' tiles and `denseCells` cells of
 /// dense grids written from them (the box of a map written untiled: the grid, GDAL's copy for the
 /// GeoTIFF, the costmap; a tiled map: its overview and one costmap tile), whichever is more.
-double layerBytes(double tiles, double denseCells);
+/// With `writers` 2 (MapOutputOptions::writers) a layer picture is encoded beside them: its page
+/// (the grid enlarged to 640 pixels a side or reduced to 2048) and the thread's allocator arena.
+double layerBytes(double tiles, double denseCells, int writers = 1);
 
 /// [bytes] What this process may still allocate: the smallest of the machine's available memory
 /// (MemAvailable of /proc/meminfo), RLIMIT_AS less the address space in use and RLIMIT_DATA less
