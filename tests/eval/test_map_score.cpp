@@ -5,6 +5,7 @@
 #include <gseg/eval/map_score.hpp>
 
 #include <support/child.hpp>
+#include <support/output_files.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -357,7 +358,7 @@ ToolCase toolCase(const std::string& name) {
     RosMap m = RosMap::unknown(10, 6, 0.2, 0.0, 0.0);
     for (int cx = 0; cx < 5; ++cx) m.value(cx, 0) = RosMap::kFree;
     for (int cx = 0; cx < 10; ++cx) m.value(cx, 3) = RosMap::kOccupied;
-    gseg::io::writeRosMap((c.dir / "map").string(), m);
+    gseg::test::writeRosMap((c.dir / "map").string(), m);
     c.map = c.dir / "map.yaml";
     return c;
 }
@@ -524,11 +525,11 @@ TEST_P(SharedDrive, SameFiguresAsScoreMapPy) {
                 if (it != t.groundHeight.end() && k < 6) e.values[layers.index(cx, cy)] = float(it->second) + errors[k];
                 else if (k == 6) e.values[layers.index(cx, cy)] = -1.7f;  // over cells without labelled ground
             }
-        gseg::map::writeLayersGeoTiff(layersPath, layers);
+        gseg::test::writeBytes(layersPath, gseg::map::encodeLayersGeoTiff(layers));
     }
     for (TestMap& m : maps) {
         if (m.name == "perturbed_truth_elevation") args += " --elevation '" + layersPath + "'";
-        gseg::io::writeRosMap((dir / m.name).string(), m.map);
+        gseg::test::writeRosMap((dir / m.name).string(), m.map);
         m.map = gseg::io::readRosMap((dir / (m.name + ".yaml")).string());  // what score_map.py reads
         if (m.clearance != clearance) args += " --clearance " + std::to_string(m.clearance), clearance = m.clearance;
         args += " '" + (dir / (m.name + ".yaml")).string() + "'";
