@@ -104,7 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (!finite) GSEG_FUZZ_CHECK(r.labels[i] == 0);
     }
     GSEG_FUZZ_CHECK(ground == r.numGround);
-    GSEG_FUZZ_CHECK(nonFinite == first.nonFinitePoints);
+    GSEG_FUZZ_CHECK(nonFinite == r.numNonFinite);
     for (std::uint32_t i : r.belowGround) GSEG_FUZZ_CHECK(i < cloud.size() && r.labels[i] == 0);
     GSEG_FUZZ_CHECK(segmenter.segment(cloud).result.labels == r.labels);                   // the same object again
     GSEG_FUZZ_CHECK(gseg::mrpt::ScanSegmenter(cfg).segment(cloud).result.labels == r.labels);  // a new one

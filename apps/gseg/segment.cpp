@@ -49,8 +49,8 @@ int run(const Cli& cli) {
     say("%s\n", scan.description.c_str());
     say("points %zu, ground %zu (%.1f %%), non-ground %zu; segmentation %.2f ms\n", cloud.size(), r.numGround,
                 100.0 * double(r.numGround) / double(std::max<std::size_t>(1, cloud.size())), r.numNonGround, r.totalMs);
-    if (s.nonFinitePoints)
-        say("%zu non-finite point(s) (NaN or infinite coordinates) labelled non-ground\n", s.nonFinitePoints);
+    if (r.numNonFinite)
+        say("%zu non-finite point(s) (NaN or infinite coordinates) labelled non-ground\n", r.numNonFinite);
     printPhase("phase I ", r.phase1);
     printPhase("phase II", r.phase2);
 

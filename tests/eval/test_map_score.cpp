@@ -1,10 +1,12 @@
-// The map scorer (gseg/eval/map_score.hpp) and `gseg eval-map`: hand-placed drives with known
-// answers, bad input, and the same figures as ../shared/tools/score_map.py on the shared drives.
+// The map scorer (gseg/eval/map_score.hpp): hand-placed drives with known answers, bad input, and
+// the same figures as ../shared/tools/score_map.py on the shared drives (the scorer, and `gseg
+// eval-map` end to end). The tool's own tests: tests/tools/test_tool_eval_map.cpp.
 #include <gseg/io/ros_map.hpp>
 #include <gseg/map/layer_file.hpp>
 #include <gseg/eval/map_score.hpp>
 
 #include <support/child.hpp>
+#include <support/output_files.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -332,87 +334,12 @@ TEST(MapScoreBadInput, NoScansOrAScanNotNamedByItsFrameIsRefused) {
     EXPECT_NE(readError(named / "nowhere").find("velodyne: no such folder"), std::string::npos);
 }
 
-// --- The tool ------------------------------------------------------------------------------------
+// --- The shared drives against score_map.py -----------------------------------------------------
 
+/// `gseg eval-map` with `args` (shell words): exit status and stdout + stderr.
 gseg::test::CommandResult evalMap(const std::string& args) {
     return gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval-map " + args + " 2>&1");
 }
-
-/// The rows drive with a map: cells 0-4 of the traversable row free, the obstacle row occupied.
-struct ToolCase {
-    fs::path dir, drive, map;
-};
-ToolCase toolCase(const std::string& name) {
-    ToolCase c;
-    c.drive = writeDrive(name + "_drive", {[] {
-                             std::vector<Pt> pts;
-                             for (int cx = 0; cx < 10; ++cx) {
-                                 addCell(pts, cx, 0, kRoad, 3, -1.7f);
-                                 addCell(pts, cx, 3, kRoad, 3, -1.7f);
-                                 addCell(pts, cx, 3, kBuilding, 2, -1.0f);
-                             }
-                             return pts;
-                         }()});
-    c.dir = gseg::test::freshDir("map_score", name);
-    RosMap m = RosMap::unknown(10, 6, 0.2, 0.0, 0.0);
-    for (int cx = 0; cx < 5; ++cx) m.value(cx, 0) = RosMap::kFree;
-    for (int cx = 0; cx < 10; ++cx) m.value(cx, 3) = RosMap::kOccupied;
-    gseg::io::writeRosMap((c.dir / "map").string(), m);
-    c.map = c.dir / "map.yaml";
-    return c;
-}
-
-TEST(EvalMapTool, PrintsTheMapBesideTheBaselineAndWritesTheReport) {
-    const ToolCase c = toolCase("tool_report");
-    const auto r = evalMap("'" + c.drive.string() + "' '" + c.map.string() + "' --report '" + (c.dir / "out/r").string() + "'");
-    ASSERT_EQ(r.status, 0) << r.output;
-    EXPECT_NE(r.output.find("traversable recall                  50.00       100.00"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("obstacle recall                    100.00       100.00"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("cells scored                           20           20"), std::string::npos) << r.output;
-    const std::string csv = gseg::test::readText((c.dir / "out/r_map_score.csv").string());
-    EXPECT_NE(csv.find("\nmap,100.0000,50.0000,66.6667,100.0000,0.0000,0.0000,20,15,5,5,0,10,0,0,0,,,\n"), std::string::npos) << csv;
-    EXPECT_NE(csv.find("\nheight_band,100.0000,100.0000,100.0000,100.0000,0.0000,0.0000,20,20,"), std::string::npos) << csv;
-    const std::string png = gseg::test::readText((c.dir / "out/r_map_cells.png").string());
-    ASSERT_GT(png.size(), 8u);
-    EXPECT_EQ(png.substr(1, 3), "PNG");
-    // The same inputs by name, quietly: nothing printed.
-    const auto q = evalMap("-i '" + c.drive.string() + "' --map '" + c.map.string() + "' -q");
-    EXPECT_EQ(q.status, 0) << q.output;
-    EXPECT_EQ(q.output, "");
-}
-
-TEST(EvalMapTool, BadInputIsOneLineNamingTheFileAndTheReportIsKept) {
-    const ToolCase c = toolCase("tool_bad");
-    const std::string report = (c.dir / "r").string();
-    ASSERT_EQ(evalMap("'" + c.drive.string() + "' '" + c.map.string() + "' -q --report '" + report + "'").status, 0);
-    const std::string before = gseg::test::readText(report + "_map_score.csv");
-    ASSERT_FALSE(before.empty());
-    // An existing report without -w: bad usage, before any work.
-    const auto again = evalMap("'" + c.drive.string() + "' '" + c.map.string() + "' --report '" + report + "'");
-    EXPECT_EQ(again.status, 2) << again.output;
-    // An unreadable map, a label file that does not match its scan: exit 1, the old report kept.
-    writeText(c.dir / "broken.yaml", "image: broken.pgm\nresolution: 0.2\n");
-    const auto map = evalMap("'" + c.drive.string() + "' '" + (c.dir / "broken.yaml").string() + "' -w --report '" + report + "'");
-    EXPECT_EQ(map.status, 1) << map.output;
-    EXPECT_NE(map.output.find("gseg eval-map: " + (c.dir / "broken.yaml").string()), std::string::npos) << map.output;
-    EXPECT_EQ(std::count(map.output.begin(), map.output.end(), '\n'), 1) << map.output;
-    const std::uint32_t one = 40;
-    writeBytes(c.drive / "labels" / "000000.label", &one, 4);
-    const auto labels = evalMap("'" + c.drive.string() + "' '" + c.map.string() + "' -w -q --report '" + report + "'");
-    EXPECT_EQ(labels.status, 1) << labels.output;
-    EXPECT_NE(labels.output.find("000000.label: 1 labels for"), std::string::npos) << labels.output;
-    EXPECT_EQ(gseg::test::readText(report + "_map_score.csv"), before);
-    EXPECT_EQ(gseg::test::entriesContaining(c.dir.string(), ".tmp"), "");
-    // Usage errors; --help and --version.
-    EXPECT_EQ(evalMap("'" + c.drive.string() + "'").status, 2);
-    const auto help = evalMap("--help");
-    EXPECT_EQ(help.status, 0);
-    EXPECT_NE(help.output.find("--elevation"), std::string::npos) << help.output;
-    EXPECT_EQ(evalMap("--version").status, 0);
-    EXPECT_EQ(evalMap("'" + c.drive.string() + "' '" + c.map.string() + "' --clearance 0.2").status, 2);
-}
-
-// --- The shared drives against score_map.py -----------------------------------------------------
 
 /// A value of score_map.py's JSON: `"section": {... "key": value ...}`.
 double jsonValue(const std::string& json, const std::string& section, const std::string& key) {
@@ -524,11 +451,11 @@ TEST_P(SharedDrive, SameFiguresAsScoreMapPy) {
                 if (it != t.groundHeight.end() && k < 6) e.values[layers.index(cx, cy)] = float(it->second) + errors[k];
                 else if (k == 6) e.values[layers.index(cx, cy)] = -1.7f;  // over cells without labelled ground
             }
-        gseg::map::writeLayersGeoTiff(layersPath, layers);
+        gseg::test::writeBytes(layersPath, gseg::map::encodeLayersGeoTiff(layers));
     }
     for (TestMap& m : maps) {
         if (m.name == "perturbed_truth_elevation") args += " --elevation '" + layersPath + "'";
-        gseg::io::writeRosMap((dir / m.name).string(), m.map);
+        gseg::test::writeRosMap((dir / m.name).string(), m.map);
         m.map = gseg::io::readRosMap((dir / (m.name + ".yaml")).string());  // what score_map.py reads
         if (m.clearance != clearance) args += " --clearance " + std::to_string(m.clearance), clearance = m.clearance;
         args += " '" + (dir / (m.name + ".yaml")).string() + "'";

@@ -5,6 +5,7 @@
 #include <gseg/io/ros_map.hpp>
 #include <gseg/traversability_options.hpp>
 #include <support/child.hpp>
+#include <support/output_files.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -55,7 +56,7 @@ Case makeCase(const std::string& name) {
     RosMap m = RosMap::unknown(10, 6, 0.2, 0.0, 0.0);
     for (int cx = 0; cx < 5; ++cx) m.value(cx, 0) = RosMap::kFree;
     for (int cx = 0; cx < 10; ++cx) m.value(cx, 3) = RosMap::kOccupied;
-    gseg::io::writeRosMap((c.dir / "map").string(), m);
+    gseg::test::writeRosMap((c.dir / "map").string(), m);
     c.map = c.dir / "map.yaml";
     return c;
 }
@@ -142,7 +143,7 @@ TEST(HostileMapInputs, HashInsideANameIsNoCommentAndRawModeIsReadAsOccupancyPerc
     RosMap raw = gseg::io::readRosMap(c.map.string());
     for (auto& v : raw.pixels) v = v == RosMap::kFree ? 0 : v == RosMap::kOccupied ? 100 : 255;
     raw.mode = "raw";
-    gseg::io::writeRosMap((c.dir / "raw").string(), raw);
+    gseg::test::writeRosMap((c.dir / "raw").string(), raw);
     ASSERT_NE(gseg::test::readText((c.dir / "raw.yaml").string()).find("mode: raw"), std::string::npos);
     const auto r = evalMap(q(c.drive) + " " + q(c.dir / "raw.yaml"));
     EXPECT_EQ(r.status, 0) << r.output;
@@ -467,7 +468,7 @@ TEST(HostileMapInputs, EvalMapSaysWhatItDoesAfterReadingAndWarnsOfFineCells) {
     // #34: on a 0.01 m map eval-map ran for minutes with nothing said after reading the scans.
     const Case c = makeCase("fine");
     RosMap fine = RosMap::unknown(200, 120, 0.01, 0.0, 0.0);
-    gseg::io::writeRosMap((c.dir / "fine").string(), fine);
+    gseg::test::writeRosMap((c.dir / "fine").string(), fine);
     const auto r = evalMap(q(c.drive) + " " + q(c.dir / "fine.yaml"));
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("gseg eval-map: the truth of 80 labelled points on 0.01 m cells (cells finer than 0.05 m: this and the "

@@ -2,6 +2,7 @@
 #include <gseg/io/ros_map.hpp>
 
 #include <support/child.hpp>
+#include <support/output_files.hpp>
 #include <support/paths.hpp>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -58,7 +59,7 @@ TEST(RosMap, TrinaryValuesAreFreeOccupiedUnknownUnderMapServerThresholds) {
 TEST(RosMap, WriteThenReadGivesTheSameMap) {
     const std::string dir = gseg::test::freshDir("ros_map", "ros_map_round_trip").string();
     const RosMap m = randomMap(7);
-    gseg::io::writeRosMap(dir + "/m", m);
+    gseg::test::writeRosMap(dir + "/m", m);
     const RosMap r = gseg::io::readRosMap(dir + "/m.yaml");
     EXPECT_EQ(r.width, m.width);
     EXPECT_EQ(r.height, m.height);
@@ -73,7 +74,7 @@ TEST(RosMap, WriteThenReadGivesTheSameMap) {
 TEST(RosMap, MrptLoadsTheFileCellForCell) {
     const std::string dir = gseg::test::freshDir("ros_map", "ros_map_mrpt").string();
     const RosMap m = randomMap(11);
-    gseg::io::writeRosMap(dir + "/m", m);
+    gseg::test::writeRosMap(dir + "/m", m);
     mrpt::maps::COccupancyGridMap2D grid;
     ASSERT_TRUE(grid.loadFromROSMapServerYAML(dir + "/m.yaml"));
     ASSERT_EQ(int(grid.getSizeX()), m.width);
@@ -95,7 +96,7 @@ TEST(RosMap, MrptLoadsTheFileCellForCell) {
 TEST(RosMap, BadFilesAreRefusedNamingFileAndReason) {
     const std::string dir = gseg::test::freshDir("ros_map", "ros_map_bad").string();
     const RosMap m = randomMap(3);
-    gseg::io::writeRosMap(dir + "/m", m);
+    gseg::test::writeRosMap(dir + "/m", m);
     const std::string pgm = gseg::test::readText(dir + "/m.pgm");
     const auto refused = [&](const std::string& yaml, const std::string& image, const std::string& expect) {
         writeText(dir + "/b.yaml", yaml);
@@ -125,14 +126,14 @@ TEST(RosMap, BadFilesAreRefusedNamingFileAndReason) {
 
 TEST(RosMap, AnInconsistentMapIsRefusedAndTheExistingFilesStay) {
     const std::string dir = gseg::test::freshDir("ros_map", "ros_map_keep").string();
-    gseg::io::writeRosMap(dir + "/m", randomMap(5));
+    gseg::test::writeRosMap(dir + "/m", randomMap(5));
     const std::string before = gseg::test::readText(dir + "/m.pgm");
     RosMap bad = randomMap(6);
     bad.pixels.pop_back();
-    EXPECT_THROW(gseg::io::writeRosMap(dir + "/m", bad), std::invalid_argument);
+    EXPECT_THROW(gseg::test::writeRosMap(dir + "/m", bad), std::invalid_argument);
     bad = randomMap(6);
     bad.resolution = 0;
-    EXPECT_THROW(gseg::io::writeRosMap(dir + "/m", bad), std::invalid_argument);
+    EXPECT_THROW(gseg::test::writeRosMap(dir + "/m", bad), std::invalid_argument);
     EXPECT_EQ(gseg::test::readText(dir + "/m.pgm"), before);
 }
 

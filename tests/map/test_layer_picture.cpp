@@ -5,6 +5,7 @@
 #include <gseg/map/map_colours.hpp>
 
 #include <support/child.hpp>
+#include <support/output_files.hpp>
 
 #include <mrpt/img/CImage.h>
 
@@ -290,10 +291,9 @@ TEST(LayerPicture, BadRequestsAreRefusedAndNothingIsWritten) {
     EXPECT_THROW(gseg::map::encodeLayerPng(g, "slope", o), std::invalid_argument);
     const std::string path = (gseg::test::freshDir("layer_picture", "refused") / "cost.png").string();
     try {
-        gseg::map::writeLayerPng(path, g, "cost");
+        gseg::test::writeBytes(path, gseg::map::encodeLayerPng(g, "cost"));
         ADD_FAILURE() << "a missing layer was drawn";
     } catch (const std::out_of_range& e) {
-        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("'cost'"), std::string::npos) << e.what();
     }
     EXPECT_FALSE(std::filesystem::exists(path));

@@ -4,6 +4,7 @@
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/render.hpp>
 #include <support/child.hpp>
+#include <support/output_files.hpp>
 
 #include <mrpt/img/CImage.h>
 #include <mrpt/maps/CSimplePointsMap.h>
@@ -54,7 +55,7 @@ TEST(PngWriter, PixelsReadBackExactly) {
     for (int y = 0; y < 5; ++y)
         for (int x = 0; x < 7; ++x) img.setPixel(x, y, mrpt::img::TColor(std::uint8_t(30 * x), std::uint8_t(50 * y), 200));
     const std::string path = (dir / "p.png").string();
-    gseg::mrpt::writePng(path, img);
+    gseg::test::writeBytes(path, gseg::mrpt::encodePng(img));
     mrpt::img::CImage back;
     ASSERT_TRUE(back.loadFromFile(path));
     ASSERT_EQ(back.getWidth(), 7u);
@@ -75,14 +76,14 @@ TEST(PngWriter, FullDiskIsAnErrorAndLeavesNothing) {
     std::vector<std::uint8_t> labels(20000);
     for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = std::uint8_t(i % 3 == 0);
     EXPECT_EQ(withFileSizeLimit(2000, [&] {
-                  gseg::mrpt::writeTopDownPng(path, gseg::PointCloudView(xyz.data(), 20000), labels);
+                  gseg::test::writeBytes(path, gseg::mrpt::topDownPng(gseg::PointCloudView(xyz.data(), 20000), labels));
               }),
               7);
     EXPECT_FALSE(fs::exists(path));
     EXPECT_EQ(gseg::test::entriesContaining(dir.string(), ""), "");
     // Without the limit it is written, and NaN points are simply not drawn.
     xyz[0] = std::numeric_limits<float>::quiet_NaN();
-    gseg::mrpt::writeTopDownPng(path, gseg::PointCloudView(xyz.data(), 20000), labels);
+    gseg::test::writeBytes(path, gseg::mrpt::topDownPng(gseg::PointCloudView(xyz.data(), 20000), labels));
     EXPECT_GT(fs::file_size(path), 2000u);
 }
 

@@ -4,6 +4,7 @@
 #include <gseg/mrpt/png.hpp>
 #include <gseg/mrpt/top_view.hpp>
 #include <gseg/mrpt/render.hpp>
+#include <support/output_files.hpp>
 
 #include <mrpt/img/CImage.h>
 #include <mrpt/math/CMatrixF.h>
@@ -84,7 +85,7 @@ TEST(Pictures, ScanPictureLegendNamesGroundAndNonGround) {
         labels.push_back(i % 2);
     }
     const std::string path = std::string(GSEG_BINARY_DIR) + "/tests/pictures_scan.png";
-    gseg::mrpt::writeTopDownPng(path, gseg::PointCloudView(xyz.data(), 100), labels);
+    gseg::test::writeBytes(path, gseg::mrpt::topDownPng(gseg::PointCloudView(xyz.data(), 100), labels));
     mrpt::img::CImage img;
     ASSERT_TRUE(img.loadFromFile(path));
     EXPECT_EQ(img.getWidth(), 800u);

@@ -1,10 +1,12 @@
 // `gseg segment` end to end: the built executable on real and broken inputs.
 #include <gseg/io/kitti.hpp>
 #include <gseg/io/ply.hpp>
+#include <gseg/mrpt/rawlog_io.hpp>
 #include <support/child.hpp>
 #include <support/paths.hpp>
 
 #include <mrpt/img/CImage.h>
+#include <mrpt/obs/CObservationVelodyneScan.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CPointCloudColoured.h>
 
@@ -244,4 +246,25 @@ TEST(SegmentToolHostile, FullDiskWritesNoOutputAtAll) {
     EXPECT_EQ(r.output.find("wrote"), std::string::npos) << r.output;
     for (const std::string& p : {labels, ply, png}) EXPECT_FALSE(exists(p)) << p;
     EXPECT_EQ(gseg::test::entriesContaining(kDir, ".tmp"), "");
+}
+
+TEST(SegmentToolRawlog, AScanThatCannotBeReadNamesItsEntryInOneLine) {
+    const std::string rawlog = (gseg::test::freshDir("segment_tool", "rawlog_errors") / "broken.rawlog").string();
+    {
+        gseg::mrpt::RawlogWriter w(rawlog);
+        mrpt::obs::CObservationVelodyneScan broken;
+        broken.sensorLabel = "BROKEN";
+        broken.point_cloud.x.assign(100, 1.f);
+        broken.point_cloud.y.assign(10, 1.f);
+        broken.point_cloud.z.assign(10, 1.f);
+        w.write(broken);
+        w.commit();
+    }
+    const ToolRun r = segmentTool("'" + rawlog + "'");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("rawlog entry 0: CObservationVelodyneScan 'BROKEN': point_cloud vectors differ in length "
+                            "(x 100, y 10, z 10"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }

@@ -1,4 +1,3 @@
-#include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>  // readFileBytes, regularFileSize
 #include <gseg/io/ros_map.hpp>
 #include <gseg/text.hpp>
@@ -37,11 +36,6 @@ double number(const std::string& file, int line, const std::string& key, const s
 std::string folderOf(const std::string& path) {
     const auto slash = path.find_last_of('/');
     return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
-}
-
-std::string baseName(const std::string& path) {
-    const auto slash = path.find_last_of('/');
-    return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
 // The next header token of a PGM, skipping white space and '#' comments.
@@ -244,7 +238,6 @@ RosMap readRosMap(const std::string& yamlPath) {
     return map;
 }
 
-std::vector<std::string> rosMapPaths(const std::string& prefix) { return {prefix + ".pgm", prefix + ".yaml"}; }
 
 std::string encodePgm(const RosMap& map) {
     validate(map);
@@ -272,16 +265,6 @@ std::string encodeRosMapYaml(const RosMap& map, const std::string& imageName) {
     out += "occupied_thresh: " + num(map.occupiedThresh) + "\n";
     out += "free_thresh: " + num(map.freeThresh) + "\n";
     return out;
-}
-
-void writeRosMap(const std::string& prefix, const RosMap& map) {
-    const auto paths = rosMapPaths(prefix);
-    const std::string pgm = encodePgm(map);
-    const std::string yaml = encodeRosMapYaml(map, baseName(paths[0]));
-    AtomicFileSet files(paths);
-    files[0].write(pgm.data(), pgm.size());
-    files[1].write(yaml.data(), yaml.size());
-    files.commit();
 }
 
 }  // namespace gseg::io

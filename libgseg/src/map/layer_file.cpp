@@ -1,6 +1,5 @@
 // The GeoTIFF of a map's 2.5D layers (GDAL's GTiff driver, built in memory under /vsimem/ and
 // written by gseg's atomic writer; read back with GDAL, refusing what is not a layer file).
-#include <gseg/io/atomic_file.hpp>
 #include <gseg/io/kitti.hpp>  // regularFileSize
 #include <gseg/map/layer_file.hpp>
 
@@ -311,18 +310,6 @@ std::string encodeLayersCog(const LayerTiles& tiles, int block) {
     VSIUnlink(source.c_str());
     if (errors.failed() || bytes.empty()) throw std::runtime_error("layer COG: " + errors.text("GDAL wrote no file"));
     return bytes;
-}
-
-void writeLayersGeoTiff(const std::string& path, const LayerGrid& grid) {
-    std::string bytes;
-    try {
-        bytes = encodeLayersGeoTiff(grid);
-    } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(path + ": " + e.what());
-    } catch (const std::exception& e) {
-        throw std::runtime_error(path + ": " + e.what());
-    }
-    gseg::io::writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
 LayerGrid readLayersGeoTiff(const std::string& path) {

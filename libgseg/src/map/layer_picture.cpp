@@ -1,7 +1,6 @@
 // The picture of one layer of a LayerGrid on the map page (gseg/map/map_page.hpp: x right, y up,
 // as the costmap PGM): colour bar or class legend, unknown cells named, scale bar, axes, a title
 // wrapped to the canvas.
-#include <gseg/io/atomic_file.hpp>
 #include <gseg/map/layer_picture.hpp>
 #include <gseg/map/map_colours.hpp>
 #include <gseg/map/map_page.hpp>
@@ -245,20 +244,6 @@ std::string encodeLayerPng(const LayerGrid& grid, const std::string& name, const
     for (std::size_t i = first; i < last; ++i) pic.text(l.texts[i].x, l.texts[i].y, l.texts[i].text);
     drawPageFrame(pic, l.page);
     return pic.png();
-}
-
-void writeLayerPng(const std::string& path, const LayerGrid& grid, const std::string& name, const LayerPictureOptions& options) {
-    std::string png;
-    try {
-        png = encodeLayerPng(grid, name, options);
-    } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(path + ": " + e.what());
-    } catch (const std::out_of_range& e) {
-        throw std::out_of_range(path + ": " + e.what());
-    } catch (const std::exception& e) {
-        throw std::runtime_error(path + ": " + e.what());
-    }
-    gseg::io::writeFileAtomic(path, png.data(), png.size());
 }
 
 }  // namespace gseg::map

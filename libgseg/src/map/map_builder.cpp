@@ -16,9 +16,8 @@
 
 namespace gseg::map {
 
-PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
-    read += o.read, segmentation += o.segmentation, transform += o.transform;
-    rayCasting += o.rayCasting, mapUpdate += o.mapUpdate, writing += o.writing;
+PhaseTimes& PhaseTimes::operator+=(const ScanTimes& scan) {
+    segmentation += scan.segmentation, transform += scan.transform, rayCasting += scan.rayCasting;
     return *this;
 }
 
@@ -46,9 +45,8 @@ bool toWorld(const ScanParts& parts, const ::mrpt::poses::CPose3D& robotPose, gs
         r.times.transform = secondsSince(t0);
         return true;
     }
-    WorldScanTimes t;
     try {
-        world = segmentToWorld(*parts.raw, robotPose, segmenter, &t, check);
+        world = segmentToWorld(*parts.raw, robotPose, segmenter, &r.times, check);
     } catch (const std::invalid_argument& e) {
         r.skipped = e.what();
         return false;
@@ -56,7 +54,6 @@ bool toWorld(const ScanParts& parts, const ::mrpt::poses::CPose3D& robotPose, gs
     r.reflections = world.reflections;
     r.heightNote = world.heightNote;
     r.heightWarning = world.heightWarning;
-    r.times.segmentation = t.segmentation, r.times.transform = t.transform;
     return true;
 }
 

@@ -109,8 +109,7 @@ ScanJob decodeScanJob(const std::string& bytes) {
 std::string encodeScanResult(const ScanResult& r) {
     ByteWriter out;
     out.u64(kResult).str(serializeScanUpdate(r.update));
-    const PhaseTimes& t = r.times;
-    out.f64(t.read).f64(t.segmentation).f64(t.transform).f64(t.rayCasting).f64(t.mapUpdate).f64(t.writing);
+    out.f64(r.times.segmentation).f64(r.times.transform).f64(r.times.rayCasting);
     out.str(r.skipped).str(r.describe).u64(r.presegmented).f64(r.fraction).u64(r.reflections).str(r.heightNote);
     out.str(r.heightWarning);
     out.u64(std::uint64_t(r.rank));
@@ -126,9 +125,7 @@ ScanResult decodeScanResult(const std::string& bytes) {
     if (kind != kResult) throw std::runtime_error("a scan result sent between processes is garbled");
     ScanResult r;
     r.update = deserializeScanUpdate(in.str());
-    PhaseTimes& t = r.times;
-    t.read = in.f64(), t.segmentation = in.f64(), t.transform = in.f64(), t.rayCasting = in.f64();
-    t.mapUpdate = in.f64(), t.writing = in.f64();
+    r.times.segmentation = in.f64(), r.times.transform = in.f64(), r.times.rayCasting = in.f64();
     r.skipped = in.str(), r.describe = in.str();
     r.presegmented = in.u64() != 0;
     r.fraction = in.f64();

@@ -2,7 +2,6 @@
 // (gseg/map/map_page.hpp: x right, y up, as the costmap PGM).
 #include <gseg/map/top_down_picture.hpp>
 
-#include <gseg/io/atomic_file.hpp>
 #include <gseg/map/map_colours.hpp>
 #include <gseg/mrpt/picture.hpp>
 
@@ -118,17 +117,6 @@ std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::V
     drawPath(pic, drivenPath, l);
     drawPageFrame(pic, l);
     return pic.png();
-}
-
-void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
-                     const std::string& title) {
-    std::string png;
-    try {
-        png = encodeTopDownPng(grid, drivenPath, title);
-    } catch (const std::exception& e) {
-        throw std::runtime_error(path + ": " + e.what());
-    }
-    gseg::io::writeFileAtomic(path, png.data(), png.size());
 }
 
 }  // namespace gseg::map

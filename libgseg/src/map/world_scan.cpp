@@ -34,7 +34,7 @@ ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs) {
 }
 
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         gseg::mrpt::ScanSegmenter& segmenter, WorldScanTimes* times, gseg::mrpt::HeightCheck check) {
+                         gseg::mrpt::ScanSegmenter& segmenter, ScanTimes* times, gseg::mrpt::HeightCheck check) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<float> levelled = gseg::mrpt::levelledPoints(obs);
     if (levelled.empty()) throw std::invalid_argument("observation '" + obs.sensorLabel + "' has no points");

@@ -91,7 +91,7 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     out.distToGround = seg.distToGround;
     out.distToGroundEstimated = seg.distToGroundEstimated;
     out.heightWarning = seg.heightWarning;
-    out.nonFinitePoints = seg.nonFinitePoints;
+    out.nonFinitePoints = seg.result.numNonFinite;
     if (robotPose) relabelWithDrive(sensorXyzi, *robotPose + sensorPose, out);
 
     // The two halves, in the frame asked for.

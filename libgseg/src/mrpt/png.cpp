@@ -1,5 +1,4 @@
 // PNG output: the encoder of every gseg picture (zlib, no filter), and its checked file.
-#include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/png.hpp>
 
 #include <mrpt/img/CImage.h>
@@ -60,11 +59,6 @@ std::string encodePng(const ::mrpt::img::CImage& image) {
     putChunk(png, "IDAT", packed);
     putChunk(png, "IEND", "");
     return png;
-}
-
-void writePng(const std::string& path, const ::mrpt::img::CImage& image) {
-    const std::string png = encodePng(image);
-    gseg::io::writeFileAtomic(path, png.data(), png.size());
 }
 
 }  // namespace gseg::mrpt

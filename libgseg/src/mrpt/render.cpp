@@ -1,4 +1,3 @@
-#include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/render.hpp>
 
 #include <stdexcept>
@@ -13,12 +12,6 @@ std::string topDownPng(const PointCloudView& cloud, const std::vector<std::uint8
     std::vector<std::uint8_t> classOf(labels.size());
     for (std::size_t i = 0; i < labels.size(); ++i) classOf[i] = labels[i] ? 0 : 1;
     return drawTopView(cloud, classOf, {{kGroundColour, "ground", 0}, {kNonGroundColour, "non-ground", 1}}, opt).png();
-}
-
-void writeTopDownPng(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                     const RenderOptions& options) {
-    const std::string png = topDownPng(cloud, labels, options);
-    gseg::io::writeFileAtomic(path, png.data(), png.size());
 }
 
 }  // namespace gseg::mrpt

@@ -29,7 +29,6 @@ ScanSegmentation ScanSegmenter::segment(const PointCloudView& cloud, bool keepCe
                                                  config_.sensorHeight);
         heightChecked_ = heightChecked_ || hasPoints;
     }
-    out.nonFinitePoints = out.result.numNonFinite;
     return out;
 }
 

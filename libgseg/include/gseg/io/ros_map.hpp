@@ -3,7 +3,7 @@
 /// 2D occupancy maps in the ROS map_server format: a binary PGM (P5) image and a YAML file that
 /// names it (`image`, `resolution`, `origin`, `negate`, `occupied_thresh`, `free_thresh`, `mode`).
 /// That is what Nav2's map_server, ROS 1's map_server and MRPT's
-/// `COccupancyGridMap2D::loadFromROSMapServerYAML` load. The one reader and writer of gseg for it.
+/// `COccupancyGridMap2D::loadFromROSMapServerYAML` load. The one reader and encoder of gseg for it.
 ///
 /// Frame: cell (cx, cy) covers map-frame x in [originX + cx * resolution, originX + (cx + 1) *
 /// resolution) and y likewise; cy = 0 is the image's bottom row (map_server's convention: the
@@ -53,17 +53,12 @@ struct RosMap {
 /// resolution, a non-zero origin yaw, an image that is not a P5 PGM or is truncated.
 RosMap readRosMap(const std::string& yamlPath);
 
-/// The two files of writeRosMap for `prefix`: `<prefix>.pgm`, `<prefix>.yaml`.
-std::vector<std::string> rosMapPaths(const std::string& prefix);
 /// The PGM bytes of a map (P5, maxval 255, a comment line with the resolution).
 std::string encodePgm(const RosMap& map);
 /// The YAML text naming `imageName` (written as given: the PGM's file name beside the YAML).
 std::string encodeRosMapYaml(const RosMap& map, const std::string& imageName);
-/// Writes `<prefix>.pgm` and `<prefix>.yaml` together (all or none, gseg/io/atomic_file.hpp).
-/// Throws std::invalid_argument on an inconsistent map (size, thresholds, resolution) and
-/// std::runtime_error naming the file on a write failure.
-void writeRosMap(const std::string& prefix, const RosMap& map);
-/// Throws std::invalid_argument on an inconsistent map (what writeRosMap() checks).
+/// Throws std::invalid_argument on an inconsistent map (size, thresholds, resolution): what
+/// encodePgm() and encodeRosMapYaml() check.
 void validate(const RosMap& map);
 
 }  // namespace gseg::io

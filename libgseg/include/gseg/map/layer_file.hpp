@@ -53,11 +53,6 @@ std::string encodeLayersCog(const LayerTiles& tiles, int block = 512);
 /// The overviews encodeLayersCog() makes: halvings until the longer side fits in one block.
 int cogOverviewCount(std::int64_t width, std::int64_t height, int block);
 
-/// Writes encodeLayersGeoTiff(grid) to `path` through gseg::io::AtomicFile (complete or absent).
-/// Throws as encodeLayersGeoTiff() (the message naming `path`) and std::runtime_error naming
-/// `path` on a write failure.
-void writeLayersGeoTiff(const std::string& path, const LayerGrid& grid);
-
 /// Reads a GeoTIFF of layers: any file of the format written above, and any single- or
 /// multi-band GeoTIFF whose geotransform is axis-aligned with square pixels (north-up, or with
 /// its first row the smallest y). Band i becomes layer i named by its description ("band N" if

@@ -77,10 +77,6 @@ LayerPictureLayout layerPictureLayout(const LayerGrid& grid, const std::string& 
 /// The PNG bytes of the picture of `layer` (see the file comment). Throws as layerPictureLayout().
 std::string encodeLayerPng(const LayerGrid& grid, const std::string& layer, const LayerPictureOptions& options = {});
 
-/// Writes encodeLayerPng() to `path` through gseg::io::AtomicFile (complete or absent). Throws as
-/// encodeLayerPng() with `path` in the message, std::runtime_error naming `path` on a write failure.
-void writeLayerPng(const std::string& path, const LayerGrid& grid, const std::string& layer, const LayerPictureOptions& options = {});
-
 /// The viridis colour of t in [0, 1] (clamped; NaN gives the low end): the colour map of
 /// continuous layers (matplotlib's viridis at nine stops, interpolated linearly in RGB).
 gseg::mrpt::Colour viridis(double t);

@@ -15,6 +15,7 @@
 #include <gseg/map/scan_stream.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/traversability_map.hpp>
+#include <gseg/map/world_scan.hpp>
 #include <gseg/mrpt/config.hpp>
 #include <gseg/mrpt/segment_scan.hpp>
 
@@ -26,16 +27,16 @@
 
 namespace gseg::map {
 
-/// Seconds per phase (summed over threads when added up).
+/// Seconds per phase of a run (the per-scan work summed over threads).
 struct PhaseTimes {
     double read = 0, segmentation = 0, transform = 0, rayCasting = 0, mapUpdate = 0, writing = 0;
-    PhaseTimes& operator+=(const PhaseTimes& o);
+    PhaseTimes& operator+=(const ScanTimes& scan);  ///< adds one scan's work
 };
 
 /// What the work gives for one scan.
 struct ScanResult {
     ScanUpdate update;
-    PhaseTimes times;
+    ScanTimes times;
     std::string skipped;    ///< why the scan could not be used ("" when it was)
     std::string describe;   ///< the scan, for messages
     bool presegmented = false;

@@ -28,14 +28,10 @@ struct PictureLayout : MapPage {
 PictureLayout pictureLayout(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath, int maxSide = 4096,
                             const std::string& title = "");
 
-/// Writes the picture (pictureLayout(): traversable green, obstacle red, unknown grey, the page
-/// around the mapped area darker; the path as a blue line from a white start square to an
-/// arrowhead in the direction of travel; title, legend naming every colour, scale bar and the
-/// x / y arrows: x right, y up) as a PNG, atomically. `title` is the first line (e.g. "6 scans, 3.55 m driven").
-/// Throws std::runtime_error naming the file on failure.
-void writeTopDownPng(const std::string& path, const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
-                     const std::string& title = "");
-/// The same PNG as bytes.
+/// The picture (pictureLayout(): traversable green, obstacle red, unknown grey, the page around
+/// the mapped area darker; the path as a blue line from a white start square to an arrowhead in
+/// the direction of travel; title, legend naming every colour, scale bar and the x / y arrows: x
+/// right, y up) as PNG bytes. `title` is the first line (e.g. "6 scans, 3.55 m driven").
 std::string encodeTopDownPng(const TopDownGrid& grid, const std::vector<Eigen::Vector3d>& drivenPath,
                              const std::string& title = "");
 

@@ -126,7 +126,7 @@ public:
     /// versions are put back):
     /// - `<prefix>_ground.bt`, `<prefix>_obstacles.bt`: the occupancy OcTrees (liboctomap, octovis);
     /// - `<prefix>_traversability.ot`: ground and obstacle voxels in one ColorOcTree;
-    /// - `<prefix>_traversability.png`: the top-down picture (writeTopDownPng());
+    /// - `<prefix>_traversability.png`: the top-down picture (encodeTopDownPng());
     /// - `<prefix>_traversability.ply`: the centres of the occupied voxels, coloured, with a
     ///   class scalar field `scalar_class` (1 ground, 2 obstacle; CloudCompare's "class") and a
     ///   `label` property (1 ground, 0 obstacle) for other programs (gseg/io/ply.hpp);

@@ -39,10 +39,11 @@ struct WorldScan {
 using gseg::mrpt::ScanPart;
 ScanPart scanPartOf(const ::mrpt::obs::CObservation& obs);
 
-/// Where segmentToWorld() spent its time [s].
-struct WorldScanTimes {
+/// Where the per-scan work of one scan spent its time [s] (MapBuilder sums them into PhaseTimes).
+struct ScanTimes {
     double segmentation = 0;  ///< points out of the observation, sensor height, segmentation
     double transform = 0;     ///< into the world frame
+    double rayCasting = 0;    ///< into the scan's update (castScan())
 };
 
 /// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) with the
@@ -51,10 +52,10 @@ struct WorldScanTimes {
 /// into the world frame with `robotPose` + the observation's sensorPose. Points without a return
 /// and reflections below the ground (Result::belowGround) go into neither class. `check`: when a
 /// fixed height is checked against the scan (heightWarning; costs about one segmentation: the map
-/// builder checks the first scan of a drive). Throws std::invalid_argument for a non-LiDAR
-/// observation or an empty scan.
+/// builder checks the first scan of a drive). `times`: its segmentation and transform seconds are
+/// added to. Throws std::invalid_argument for a non-LiDAR observation or an empty scan.
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,
-                         gseg::mrpt::ScanSegmenter& segmenter, WorldScanTimes* times = nullptr,
+                         gseg::mrpt::ScanSegmenter& segmenter, ScanTimes* times = nullptr,
                          gseg::mrpt::HeightCheck check = gseg::mrpt::HeightCheck::Never);
 
 /// Appends every point of `obs` (one class already) in the world frame to `out` (x, y, z

@@ -23,15 +23,10 @@ using RenderOptions = TopViewOptions;
 inline constexpr Colour kGroundColour{palette::kGround[0], palette::kGround[1], palette::kGround[2]};
 inline constexpr Colour kNonGroundColour{palette::kNonGround[0], palette::kNonGround[1], palette::kNonGround[2]};
 
-/// Writes a top-down PNG (drawTopView()): ground green, non-ground red (drawn over the ground),
-/// with the title, orientation, range circles, forward arrow, scale bar and a legend with the
-/// counts; points with a NaN or infinite coordinate are not drawn. Written with writePng().
-/// Throws std::invalid_argument if the label count differs from the point count,
-/// std::runtime_error if the file cannot be written.
-void writeTopDownPng(const std::string& path, const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
-                     const RenderOptions& options = RenderOptions());
-
-/// The PNG file writeTopDownPng() writes, in memory.
+/// A top-down picture of a labelled scan as PNG bytes (drawTopView(), encodePng()): ground green,
+/// non-ground red (drawn over the ground), with the title, orientation, range circles, forward
+/// arrow, scale bar and a legend with the counts; points with a NaN or infinite coordinate are not
+/// drawn. Throws std::invalid_argument if the label count differs from the point count.
 std::string topDownPng(const PointCloudView& cloud, const std::vector<std::uint8_t>& labels,
                        const RenderOptions& options = RenderOptions());
 

@@ -30,7 +30,6 @@ namespace gseg::mrpt {
 struct ScanSegmentation {
     /// One label per input point (non-finite points 0, counted in result.numNonFinite).
     gseg::Result result;
-    std::size_t nonFinitePoints = 0;     ///< input points with a NaN or infinite coordinate
     double distToGround = 0;             ///< [m] the sensor height used
     bool distToGroundEstimated = false;  ///< `distToGround: auto` and this scan gave an estimate
     HeightDecision height;               ///< with `distToGround: auto`: what was used and why
