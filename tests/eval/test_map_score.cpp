@@ -7,6 +7,7 @@
 
 #include <support/child.hpp>
 #include <support/output_files.hpp>
+#include <support/labelled_drive.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -29,42 +30,16 @@ using gseg::map::TruthClass;
 
 constexpr std::uint32_t kRoad = 40, kTerrain = 72, kCar = 10, kBuilding = 50, kVegetation = 70;
 
-struct Pt {
-    float x, y, z;
-    std::uint32_t label;
-};
-
-const char* const kIdentity12 = "1 0 0 0 0 1 0 0 0 0 1 0";
-
-void writeBytes(const fs::path& path, const void* data, std::size_t n) {
-    std::ofstream(path, std::ios::binary).write(static_cast<const char*>(data), std::streamsize(n));
-}
-void writeText(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+using gseg::test::addCell;
+using gseg::test::kIdentity12;
+using gseg::test::Pt;
+using gseg::test::writeBytes;
+using gseg::test::writeText;
 
 /// A drive folder: one scan per entry of `frames` (frame k named k), identity poses and Tr unless given.
-fs::path writeDrive(const std::string& name, const std::vector<std::vector<Pt>>& frames, std::string poses = "",
-                    const std::string& calib = std::string("P0: ") + kIdentity12 + "\nTr: " + kIdentity12 + "\n") {
-    const fs::path dir = gseg::test::freshDir("map_score", name);
-    fs::create_directories(dir / "velodyne"), fs::create_directories(dir / "labels");
-    for (std::size_t k = 0; k < frames.size(); ++k) {
-        char stem[32];
-        std::snprintf(stem, sizeof stem, "%06zu", k);
-        std::vector<float> xyzi;
-        std::vector<std::uint32_t> labels;
-        for (const Pt& p : frames[k]) xyzi.insert(xyzi.end(), {p.x, p.y, p.z, 0.f}), labels.push_back(p.label);
-        writeBytes(dir / "velodyne" / (std::string(stem) + ".bin"), xyzi.data(), xyzi.size() * 4);
-        writeBytes(dir / "labels" / (std::string(stem) + ".label"), labels.data(), labels.size() * 4);
-    }
-    if (poses.empty())
-        for (std::size_t k = 0; k < frames.size(); ++k) poses += std::string(kIdentity12) + "\n";
-    writeText(dir / "poses.txt", poses);
-    writeText(dir / "calib.txt", calib);
-    return dir;
-}
-
-/// n points of `label` at the centre of cell (cx, cy) of a 0.2 m grid at the origin, at heights z0, z0 + dz, ...
-void addCell(std::vector<Pt>& pts, int cx, int cy, std::uint32_t label, int n, float z0, float dz = 0.01f) {
-    for (int i = 0; i < n; ++i) pts.push_back({0.2f * float(cx) + 0.1f, 0.2f * float(cy) + 0.1f, z0 + dz * float(i), label});
+fs::path writeDrive(const std::string& name, const std::vector<std::vector<Pt>>& frames, const std::string& poses = "",
+                    const std::string& calib = gseg::test::kIdentityCalib) {
+    return gseg::test::writeLabelledDrive("map_score", name, frames, poses, calib);
 }
 
 const gseg::map::ScoreGrid kGrid{0.2, 0.0, 0.0};

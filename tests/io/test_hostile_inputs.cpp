@@ -4,6 +4,7 @@
 #include <gseg/io/output_checks.hpp>
 #include <gseg/io/ros_map.hpp>
 #include <gseg/traversability_options.hpp>
+#include <support/labelled_drive.hpp>
 #include <support/child.hpp>
 #include <support/output_files.hpp>
 #include <support/paths.hpp>
@@ -23,43 +24,16 @@ using gseg::io::RosMap;
 
 namespace {
 
-const char* const kIdentity12 = "1 0 0 0 0 1 0 0 0 0 1 0";
 const fs::path kVlp16 = "/usr/share/mrpt/datasets/test_velodyne_VLP16.rawlog";
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
-void writeText(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+using gseg::test::writeText;
 
-/// A one-scan labelled drive: 10 cells of road at y = 0 and, at y = 3 (0.2 m cells), road under a
-/// building (as test_map_score's tool case); and a trinary map calling cells 0-4 of the road free
-/// and the building row occupied.
-struct Case {
-    fs::path dir, drive, map;
-};
-
-Case makeCase(const std::string& name) {
-    Case c;
-    c.dir = gseg::test::freshDir("hostile_inputs", name);
-    c.drive = c.dir / "drive";
-    fs::create_directories(c.drive / "velodyne"), fs::create_directories(c.drive / "labels");
-    std::vector<float> xyzi;
-    std::vector<std::uint32_t> labels;
-    auto cell = [&](int cx, int cy, std::uint32_t label, int n, float z0) {
-        for (int k = 0; k < n; ++k)
-            xyzi.insert(xyzi.end(), {0.2f * float(cx) + 0.1f, 0.2f * float(cy) + 0.1f, z0 + 0.01f * float(k), 0.f}), labels.push_back(label);
-    };
-    for (int cx = 0; cx < 10; ++cx) cell(cx, 0, 40, 3, -1.7f), cell(cx, 3, 40, 3, -1.7f), cell(cx, 3, 50, 2, -1.0f);
-    std::ofstream(c.drive / "velodyne/000000.bin", std::ios::binary).write(reinterpret_cast<const char*>(xyzi.data()), std::streamsize(xyzi.size() * 4));
-    std::ofstream(c.drive / "labels/000000.label", std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), std::streamsize(labels.size() * 4));
-    writeText(c.drive / "poses.txt", std::string(kIdentity12) + "\n");
-    writeText(c.drive / "calib.txt", std::string("P0: ") + kIdentity12 + "\nTr: " + kIdentity12 + "\n");
-    RosMap m = RosMap::unknown(10, 6, 0.2, 0.0, 0.0);
-    for (int cx = 0; cx < 5; ++cx) m.value(cx, 0) = RosMap::kFree;
-    for (int cx = 0; cx < 10; ++cx) m.value(cx, 3) = RosMap::kOccupied;
-    gseg::test::writeRosMap((c.dir / "map").string(), m);
-    c.map = c.dir / "map.yaml";
-    return c;
-}
+/// A one-scan labelled drive with a map calling cells 0-4 of its road free and the building row
+/// occupied (gseg::test::rowsDriveCase(), as test_tool_eval_map's).
+using Case = gseg::test::RowsDriveCase;
+Case makeCase(const std::string& name) { return gseg::test::rowsDriveCase("hostile_inputs", name); }
 
 /// gseg eval-map under `timeout 60` (a reader that blocks fails the test instead of hanging it).
 gseg::test::CommandResult evalMap(const std::string& args) {

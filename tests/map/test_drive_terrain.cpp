@@ -17,6 +17,7 @@
 #include <gseg/terrain_model.hpp>
 
 #include <support/child.hpp>
+#include <support/labelled_drive.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/paths.hpp>
 
@@ -662,14 +663,9 @@ TEST(DriveTerrainReal, OneThreeThreadsAndTwoRanksGiveTheSameLayersAndCostmap) {
 }
 
 TEST(DriveTerrainReal, RawlogGsegsFirstPassGivesTheSameModelOnOneOrThreeWorkers) {
-    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
-    const std::string poses = gseg::test::sharedData(rel);
-    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
-    const fs::path dir = gseg::test::freshDir("drive_terrain", "pass1");
-    const std::string rawlog = (dir / "d09.rawlog").string();
-    const auto k = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + fs::path(poses).parent_path().string() +
-                                          "' -o '" + rawlog + "'");
-    ASSERT_EQ(k.status, 0) << k.output;
+    if (gseg::test::sharedData(gseg::test::kDrive09Poses).empty()) GTEST_SKIP() << gseg::test::missingDataMessage(gseg::test::kDrive09Poses);
+    const std::string rawlog = gseg::test::drive09Rawlog(gseg::test::freshDir("drive_terrain", "pass1"), "d09");
+    ASSERT_FALSE(rawlog.empty()) << "kitti2rawlog failed (above)";
     const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml");
     std::vector<double> fractions;
     const gseg::map::DriveModel one = gseg::map::driveModelOf(rawlog, config, {}, {}, 1);
@@ -718,14 +714,9 @@ SegmentedRawlog segmentRawlog(const std::string& rawlog, const gseg::mrpt::Loade
 }
 
 TEST(DriveTerrainReal, RawlogGsegsSecondPassGivesTheSameRawlogOnOneOrThreeWorkers) {
-    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
-    const std::string poses = gseg::test::sharedData(rel);
-    if (poses.empty()) GTEST_SKIP() << gseg::test::missingDataMessage(rel);
-    const fs::path dir = gseg::test::freshDir("drive_terrain", "pass2");
-    const std::string rawlog = (dir / "d09.rawlog").string();
-    const auto k = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -i '" + fs::path(poses).parent_path().string() +
-                                          "' -o '" + rawlog + "'");
-    ASSERT_EQ(k.status, 0) << k.output;
+    if (gseg::test::sharedData(gseg::test::kDrive09Poses).empty()) GTEST_SKIP() << gseg::test::missingDataMessage(gseg::test::kDrive09Poses);
+    const std::string rawlog = gseg::test::drive09Rawlog(gseg::test::freshDir("drive_terrain", "pass2"), "d09");
+    ASSERT_FALSE(rawlog.empty()) << "kitti2rawlog failed (above)";
     const gseg::mrpt::LoadedConfig config = gseg::mrpt::loadConfigOrDefault(GSEG_SOURCE_DIR "/config/kitti_hdl64.yaml");
     const gseg::map::DriveModel drive = gseg::map::driveModelOf(rawlog, config, {}, {}, 2);
     ASSERT_TRUE(drive.model) << drive.why;

@@ -303,6 +303,16 @@ float cogCell(GDALDatasetH ds, int b, std::int64_t ix, std::int64_t iy, double r
     return v;
 }
 
+/// `bytes` opened by GDAL as the in-memory file `name` (not copied: `bytes` must outlive it), or
+/// nullptr.
+GDALDatasetH openInMemory(const std::string& bytes, const std::string& name) {
+    GDALAllRegister();
+    VSILFILE* f = VSIFileFromMemBuffer(name.c_str(), reinterpret_cast<GByte*>(const_cast<char*>(bytes.data())), vsi_l_offset(bytes.size()), FALSE);
+    if (!f) return nullptr;
+    VSIFCloseL(f);
+    return GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+}
+
 // #35: the COG of a sparse box (a pose jump) has the blocks with cells and nothing else: the
 // empty blocks are absent from the file (GDAL reports them empty) and read as nodata (NaN), at
 // full resolution and in the overviews; and the file is exactly what GDAL's COG driver writes
@@ -311,12 +321,8 @@ float cogCell(GDALDatasetH ds, int b, std::int64_t ix, std::int64_t iy, double r
 TEST(LayerTiles, TheCogOfASparseBoxLeavesItsEmptyBlocksOutAndIsWhatGdalsCogDriverWrites) {
     const LayerTiles t = twoPatches(3000);
     const std::string bytes = gseg::map::encodeLayersCog(t, 256);
-    GDALAllRegister();
     const std::string name = "/vsimem/test_layer_tiles_sparse.tif";
-    VSILFILE* f = VSIFileFromMemBuffer(name.c_str(), reinterpret_cast<GByte*>(const_cast<char*>(bytes.data())), vsi_l_offset(bytes.size()), FALSE);
-    ASSERT_NE(f, nullptr);
-    VSIFCloseL(f);
-    GDALDatasetH ds = GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+    GDALDatasetH ds = openInMemory(bytes, name);
     ASSERT_NE(ds, nullptr);
     EXPECT_STREQ(GDALGetMetadataItem(ds, "LAYOUT", "IMAGE_STRUCTURE"), "COG");
     EXPECT_EQ(bytes.substr(0, 4), std::string("II*\0", 4)) << "a classic TIFF: under 2 GB of values";
@@ -395,12 +401,8 @@ TEST(LayerTiles, ThePoseJumpCogIsABigTiffOfTheBlocksSeen) {
     const std::string bytes = gseg::map::encodeLayersCog(t);
     EXPECT_EQ(bytes.substr(0, 4), std::string("II+\0", 4)) << "BigTIFF: over 2 GB of values, as GDAL's BIGTIFF=IF_SAFER";
     EXPECT_LT(bytes.size(), 200000u) << "the blocks seen";
-    GDALAllRegister();
     const std::string name = "/vsimem/test_layer_tiles_jump.tif";
-    VSILFILE* f = VSIFileFromMemBuffer(name.c_str(), reinterpret_cast<GByte*>(const_cast<char*>(bytes.data())), vsi_l_offset(bytes.size()), FALSE);
-    ASSERT_NE(f, nullptr);
-    VSIFCloseL(f);
-    GDALDatasetH ds = GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+    GDALDatasetH ds = openInMemory(bytes, name);
     ASSERT_NE(ds, nullptr);
     EXPECT_STREQ(GDALGetMetadataItem(ds, "LAYOUT", "IMAGE_STRUCTURE"), "COG");
     EXPECT_EQ(GDALGetRasterXSize(ds), 21760);

@@ -5,6 +5,7 @@
 
 #include <support/child.hpp>
 #include <support/output_files.hpp>
+#include <support/labelled_drive.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -21,73 +22,16 @@ namespace {
 namespace fs = std::filesystem;
 using gseg::io::RosMap;
 
-constexpr std::uint32_t kRoad = 40, kBuilding = 50;
-
-struct Pt {
-    float x, y, z;
-    std::uint32_t label;
-};
-
-const char* const kIdentity12 = "1 0 0 0 0 1 0 0 0 0 1 0";
-
-void writeBytes(const fs::path& path, const void* data, std::size_t n) {
-    std::ofstream(path, std::ios::binary).write(static_cast<const char*>(data), std::streamsize(n));
-}
-void writeText(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
-
-/// A drive folder: one scan per entry of `frames` (frame k named k), identity poses and Tr unless given.
-fs::path writeDrive(const std::string& name, const std::vector<std::vector<Pt>>& frames, std::string poses = "",
-                    const std::string& calib = std::string("P0: ") + kIdentity12 + "\nTr: " + kIdentity12 + "\n") {
-    const fs::path dir = gseg::test::freshDir("eval_map_tool", name);
-    fs::create_directories(dir / "velodyne"), fs::create_directories(dir / "labels");
-    for (std::size_t k = 0; k < frames.size(); ++k) {
-        char stem[32];
-        std::snprintf(stem, sizeof stem, "%06zu", k);
-        std::vector<float> xyzi;
-        std::vector<std::uint32_t> labels;
-        for (const Pt& p : frames[k]) xyzi.insert(xyzi.end(), {p.x, p.y, p.z, 0.f}), labels.push_back(p.label);
-        writeBytes(dir / "velodyne" / (std::string(stem) + ".bin"), xyzi.data(), xyzi.size() * 4);
-        writeBytes(dir / "labels" / (std::string(stem) + ".label"), labels.data(), labels.size() * 4);
-    }
-    if (poses.empty())
-        for (std::size_t k = 0; k < frames.size(); ++k) poses += std::string(kIdentity12) + "\n";
-    writeText(dir / "poses.txt", poses);
-    writeText(dir / "calib.txt", calib);
-    return dir;
-}
-
-/// n points of `label` at the centre of cell (cx, cy) of a 0.2 m grid at the origin, at heights z0, z0 + dz, ...
-void addCell(std::vector<Pt>& pts, int cx, int cy, std::uint32_t label, int n, float z0, float dz = 0.01f) {
-    for (int i = 0; i < n; ++i) pts.push_back({0.2f * float(cx) + 0.1f, 0.2f * float(cy) + 0.1f, z0 + dz * float(i), label});
-}
+using gseg::test::writeBytes;
+using gseg::test::writeText;
 
 gseg::test::CommandResult evalMap(const std::string& args) {
     return gseg::test::runCommand("'" + gseg::test::tool("gseg") + "' eval-map " + args + " 2>&1");
 }
 
 /// The rows drive with a map: cells 0-4 of the traversable row free, the obstacle row occupied.
-struct ToolCase {
-    fs::path dir, drive, map;
-};
-ToolCase toolCase(const std::string& name) {
-    ToolCase c;
-    c.drive = writeDrive(name + "_drive", {[] {
-                             std::vector<Pt> pts;
-                             for (int cx = 0; cx < 10; ++cx) {
-                                 addCell(pts, cx, 0, kRoad, 3, -1.7f);
-                                 addCell(pts, cx, 3, kRoad, 3, -1.7f);
-                                 addCell(pts, cx, 3, kBuilding, 2, -1.0f);
-                             }
-                             return pts;
-                         }()});
-    c.dir = gseg::test::freshDir("eval_map_tool", name);
-    RosMap m = RosMap::unknown(10, 6, 0.2, 0.0, 0.0);
-    for (int cx = 0; cx < 5; ++cx) m.value(cx, 0) = RosMap::kFree;
-    for (int cx = 0; cx < 10; ++cx) m.value(cx, 3) = RosMap::kOccupied;
-    gseg::test::writeRosMap((c.dir / "map").string(), m);
-    c.map = c.dir / "map.yaml";
-    return c;
-}
+using ToolCase = gseg::test::RowsDriveCase;
+ToolCase toolCase(const std::string& name) { return gseg::test::rowsDriveCase("eval_map_tool", name); }
 
 TEST(EvalMapTool, PrintsTheMapBesideTheBaselineAndWritesTheReport) {
     const ToolCase c = toolCase("tool_report");

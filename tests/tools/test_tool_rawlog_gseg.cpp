@@ -2,6 +2,8 @@
 // MPI, the drive's context (#31). The filter itself: tests/mrpt/test_ground_filter.cpp.
 #include <gseg/io/kitti.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
+#include <support/labelled_drive.hpp>
+#include <support/sim_observations.hpp>
 #include <support/child.hpp>
 #include <support/lidar_sim.hpp>
 #include <support/paths.hpp>
@@ -162,22 +164,8 @@ namespace {
 
 const std::string kRotScan = "/usr/share/mrpt/datasets/rot_scan_velodyne.rawlog";
 
-/// A simulated level scan as a CObservationPointCloud.
-mrpt::obs::CObservationPointCloud simulatedCloud(const gseg::test::SimScan& scan) {
-    auto pc = mrpt::maps::CPointsMapXYZI::Create();
-    for (std::size_t i = 0; i < scan.size(); ++i) pc->insertPoint(scan.xyz[3 * i], scan.xyz[3 * i + 1], scan.xyz[3 * i + 2]);
-    mrpt::obs::CObservationPointCloud obs;
-    obs.pointcloud = pc;
-    obs.sensorLabel = "SIM";
-    return obs;
-}
-
-gseg::test::SimScan streetScan() {
-    gseg::test::Scene s;
-    s.addFlatGround(1.73);
-    s.addBox(6, -1, -1.73, 8, 1, 0);
-    return gseg::test::simulate(s, gseg::test::Lidar::hdl64());
-}
+using gseg::test::simulatedCloud;
+using gseg::test::streetScan;
 
 }  // namespace
 
@@ -643,19 +631,8 @@ std::vector<std::size_t> groundPerScan(const std::string& rawlog) {
     return out;
 }
 
-/// Drive 09 (rural) of the shared labelled drives as the rawlog kDir/<name>.rawlog (with poses, or
-/// without), or "" (a failure reported).
-std::string drive09Rawlog(bool poses, const std::string& name) {
-    const std::string rel = "semantickitti-drives/sequences/09/poses.txt";
-    const std::string p = gseg::test::sharedData(rel);
-    if (p.empty()) return "";
-    fs::create_directories(kDir);
-    const std::string out = (kDir / (name + ".rawlog")).string();
-    const auto k = gseg::test::runCommand("'" + gseg::test::tool("kitti2rawlog") + "' -q -w -i '" + fs::path(p).parent_path().string() +
-                                          "' -o '" + out + "'" + (poses ? "" : " --no-poses"));
-    EXPECT_EQ(k.status, 0) << k.output;
-    return k.status == 0 ? out : "";
-}
+/// Drive 09 as the rawlog kDir/<name>.rawlog (with poses, or without), or "" (a failure reported).
+std::string drive09Rawlog(bool poses, const std::string& name) { return gseg::test::drive09Rawlog(kDir, name, poses); }
 
 }  // namespace
 
