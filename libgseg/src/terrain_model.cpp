@@ -219,8 +219,6 @@ void TerrainModel::build() {
     };
     const Disc inner = discOf(options_.supportRadius), outer = discOf(std::max(options_.supportRadius, options_.sparseRadius));
     const int r = outer.r;
-    // A cell that joins may change the candidates within the inner disc around it, and beyond it
-    // those whose inner support is too small (`sparse`): they are judged again in the next wave.
     // The tiles around a candidate's tile, found once per tile (candidates come tile by tile), so
     // a cell near it is an index, not a hash lookup.
     const int span = (r + kTileSize - 1) / kTileSize, side = 2 * span + 1;
@@ -273,6 +271,10 @@ void TerrainModel::build() {
     // candidate's own cell is not modelled (NaN) while it is a candidate.
     struct Sums {
         double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
+        Sums& operator+=(const Sums& o) {
+            n += o.n, sx += o.sx, sy += o.sy, sz += o.sz, sxx += o.sxx, sxy += o.sxy, syy += o.syy, sxz += o.sxz, syz += o.syz;
+            return *this;
+        }
     };
     // `hole`: the sums of a smaller disc already taken (its cells left out here), or nullptr.
     auto sumsOver = [&](const Disc& d, std::int32_t cx, std::int32_t cy, const Disc* hole) {
@@ -340,9 +342,7 @@ void TerrainModel::build() {
             const Disc* support = &inner;
             sparse[k] = s.n < options_.minSupport;
             if (sparse[k] && outer.r > inner.r) {  // the ring beyond the inner disc added
-                const Sums ring = sumsOver(outer, cand.ix, cand.iy, &inner);
-                s.n += ring.n, s.sx += ring.sx, s.sy += ring.sy, s.sz += ring.sz, s.sxx += ring.sxx, s.sxy += ring.sxy;
-                s.syy += ring.syy, s.sxz += ring.sxz, s.syz += ring.syz;
+                s += sumsOver(outer, cand.ix, cand.iy, &inner);
                 support = &outer;
             }
             const double n = s.n, sx = s.sx, sy = s.sy, sz = s.sz, sxx = s.sxx, sxy = s.sxy, syy = s.syy, sxz = s.sxz, syz = s.syz;
@@ -370,7 +370,9 @@ void TerrainModel::build() {
         pending.clear();
         std::fill(queued.begin(), queued.end(), 0);
         if (joined.empty()) break;
-        // The outer disc row by row, each row's candidates read from at most two tiles' rows.
+        // A cell that joined may change the candidates within the inner disc around it, and beyond
+        // it those whose inner support was too small (`sparse`). The outer disc row by row, each
+        // row's candidates read from at most two tiles' rows.
         std::uint64_t lastKey = ~std::uint64_t(0);
         const std::vector<std::uint32_t>* lastTile = nullptr;
         for (const std::size_t k : joined)

@@ -33,10 +33,11 @@ bool isSegmentedHalf(const ::mrpt::obs::CObservation& obs) {
 struct RawlogSegmenter::Item {
     std::size_t entry = 0;
     std::shared_ptr<::mrpt::serialization::CSerializable> object;  ///< the entry as read
-    ::mrpt::obs::CObservation::Ptr scan;     ///< observation layout: the scan to segment (nullptr: `object` passes through)
-    std::shared_ptr<::mrpt::obs::CSensoryFrame> frame;  ///< sensory-frame layout
+    std::shared_ptr<::mrpt::obs::CSensoryFrame> frame;  ///< sensory-frame layout (null: an observation or another object)
     std::vector<int> partTask;               ///< per observation of `frame`: its index in `tasks` (-1: passed through)
-    std::vector<::mrpt::obs::CObservation::Ptr> tasks;  ///< the scans to segment, in order
+    /// The scans to segment, in order: of `frame`, or `object` itself (observation layout; empty:
+    /// it passes through).
+    std::vector<::mrpt::obs::CObservation::Ptr> tasks;
 };
 
 /// One scan segmented (or why not).
@@ -72,16 +73,16 @@ void RawlogSegmenter::plan(std::size_t entry, const std::shared_ptr<::mrpt::seri
     if (held_) {  // the held scan: its pair follows (passed through), or it is segmented
         Item held = std::move(*held_);
         held_.reset();
-        if (obs && isGroundHalfOf(*obs, *held.scan)) {
+        if (obs && isGroundHalfOf(*obs, *held.tasks.front())) {
             ++read_.alreadySplit;
-            held.scan = nullptr, held.tasks.clear();
+            held.tasks.clear();
         }
         ready.push_back(std::move(held));
     }
     Item item;
     item.entry = entry, item.object = object;
     if (obs && wanted(*obs)) {
-        item.scan = obs, item.tasks = {obs};
+        item.tasks = {obs};
         held_ = std::make_unique<Item>(std::move(item));
         return;
     }
@@ -161,12 +162,12 @@ std::vector<::mrpt::obs::CObservation::Ptr> RawlogSegmenter::outputOf(const ::mr
 }
 
 void RawlogSegmenter::emitItem(const Item& item, std::vector<Segmented>& segmented) {
-    if (item.scan) {
-        for (const auto& o : outputOf(item.scan, item.entry, segmented.front())) emit_(*o);
+    if (!item.frame && item.tasks.empty()) {  // passed through
+        emit_(*item.object);
         return;
     }
-    if (!item.frame) {
-        emit_(*item.object);
+    if (!item.frame) {  // an observation: itself and its halves
+        for (const auto& o : outputOf(item.tasks.front(), item.entry, segmented.front())) emit_(*o);
         return;
     }
     ::mrpt::obs::CSensoryFrame result;
