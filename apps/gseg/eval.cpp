@@ -240,7 +240,7 @@ std::vector<FrameResult> evaluateOnRanks(const std::vector<Frame>& frames, const
 struct DriveContext {
     std::string sequence;
     std::vector<FrameRow> alone, withContext;
-    std::size_t relabelled = 0;       ///< points turned ground, all frames
+    std::size_t relabelled = 0;       ///< points relabelled (both ways), all frames
     std::size_t anchors = 0, grown = 0;  ///< cells of the model
     std::string skipped;               ///< why the sequence has no context figures ("" if it has)
 };

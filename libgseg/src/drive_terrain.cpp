@@ -12,13 +12,15 @@ DriveTerrain::DriveTerrain(const TerrainOptions& options, double maxRange, doubl
     if (!std::isfinite(keepRadius_)) throw std::invalid_argument("DriveTerrain: keepRadius must be finite");
 }
 
-std::size_t DriveTerrain::label(const PointCloudView& world, std::vector<std::uint8_t>& labels, const Eigen::Vector3d& sensor) {
+std::size_t DriveTerrain::label(const PointCloudView& world, std::vector<std::uint8_t>& labels, const Eigen::Vector3d& sensor,
+                                std::size_t* promoted) {
     if (labels.size() != world.size())
         throw std::invalid_argument("DriveTerrain::label: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(world.size()) + " points");
     // The evidence of this scan is the segmenter's, taken before relabelling.
     const std::vector<TerrainSample> samples = terrainSamples(world, labels, model_.options().cellSize, maxRange_, sensor);
-    const std::size_t changed = model_.scans() ? model_.relabel(world, labels) : 0;
+    if (promoted) *promoted = 0;
+    const std::size_t changed = model_.scans() ? model_.relabel(world, labels, promoted) : 0;
     model_.forgetFartherThan(sensor.x(), sensor.y(), keepRadius_);
     model_.add(samples);
     model_.build();
@@ -30,12 +32,15 @@ namespace {
 /// `relabel(labels)` on the labels of `result` with its reflections marked 2 (left alone), the
 /// counts then updated.
 template <class F>
-std::size_t onResult(Result& result, F&& relabel) {
+std::size_t onResult(Result& result, std::size_t* promotedOut, F&& relabel) {
     for (const std::uint32_t i : result.belowGround) result.labels.at(i) = 2;
-    const std::size_t changed = relabel(result.labels);
+    std::size_t promoted = 0;
+    const std::size_t changed = relabel(result.labels, promoted);  // both ways
     for (const std::uint32_t i : result.belowGround) result.labels[i] = 0;
-    result.numGround += changed;
-    result.numNonGround -= changed;
+    const std::size_t demoted = changed - promoted;
+    result.numGround = result.numGround + promoted - demoted;
+    result.numNonGround = result.numNonGround + demoted - promoted;
+    if (promotedOut) *promotedOut = promoted;
     return changed;
 }
 
@@ -48,12 +53,12 @@ std::vector<TerrainSample> terrainSamples(const PointCloudView& world, const Res
     return terrainSamples(world, labels, cellSize, maxRange, sensor);
 }
 
-std::size_t DriveTerrain::label(const PointCloudView& world, Result& result, const Eigen::Vector3d& sensor) {
-    return onResult(result, [&](std::vector<std::uint8_t>& labels) { return label(world, labels, sensor); });
+std::size_t DriveTerrain::label(const PointCloudView& world, Result& result, const Eigen::Vector3d& sensor, std::size_t* promoted) {
+    return onResult(result, promoted, [&](std::vector<std::uint8_t>& labels, std::size_t& promoted) { return label(world, labels, sensor, &promoted); });
 }
 
-std::size_t relabelWithModel(const TerrainModel& model, const PointCloudView& world, Result& result) {
-    return onResult(result, [&](std::vector<std::uint8_t>& labels) { return model.relabel(world, labels); });
+std::size_t relabelWithModel(const TerrainModel& model, const PointCloudView& world, Result& result, std::size_t* promoted) {
+    return onResult(result, promoted, [&](std::vector<std::uint8_t>& labels, std::size_t& promoted) { return model.relabel(world, labels, &promoted); });
 }
 
 }  // namespace gseg

@@ -44,6 +44,7 @@ void TerrainOptions::validate() const {
     positive(tolerance, "tolerance [m]");
     positive(supportRadius, "supportRadius [m]");
     positive(pointTolerance, "pointTolerance [m]");
+    positive(footHeight, "footHeight [m]");
     if (!(standHeight > pointTolerance && std::isfinite(standHeight)))
         throw std::invalid_argument("TerrainOptions.standHeight = " + std::to_string(standHeight) + ": must exceed pointTolerance");
     positive(sparseRadius, "sparseRadius [m]");
@@ -437,29 +438,33 @@ void TerrainModel::forEachModelled(const std::function<void(std::int32_t, std::i
     }
 }
 
-std::size_t TerrainModel::relabel(const PointCloudView& points, std::vector<std::uint8_t>& labels) const {
+std::size_t TerrainModel::relabel(const PointCloudView& points, std::vector<std::uint8_t>& labels, std::size_t* promoted) const {
     if (labels.size() != points.size())
         throw std::invalid_argument("TerrainModel::relabel: " + std::to_string(labels.size()) + " labels for " +
                                     std::to_string(points.size()) + " points");
-    std::size_t changed = 0;
+    std::size_t up = 0, down = 0;
     for (std::size_t i = 0; i < points.size(); ++i) {
-        if (labels[i]) continue;
+        if (labels[i] > 1) continue;
         const float* p = points.point(i);
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
         std::int32_t ix = 0, iy = 0;
         if (!cellIndex(p[0], options_.cellSize, ix) || !cellIndex(p[1], options_.cellSize, iy)) continue;
         const TerrainCell* c = find(ix, iy);
         if (!c || c->state == TerrainCell::None) continue;
-        if (!(std::abs(double(p[2]) - double(c->elevation)) <= options_.pointTolerance)) continue;
+        const double dz = double(p[2]) - double(c->elevation);
+        // Only the two bands the rules act on look at the neighbours.
+        if (labels[i] ? !(dz > options_.footHeight) : !(std::abs(dz) <= options_.pointTolerance)) continue;
         bool standing = false;
         for (int dy = -1; dy <= 1 && !standing; ++dy)
             for (int dx = -1; dx <= 1 && !standing; ++dx) {
                 const TerrainCell* n = find(ix + dx, iy + dy);
                 standing = n && double(n->highMax) > double(c->elevation) + options_.standHeight;
             }
-        if (!standing) labels[i] = 1, ++changed;
+        if (labels[i] && standing) labels[i] = 0, ++down;
+        else if (!labels[i] && !standing) labels[i] = 1, ++up;
     }
-    return changed;
+    if (promoted) *promoted = up;
+    return up + down;
 }
 
 }  // namespace gseg

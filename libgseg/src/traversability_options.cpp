@@ -51,6 +51,9 @@ const OptionTable<TraversabilityOptions>& table() {
             {"terrainStandHeight", &O::terrainStandHeight, "m",
              "... unless a return of any scan in its cell or the 8 around stands more than this above that ground (the foot of a "
              "wall, fence, car or bush), > terrainPointTolerance"},
+            {"terrainFootHeight", &O::terrainFootHeight, "m",
+             "... and where such a return stands, a ground point more than this above that ground becomes non-ground (the foot of a "
+             "wall, fence or car the segmenter took for ground), > 0"},
             {"fillGaps", &O::fillGaps, "-",
              "an unknown cell between traversable cells becomes traversable (layer source = 2) where the ground interpolates within "
              "maxStep and maxSlope, rays passed over it and none below it"},
@@ -133,6 +136,8 @@ void TraversabilityOptions::validate() const {
     if (!(terrainStandHeight > terrainPointTolerance && std::isfinite(terrainStandHeight)))
         throw std::invalid_argument("TraversabilityOptions.terrainStandHeight = " + std::to_string(terrainStandHeight) +
                                     ": must exceed terrainPointTolerance");
+    if (!(terrainFootHeight > 0 && std::isfinite(terrainFootHeight)))
+        throw std::invalid_argument("TraversabilityOptions.terrainFootHeight = " + std::to_string(terrainFootHeight) + ": must be > 0 m");
     if (!(maxGapWidth > 0 && std::isfinite(maxGapWidth)))
         throw std::invalid_argument("TraversabilityOptions.maxGapWidth = " + std::to_string(maxGapWidth) + ": must be > 0 m");
     if (!(minObstacleHeight >= 0 && minObstacleHeight < clearance))

@@ -201,7 +201,8 @@ FileResult segmentFile(const Cli& cli, const gseg::mrpt::LoadedConfig& config, c
     if (reporter.scans()) result.message += ", " + reporter.heights(config.distToGroundAuto) + " " + gseg::mrpt::configOrigin(cli.config);
     if (drive.model) {
         std::snprintf(text, sizeof text, ", %zu scans labelled with the drive's terrain model (%zu anchored + %zu grown cells, poses: %s): "
-                      "%zu points turned ground", t.withDrive, drive.model->anchors(), drive.model->grown(), drive.poseSource.c_str(), t.driveRelabelled);
+                      "%zu points turned ground, %zu non-ground", t.withDrive, drive.model->anchors(), drive.model->grown(), drive.poseSource.c_str(),
+                      t.driveRelabelled, t.driveDropped);
         result.message += text;
     } else if (t.scans && !drive.why.empty()) {
         result.message += ", single-scan labels (no drive context: " + drive.why + ")";

@@ -320,7 +320,8 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
         {"maxGroundRise", "0.5"}, {"groundRiseRadius", "1.2"}, {"obstacleClearProbability", "0.2"},
         {"minObstacleHeight", "0.25"}, {"driveTerrain", "false"}, {"terrainTolerance", "0.08"}, {"terrainRadius", "1.5"},
         {"terrainSparseRadius", "2.5"},
-        {"terrainMinScans", "3"}, {"terrainPointTolerance", "0.04"}, {"terrainStandHeight", "0.4"}, {"fillGaps", "false"},
+        {"terrainMinScans", "3"}, {"terrainPointTolerance", "0.04"}, {"terrainStandHeight", "0.4"}, {"terrainFootHeight", "0.1"},
+        {"fillGaps", "false"},
         {"maxGapWidth", "1"}};
     ASSERT_EQ(heightValues.size(), gseg::SensorHeightOptions::keys().size());
     ASSERT_EQ(mapValues.size(), gseg::map::TraversabilityOptions::keys().size());

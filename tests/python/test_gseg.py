@@ -492,7 +492,7 @@ def test_segment_with_poses_labels_with_the_earlier_scans_terrain_and_single_sca
     params = gseg.Params(str(SRC / "config/kitti_hdl64.yaml"))
     stream, alone = gseg.GroundSegmenter(params), gseg.GroundSegmenter(params)
     off = gseg.GroundSegmenter(gseg.Params(params, traversability={"driveTerrain": False}))
-    gained, recall = 0, {"alone": [], "stream": []}
+    up, down, recall = 0, 0, {"alone": [], "stream": []}
     precision = {"alone": [], "stream": []}
     for k, (b, lab, pose) in enumerate(zip(bins, labels, poses)):
         points = gseg.read_kitti_bin(str(b))
@@ -501,17 +501,20 @@ def test_segment_with_poses_labels_with_the_earlier_scans_terrain_and_single_sca
         assert np.array_equal(off.segment(points, pose=pose).labels, single), "driveTerrain: false is the scan alone"
         if k == 0:
             assert np.array_equal(with_drive, single), "the first scan has no earlier scans"
-        assert np.all(with_drive[single == 1] == 1), "ground stays ground"
-        gained += int(with_drive.sum() - single.sum())
+        up += int(np.sum((single == 0) & (with_drive == 1)))
+        down += int(np.sum((single == 1) & (with_drive == 0)))  # the feet of what stands
         truth = gseg.read_kitti_labels(str(lab))
         for name, pred in (("alone", single), ("stream", with_drive)):
             s = gseg.evaluate(points, truth, pred)
             recall[name].append(s["recall"])
             precision[name].append(s["precision"])
-    assert gained > 1000
+    assert up > 1000
+    assert 0 < down < up / 2
+    print(f"drive 09 stream: {up} points turned ground, {down} non-ground, P {np.mean(precision['alone']):.2f} -> "
+          f"{np.mean(precision['stream']):.2f}, R {np.mean(recall['alone']):.2f} -> {np.mean(recall['stream']):.2f}")
     assert np.mean(recall["stream"]) > np.mean(recall["alone"])
-    # measured 2026-12-06 on drive 09 (terrainMinScans 1): P 98.86 -> 98.51, R 91.66 -> 92.51, 9,524
-    # points turned ground (the offline form, the whole drive: 98.45 / 93.41)
+    # measured 2026-12-07 on drive 09 (terrainFootHeight 0.08): P 98.86 -> 98.60, R 91.66 -> 92.05,
+    # 9,761 points turned ground and 4,645 non-ground (the offline form, the whole drive: 98.49 / 93.03)
     assert np.mean(precision["stream"]) > np.mean(precision["alone"]) - 0.5
     with pytest.raises(ValueError, match="pose"):
         stream.segment(points, pose=np.eye(3))

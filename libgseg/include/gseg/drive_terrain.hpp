@@ -32,14 +32,16 @@ public:
 
     /// One scan, in stream order: `world` its points in the world frame (x, y, z; NaN allowed),
     /// `labels` the segmenter's (1 ground, 0 not; any other value: a point left alone, e.g. a
-    /// reflection below the ground), `sensor` the sensor's position. Turns non-ground points into
-    /// ground where the model of the earlier scans says so, then adds the scan. Returns the
-    /// points turned ground. Throws std::invalid_argument if the sizes differ.
-    std::size_t label(const PointCloudView& world, std::vector<std::uint8_t>& labels, const Eigen::Vector3d& sensor);
+    /// reflection below the ground), `sensor` the sensor's position. Relabels the scan with the
+    /// model of the earlier scans (TerrainModel::relabel(): ground found, feet of what stands
+    /// dropped), then adds the scan. Returns the points relabelled (both ways; `promoted`, if given,
+    /// gets those turned ground). Throws std::invalid_argument if the sizes differ.
+    std::size_t label(const PointCloudView& world, std::vector<std::uint8_t>& labels, const Eigen::Vector3d& sensor,
+                      std::size_t* promoted = nullptr);
 
     /// The same on a segmenter's Result (its labels and counts; its reflections, belowGround, are
     /// neither evidence nor relabelled).
-    std::size_t label(const PointCloudView& world, Result& result, const Eigen::Vector3d& sensor);
+    std::size_t label(const PointCloudView& world, Result& result, const Eigen::Vector3d& sensor, std::size_t* promoted = nullptr);
 
     const TerrainModel& model() const { return model_; }
     std::size_t scans() const { return model_.scans(); }
@@ -57,7 +59,8 @@ std::vector<TerrainSample> terrainSamples(const PointCloudView& world, const Res
 
 /// The offline form on a segmenter's Result: `model` (built from the whole drive) relabels the
 /// scan whose points in the world frame are `world` (TerrainModel::relabel()); reflections
-/// (belowGround) stay non-ground; the counts follow. Returns the points turned ground.
-std::size_t relabelWithModel(const TerrainModel& model, const PointCloudView& world, Result& result);
+/// (belowGround) stay non-ground; the counts follow. Returns the points relabelled (both ways;
+/// `promoted`, if given, gets those turned ground).
+std::size_t relabelWithModel(const TerrainModel& model, const PointCloudView& world, Result& result, std::size_t* promoted = nullptr);
 
 }  // namespace gseg

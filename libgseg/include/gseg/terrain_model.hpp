@@ -51,6 +51,7 @@ struct TerrainOptions {
     double maxSlope = 20;        ///< [deg] a candidate also lies within tolerance + cellSize x tan(maxSlope) of each modelled cell beside it (a kerb's face between two levels stays out), in (0, 90)
     double pointTolerance = 0.05;  ///< [m] relabel(): a non-ground point within this of its cell's modelled ground becomes ground
     double standHeight = 0.3;    ///< [m] relabel() leaves a point alone where a return of any scan in its cell or the 8 around stands more than this above the cell's modelled ground (the foot of a wall, a fence, a car, a bush), > tolerance
+    double footHeight = 0.08;    ///< [m] relabel(): a ground point more than this above its cell's modelled ground, where such a return stands beside it (the foot of a wall, fence or car), becomes non-ground, > 0
     /// Throws std::invalid_argument naming the first invalid field.
     void validate() const;
 };
@@ -125,10 +126,12 @@ public:
 
     /// Turns non-ground points (labels 0) lying within `pointTolerance` of their cell's modelled ground
     /// into ground (1), except where a return of any scan in the cell or its 8 neighbours stands
-    /// more than `standHeight` above that ground; `points` in the world frame, one label per
-    /// point; returns how many changed.
-    /// Ground points stay ground. Throws std::invalid_argument if the sizes differ.
-    std::size_t relabel(const PointCloudView& points, std::vector<std::uint8_t>& labels) const;
+    /// more than `standHeight` above that ground; where such a return stands, ground points (1)
+    /// lying more than `footHeight` above that ground become non-ground (0): the foot of a wall, a
+    /// fence or a car the segmenter took for ground. Other labels (2: reflections) stay. `points` in
+    /// the world frame, one label per point; returns how many changed (both ways; `promoted`, if
+    /// given, gets how many became ground). Throws std::invalid_argument if the sizes differ.
+    std::size_t relabel(const PointCloudView& points, std::vector<std::uint8_t>& labels, std::size_t* promoted = nullptr) const;
 
     /// Calls f(ix, iy, cell) for every modelled cell (state Anchor or Grown, after build()), in a
     /// fixed order (tile by tile, sorted).

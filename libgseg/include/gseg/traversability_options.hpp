@@ -40,6 +40,7 @@ struct TraversabilityOptions {
     int terrainMinScans = 1;          ///< [scans] scans that must agree on a cell before it anchors or joins the model, >= 1
     double terrainPointTolerance = 0.05;  ///< [m] labels with the drive's context (rawlog-gseg, gseg eval on drives, Python): a non-ground point within this of its cell's modelled ground becomes ground, > 0
     double terrainStandHeight = 0.3;  ///< [m] ... unless a return of any scan in its cell or the 8 around stands more than this above that ground (the foot of a wall, fence, car or bush), > terrainPointTolerance
+    double terrainFootHeight = 0.08;  ///< [m] ... and where such a return stands, a ground point more than this above that ground becomes non-ground (the foot of a wall, fence or car the segmenter took for ground), > 0
     bool fillGaps = true;             ///< an unknown cell between traversable cells (ring stripes) becomes traversable (layer `source` = 2) where the ground interpolates within maxStep and maxSlope, rays passed over it and none below it
     double maxGapWidth = 1.5;         ///< [m] widest gap filled (wider ones, ditches among them, stay unknown), > 0 (used as at most 50 cells: gapWidth())
     /// Throws std::invalid_argument naming the first invalid field (also a ray longer than
@@ -65,7 +66,7 @@ struct TraversabilityOptions {
         t.cellSize = resolution, t.tolerance = terrainTolerance, t.minScans = terrainMinScans;
         t.supportRadius = std::min(std::max(terrainRadius, resolution), 50 * resolution);  // the search window's cost is bounded
         t.sparseRadius = std::min(std::max(terrainSparseRadius, t.supportRadius), 50 * resolution);
-        t.pointTolerance = terrainPointTolerance, t.standHeight = terrainStandHeight;
+        t.pointTolerance = terrainPointTolerance, t.standHeight = terrainStandHeight, t.footHeight = terrainFootHeight;
         t.minAnchorPoints = minGroundPoints, t.maxSlope = maxSlope;
         return t;
     }

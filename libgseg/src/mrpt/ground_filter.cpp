@@ -61,10 +61,10 @@ void GroundFilter::relabelWithDrive(const std::vector<float>& sensorXyzi, const 
     if (collect_) {
         out.driveEvidence = gseg::terrainSamples(cloud, out.result, t.terrainOptions().cellSize, t.maxRange, sensor);
     } else if (driveModel_) {
-        out.driveRelabelled = gseg::relabelWithModel(*driveModel_, cloud, out.result);
+        out.driveDropped = gseg::relabelWithModel(*driveModel_, cloud, out.result, &out.driveRelabelled) - out.driveRelabelled;
     } else {
         if (!causal_) causal_ = std::make_unique<gseg::DriveTerrain>(t.terrainOptions(), t.maxRange);
-        out.driveRelabelled = causal_->label(cloud, out.result, sensor);
+        out.driveDropped = causal_->label(cloud, out.result, sensor, &out.driveRelabelled) - out.driveRelabelled;
     }
 }
 

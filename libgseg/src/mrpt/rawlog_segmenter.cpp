@@ -141,8 +141,10 @@ std::vector<::mrpt::obs::CObservation::Ptr> RawlogSegmenter::outputOf(const ::mr
     report.ground = o.result.numGround;
     report.nonFinite = o.nonFinitePoints;
     report.driveRelabelled = o.driveRelabelled;
+    report.driveDropped = o.driveDropped;
     totals_.withDrive += report.withDrive ? 1 : 0;
     totals_.driveRelabelled += report.driveRelabelled;
+    totals_.driveDropped += report.driveDropped;
     report.distToGround = o.distToGround;
     report.distToGroundEstimated = o.distToGroundEstimated;
     // The height check is the first scan's with points (each worker's filter checks its own first).

@@ -54,6 +54,7 @@ public:
         std::size_t nonFinitePoints = 0;  ///< input points with a NaN or infinite coordinate
         std::size_t reflections = 0;      ///< points more than belowGroundMargin below the ground (result.belowGround)
         std::size_t driveRelabelled = 0;  ///< points the drive's terrain model turned ground (filter() with a pose)
+        std::size_t driveDropped = 0;     ///< ground points it turned non-ground (the feet of what stands)
         /// collectDriveEvidence(true): the scan's evidence for the drive's model (its single-scan
         /// labels by cell of the configuration's terrain model, for TerrainModel::add() in scan order)
         std::vector<gseg::TerrainSample> driveEvidence;
@@ -79,8 +80,9 @@ public:
     Output filter(const ::mrpt::maps::CPointsMap& map, const std::string& label = "points");
 
     /// With the drive's context (#31): segments `obs` as filter(obs) does, then labels ground the
-    /// non-ground points lying on the terrain the drive's model holds (TerrainModel::relabel();
-    /// `result.labels`, the halves and `driveRelabelled` say so). `robotPose`: the vehicle's pose
+    /// non-ground points lying on the terrain the drive's model holds, and non-ground the feet of
+    /// what stands on it (TerrainModel::relabel(); `result.labels`, the halves and
+    /// `driveRelabelled` say so). `robotPose`: the vehicle's pose
     /// in the world frame (the observation's sensorPose is on the vehicle). The model is, by
     /// default, the causal one of the scans given to this call before (a stream: call it in the
     /// drive's order; gseg::DriveTerrain keeps the area around the sensor), or the one

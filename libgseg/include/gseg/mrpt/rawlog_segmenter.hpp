@@ -51,6 +51,7 @@ struct ScanReport {
     std::string heightWarning; ///< the first scan contradicts a fixed distToGround (GroundFilter::Output)
     double ms = 0;             ///< segmentation time
     std::size_t driveRelabelled = 0;  ///< points the drive's terrain model turned ground
+    std::size_t driveDropped = 0;     ///< ground points it turned non-ground (the feet of what stands)
     bool withDrive = false;    ///< labelled with the drive's context (it had a pose)
     std::string skipped;       ///< why it could not be segmented ("" if it was)
 };
@@ -60,7 +61,7 @@ struct RawlogTotals {
     std::size_t entries = 0;       ///< input entries seen
     std::size_t scans = 0;         ///< scans segmented
     std::size_t points = 0, ground = 0, nonFinite = 0;
-    std::size_t withDrive = 0, driveRelabelled = 0;  ///< scans labelled with the drive's context, points it turned ground
+    std::size_t withDrive = 0, driveRelabelled = 0, driveDropped = 0;  ///< scans labelled with the drive's context, points it turned ground, non-ground
     std::size_t alreadySplit = 0;  ///< scans passed through because their pair was already there
     double ms = 0;                 ///< segmentation time of all scans
     std::vector<ScanReport> skipped;  ///< scans that could not be segmented (passed through)
