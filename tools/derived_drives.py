@@ -6,13 +6,14 @@
                                                 CONFIG, score it with ../shared/tools/score_map.py
 
 `make` writes, for each labelled KITTI drive folder SEQ (velodyne/, labels/, poses.txt, calib.txt),
-four drives the shared data does not have:
+five drives the shared data does not have:
   NNr2    every 2nd ring (a 32-ring sensor's geometry; rings found where the azimuth wraps, as
           `gseg eval --ring-step` finds them)
   NNr4    every 4th ring (16 rings)
   NNf2    every 2nd frame (the vehicle twice as fast)
   NNlowz  the sensor 0.5 m lower (every point's z + 0.5 in the sensor frame, poses unchanged);
           `score` maps it with distToGround: auto (CONFIG's copy, which must hold a fixed height)
+  NNhighz the sensor 0.5 m higher (z - 0.5; a van's or truck's roof), mapped as lowz is
 Labels travel with their points; score_map.py's truth comes from the derived points, so each drive
 is scored against what its own sensor saw. `score` prints one line per drive: traversable
 precision, recall, unsafe beyond one cell [%], then the mean and worst over the drives.
@@ -22,7 +23,7 @@ import array, json, math, os, re, shutil, subprocess, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCORER = os.path.join(HERE, '..', '..', 'shared', 'tools', 'score_map.py')
-MODES = ('r2', 'r4', 'f2', 'lowz')
+MODES = ('r2', 'r4', 'f2', 'lowz', 'highz')
 
 
 def rings(p, n, min_ring_points=200):
@@ -77,9 +78,10 @@ def derive(seq, final, mode):
                     P.extend(p[4 * i:4 * i + 4])
                     L.append(lab[i])
             p, lab = P, L
-        elif mode == 'lowz':
+        elif mode in ('lowz', 'highz'):
+            dz = 0.5 if mode == 'lowz' else -0.5
             for i in range(len(lab)):
-                p[4 * i + 2] += 0.5
+                p[4 * i + 2] += dz
         open(os.path.join(out, 'velodyne', f'{n:06d}.bin'), 'wb').write(p.tobytes())
         open(os.path.join(out, 'labels', f'{n:06d}.label'), 'wb').write(lab.tobytes())
     os.rename(out, final)
@@ -97,7 +99,7 @@ def score(out, bindir, config):
     auto = os.path.join(out, 'config_auto_height.yaml')
     text = open(config).read()
     if not re.search(r'^distToGround:\s*[0-9.]+', text, re.M):
-        sys.exit(f'{config}: needs a fixed distToGround (the lowz drives use a copy with auto)')
+        sys.exit(f'{config}: needs a fixed distToGround (the lowz and highz drives use a copy with auto)')
     open(auto, 'w').write(re.sub(r'^distToGround:\s*[0-9.]+', 'distToGround: auto', text, count=1, flags=re.M))
     rows = []
     for d in sorted(e for e in os.listdir(out) if os.path.isdir(os.path.join(out, e, 'velodyne'))):
@@ -106,7 +108,7 @@ def score(out, bindir, config):
         if not os.path.exists(rawlog):
             subprocess.run([os.path.join(bindir, 'kitti2rawlog'), '-q', '-w', '-i', folder, '-o', rawlog], check=True)
         subprocess.run([os.path.join(bindir, 'rawlog-octomap'), '-q', '-w', '-i', rawlog, '-o', prefix,
-                        '-c', auto if d.endswith('lowz') else config], check=True)
+                        '-c', auto if d.endswith(('lowz', 'highz')) else config], check=True)
         m = json.loads(subprocess.run([sys.executable, SCORER, folder, prefix + '_costmap.yaml', '--json'],
                                       check=True, capture_output=True, text=True).stdout)['map']
         rows.append((d, m['trav_P'], m['trav_R'], m['unsafe1']))

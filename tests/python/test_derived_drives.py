@@ -36,7 +36,7 @@ def test_rings_frames_and_height_of_the_derived_drives(tmp_path):
     out = tmp_path / "derived"
     r = subprocess.run([sys.executable, str(TOOL), "make", str(out), str(seq)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    assert r.stdout.split() == ["07r2", "07r4", "07f2", "07lowz"]
+    assert r.stdout.split() == ["07r2", "07r4", "07f2", "07lowz", "07highz"]
     for name, rings in (("07r2", [0, 2]), ("07r4", [0])):
         p, lab = _read(out / name, 1)
         assert len(p) == 300 * len(rings) == len(lab)
@@ -48,6 +48,8 @@ def test_rings_frames_and_height_of_the_derived_drives(tmp_path):
     p0, lab0 = _read(seq, 0)
     p, lab = _read(out / "07lowz", 0)
     assert np.array_equal(lab, lab0) and np.allclose(p[:, 2], p0[:, 2] + 0.5) and np.array_equal(p[:, :2], p0[:, :2])
+    p, lab = _read(out / "07highz", 0)
+    assert np.array_equal(lab, lab0) and np.allclose(p[:, 2], p0[:, 2] - 0.5) and np.array_equal(p[:, :2], p0[:, :2])
 
 
 def test_a_frame_whose_labels_do_not_match_its_points_is_refused(tmp_path):
