@@ -247,8 +247,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
             if (!quiet) progress.message("rawlog-octomap: skipped " + skipped);
             if (!quiet && !gseg::tools::progressOut())  // --quiet: a skipped scan is still an error
                 std::fprintf(stderr, "rawlog-octomap: skipped %s\n", skipped.c_str());
-        } else if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
-            const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
+        } else if (!r.notes.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
+            const std::string line = "rawlog-octomap: " + r.describe + ": " + r.notes.heightWarning;
             if (gseg::tools::progressOut()) progress.message(line);
             else gseg::tools::note("%s\n", line.c_str());
         }
