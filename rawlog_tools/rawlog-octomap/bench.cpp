@@ -140,7 +140,7 @@ void runBench(const Cli& cli) {
     gseg::tools::say("median: plain OctoMap %.3f s (insertPointCloud alone %.3f s), rawlog-octomap %.3f s: %.1fx faster "
                 "(%.1fx against insertPointCloud alone)\n",
                 p, pi, f, p / f, pi / f);
-    const PhaseTimes& t = last.times;
+    const PhaseTimes& t = last.tally.times;
     gseg::tools::say("rawlog-octomap, last round [s]: read %.3f, segmentation %.3f, transform %.3f, ray casting %.3f "
                 "(summed over %u worker thread(s)), map update %.3f, writing %.3f\n",
                 t.read, t.segmentation, t.transform, t.rayCasting, cli.threads, t.mapUpdate, t.writing);

@@ -152,16 +152,18 @@ double peakResidentMb() {
 
 void printReport(const RunReport& r, double resolution) {
     const gseg::map::MapStats& s = r.stats;
+    const gseg::map::BuildTally& tally = r.tally;
     const double cellArea = resolution * resolution;
     gseg::tools::say("rawlog-octomap: %zu scans (%zu from _ground/_obstacles pairs, %zu raw scans not segmented again, %zu "
                 "skipped), poses from %s, sensor path %.2f m; points: %zu ground, %zu obstacle, %zu not used; %zu rays\n",
-                s.scans + r.skipped.size(), r.presegmented, r.rawWithPair, r.skipped.size(), r.poseSource.c_str(),
+                s.scans + tally.skipped.size(), tally.presegmented, r.rawWithPair, tally.skipped.size(), r.poseSource.c_str(),
                 s.pathLength, s.groundPoints, s.obstaclePoints, s.pointsSkipped, s.rays);
     gseg::tools::say("%s\n", r.height.c_str());
-    if (r.reflections) gseg::tools::say("%zu points more than belowGroundMargin below the ground left out (reflections)\n", r.reflections);
-    if (!r.heightFallbacks.empty())
-        gseg::tools::say("distToGround: auto found no estimate in %zu scan(s), first: %s\n", r.heightFallbacks.size(),
-                    r.heightFallbacks[0].c_str());
+    if (tally.reflections)
+        gseg::tools::say("%zu points more than belowGroundMargin below the ground left out (reflections)\n", tally.reflections);
+    if (!tally.heightFallbacks.empty())
+        gseg::tools::say("distToGround: auto found no estimate in %zu scan(s), first: %s\n", tally.heightFallbacks.size(),
+                    tally.heightFallbacks[0].c_str());
     if (r.origin)
         gseg::tools::say("map origin: (%.3f, %.3f, %.3f) m of the poses' world is (0, 0, 0) in the maps\n", r.origin->x(),
                     r.origin->y(), r.origin->z());
@@ -179,8 +181,8 @@ void printReport(const RunReport& r, double resolution) {
                 double(s.costmapOccupied) * cellArea, s.costmapUnknown);
     gseg::tools::say("voxel columns (_traversability.png, not the costmap): %zu traversable, %zu obstacle, %zu unknown cells\n",
                 s.cellsTraversable, s.cellsObstacle, s.cellsUnknown);
-    const PhaseTimes& t = r.times;
-    const std::size_t processes = r.scansByProcess.size();
+    const PhaseTimes& t = tally.times;
+    const std::size_t processes = tally.scansByRank.size();
     std::string where = r.workers ? "summed over " + std::to_string(r.workers) + " worker thread(s)" : "one thread";
     if (processes > 1) where += " in " + std::to_string(processes) + " processes";
     gseg::tools::say("time [s]: read %.2f, segmentation %.2f, transform %.2f, ray casting %.2f (%s), map update %.2f, "
@@ -192,7 +194,7 @@ void printReport(const RunReport& r, double resolution) {
     if (processes > 1) {
         std::string split;
         for (std::size_t p = 0; p < processes; ++p)
-            split += (p ? ", " : "") + std::to_string(r.scansByProcess[p]) + " on rank " + std::to_string(p);
+            split += (p ? ", " : "") + std::to_string(tally.scansByRank[p]) + " on rank " + std::to_string(p);
         gseg::tools::say("scans worked on: %s\n", split.c_str());
     }
     for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
@@ -245,8 +247,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
             if (!quiet) progress.message("rawlog-octomap: skipped " + skipped);
             if (!quiet && !gseg::tools::progressOut())  // --quiet: a skipped scan is still an error
                 std::fprintf(stderr, "rawlog-octomap: skipped %s\n", skipped.c_str());
-        } else if (!r.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
-            const std::string line = "rawlog-octomap: " + r.describe + ": " + r.heightWarning;
+        } else if (!r.notes.heightWarning.empty() && !quiet) {  // a warning, not an error: the maps go on
+            const std::string line = "rawlog-octomap: " + r.describe + ": " + r.notes.heightWarning;
             if (gseg::tools::progressOut()) progress.message(line);
             else gseg::tools::note("%s\n", line.c_str());
         }
@@ -265,11 +267,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     if (map.empty()) throw std::runtime_error(cli.input + ": none of the " + std::to_string(total) + " scans could be used");
     RunReport report;
     report.workers = how.threads + how.remoteWorkers;
-    report.times = tally.times;
-    report.presegmented = tally.presegmented, report.reflections = tally.reflections;
-    report.heightFallbacks = tally.heightFallbacks, report.skipped = tally.skipped;
+    report.tally = tally;
     report.height = gseg::mrpt::heightSummary(cfg, cli.config);
-    report.scansByProcess = tally.scansByRank;
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();
     report.poseSource = stream.poseSource();
@@ -279,7 +278,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         std::fprintf(gseg::tools::progressOut(), "rawlog-octomap: writing %zu map files (%s_*) ...\n",
                      gseg::map::TraversabilityMap::outputPaths(cli.prefix).size(), cli.prefix.c_str());
     report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix, cli.outputs); });
-    report.times.writing = gseg::secondsSince(t0);
+    report.tally.times.writing = gseg::secondsSince(t0);
     report.stats = map.stats();
     report.wallSeconds = gseg::secondsSince(start);
     report.peakMb = peakResidentMb();
@@ -317,8 +316,9 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         }
         const RunReport r = buildMaps(cli, false, &remote);
         printReport(r, cli.options.resolution);
-        if (!r.skipped.empty()) {
-            std::cerr << "rawlog-octomap: " << r.skipped.size() << " scan(s) skipped, first: " << r.skipped[0] << "\n";
+        if (!r.tally.skipped.empty()) {
+            std::cerr << "rawlog-octomap: " << r.tally.skipped.size() << " scan(s) skipped, first: " << r.tally.skipped[0]
+                      << "\n";
             return gseg::tools::kPartlyDone;
         }
         return gseg::tools::kDone;

@@ -39,20 +39,15 @@ class RemoteWorkers;
 /// What a run did.
 struct RunReport {
     gseg::map::MapStats stats;
-    PhaseTimes times;
+    gseg::map::BuildTally tally;  ///< the builder's counts; tally.times.writing added by the tool
     double wallSeconds = 0;
     double peakMbBeforeWriting = 0, peakMb = 0;  ///< [MB] peak resident memory of the process (ru_maxrss)
-    std::size_t presegmented = 0;  ///< scans taken from a _ground/_obstacles pair
     std::size_t rawWithPair = 0;   ///< raw scans not segmented again because their pair was there
-    std::size_t reflections = 0;   ///< points left out of both maps: far below the ground
-    std::vector<std::string> heightFallbacks;  ///< distToGround: auto found no estimate: "scan k (...): what was used"
     std::string height;  ///< the sensor height and where it came from (gseg::mrpt::heightSummary)
-    std::vector<std::string> skipped;  ///< "scan k (...): reason"
     std::vector<std::string> written;
     std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)
     std::string poseSource;                 ///< "the rawlog" or the pose file
     unsigned workers = 0;                   ///< worker threads, on every process
-    std::vector<std::size_t> scansByProcess;  ///< scans worked on by each MPI rank (one entry in one process)
 };
 
 /// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless

@@ -126,15 +126,15 @@ TEST(MapBuilderWorker, ResultsDependOnTheScanAloneNotOnTheWorkerOrTheOrder) {
             EXPECT_TRUE(a[i].skipped.empty()) << a[i].skipped;
             EXPECT_FALSE(a[i].update.groundHits.empty()) << jobs[i].describe();
             EXPECT_TRUE(a[i].update == b[i].update) << jobs[i].describe() << " differs in reverse order";
-            EXPECT_EQ(a[i].heightNote, b[i].heightNote);
+            EXPECT_EQ(a[i].notes.heightNote, b[i].notes.heightNote);
         }
         if (cfg.distToGroundAuto) {
             // The one height rule: scan 2 has no estimate and gets the configured height, not scan 1's estimate.
-            EXPECT_NE(a[2].heightNote.find("1.80 m (fallback"), std::string::npos) << a[2].heightNote;
-            EXPECT_TRUE(a[1].heightNote.empty()) << a[1].heightNote;
-            EXPECT_TRUE(a[3].heightNote.empty()) << a[3].heightNote;
+            EXPECT_NE(a[2].notes.heightNote.find("1.80 m (fallback"), std::string::npos) << a[2].notes.heightNote;
+            EXPECT_TRUE(a[1].notes.heightNote.empty()) << a[1].notes.heightNote;
+            EXPECT_TRUE(a[3].notes.heightNote.empty()) << a[3].notes.heightNote;
         } else {
-            EXPECT_TRUE(a[2].heightNote.empty()) << "a fixed height has no fallback";
+            EXPECT_TRUE(a[2].notes.heightNote.empty()) << "a fixed height has no fallback";
         }
     }
 }
@@ -157,8 +157,8 @@ TEST(MapBuilderWorker, AFixedHeightIsCheckedOnTheFirstScanOnly) {
     gseg::mrpt::LoadedConfig wrong;
     wrong.params.distToGround = 0.6;  // the sensor is 1.8 m up
     ScanWorker worker(wrong, {});
-    EXPECT_TRUE(worker(jobs[1]).heightWarning.empty()) << "only scan 0 is checked (any worker may get it)";
-    EXPECT_NE(worker(jobs[0]).heightWarning.find("distToGround is 0.600 m"), std::string::npos);
+    EXPECT_TRUE(worker(jobs[1]).notes.heightWarning.empty()) << "only scan 0 is checked (any worker may get it)";
+    EXPECT_NE(worker(jobs[0]).notes.heightWarning.find("distToGround is 0.600 m"), std::string::npos);
 }
 
 TEST(MapBuilder, TheSameMapsWithAnyNumberOfWorkers) {
@@ -213,7 +213,7 @@ TEST(MapBuilder, ScansAndResultsThroughTheWireFormatGiveTheSameMaps) {
         r.rank = 1;
         const ScanResult back = gseg::map::decodeScanResult(gseg::map::encodeScanResult(r));
         EXPECT_TRUE(back.update == r.update);
-        EXPECT_EQ(back.heightNote, r.heightNote);
+        EXPECT_EQ(back.notes.heightNote, r.notes.heightNote);
         EXPECT_EQ(back.rank, 1);
         return back;
     };

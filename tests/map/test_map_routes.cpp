@@ -8,6 +8,7 @@
 #include <gseg/map/traversability_map.hpp>
 #include <support/child.hpp>
 #include <support/lidar_sim.hpp>
+#include <support/map_files.hpp>
 #include <support/paths.hpp>
 
 #include <gtest/gtest.h>
@@ -68,9 +69,6 @@ std::string simulatedSequence(const std::string& dir, double height = 1.723) {
     return dir;
 }
 
-const char* const kSuffixes[] = {"_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png",
-                                 "_traversability.ply", "_traversability.3Dscene", "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png", "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png", "_layer_source.png"};
-
 /// kitti2rawlog of the first scan of simulatedSequence(dir/seq): dir/seq.rawlog and dir/seq.simplemap.
 gseg::test::CommandResult simulatedSimplemap(const std::string& dir) {
     return runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + simulatedSequence(dir + "/seq") + "' -o " + dir +
@@ -109,7 +107,7 @@ std::string yamlOfIni(const std::string& ini) {
 void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string& dir,
                                   const std::string& yaml = "config/kitti_hdl64.yaml",
                                   const std::string& ini = "config/octomap_maps.ini") {
-    ASSERT_EQ(gseg::map::TraversabilityMap::outputPaths("x").size(), std::size(kSuffixes));
+    ASSERT_EQ(gseg::map::TraversabilityMap::outputPaths("x").size(), gseg::test::kMapFiles.size());
     auto r = runCommand(gseg::test::tool("kitti2rawlog") + " -i '" + sequence + "' -o " + dir + "/seq.rawlog --simplemap " +
                         dir + "/seq.simplemap");
     ASSERT_EQ(r.status, 0) << r.output;
@@ -123,13 +121,13 @@ void expectSameMapsFromBothRoutes(const std::string& sequence, const std::string
     r = runCommand("cd '" + kSource + "' && " + kHostEnv + "'" + gseg::test::tool("gseg-observations2map") + "' " + ini + " " + dir +
                    "/seq.simplemap " + dir + "/w");
     ASSERT_EQ(r.status, 0) << r.output;
-    for (const char* s : kSuffixes) {
+    for (const std::string& s : gseg::test::kMapFiles) {
         const std::string a = gseg::test::readText(dir + "/r" + s);
         EXPECT_GT(a.size(), 100u) << s;
         // The costmap's YAML names its own PGM: compared with the prefix swapped.
         auto named = [&](const std::string& prefix) {
             std::string t = gseg::test::readText(dir + "/" + prefix + s);
-            const std::size_t at = std::string(s) == "_costmap.yaml" ? t.find(prefix + "_costmap.pgm") : std::string::npos;
+            const std::size_t at = s == "_costmap.yaml" ? t.find(prefix + "_costmap.pgm") : std::string::npos;
             return at == std::string::npos ? t : t.replace(at, prefix.size(), "r");
         };
         EXPECT_TRUE(a == named("o2m_gseg_maps__CTraversabilityOctoMap_00")) << s << " differs";

@@ -666,8 +666,8 @@ TEST(OctomapBuilder, ReflectionsBelowTheRoadBecomeNeitherGroundNorObstacles) {
     fixed.params.distToGround = n.sensorHeight;
     gseg::mrpt::ScanSegmenter seg(fixed);
     const gseg::map::WorldScan w = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), seg);
-    EXPECT_GE(w.reflections, 1900u);
-    EXPECT_EQ(w.ground.size() / 3 + w.obstacles.size() / 3 + w.reflections, n.scan.size());
+    EXPECT_GE(w.notes.reflections, 1900u);
+    EXPECT_EQ(w.ground.size() / 3 + w.obstacles.size() / 3 + w.notes.reflections, n.scan.size());
     for (std::size_t i = 2; i < w.obstacles.size(); i += 3) EXPECT_GT(w.obstacles[i], -1.73f - 1.0f) << i / 3;
     gseg::map::TraversabilityMap map;
     map.apply(gseg::map::castScan(w.groundView(), w.obstaclesView(), w.sensorOrigin, map.options()));
@@ -677,6 +677,6 @@ TEST(OctomapBuilder, ReflectionsBelowTheRoadBecomeNeitherGroundNorObstacles) {
     automatic.distToGroundAuto = true;
     gseg::mrpt::ScanSegmenter autoSeg(automatic);
     const gseg::map::WorldScan a = gseg::map::segmentToWorld(obs, mrpt::poses::CPose3D(), autoSeg);
-    EXPECT_GE(a.reflections, 1900u);
-    EXPECT_TRUE(a.heightNote.empty()) << a.heightNote;
+    EXPECT_GE(a.notes.reflections, 1900u);
+    EXPECT_TRUE(a.notes.heightNote.empty()) << a.notes.heightNote;
 }

@@ -282,7 +282,7 @@ TEST(GroundFilterHostile, NonFinitePointsAreLabelledNonGroundCountedAndLeftOutOf
     }
     withHoles.pointcloud = holed;
     const auto out = filter.filter(withHoles);
-    EXPECT_EQ(out.nonFinitePoints, 3u);
+    EXPECT_EQ(out.result.numNonFinite, 3u);
     ASSERT_EQ(out.result.labels.size(), scan.size() + 3);
     std::vector<std::uint8_t> finiteLabels;
     for (std::size_t i = 0; i < out.result.labels.size(); ++i) {

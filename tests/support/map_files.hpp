@@ -1,7 +1,8 @@
 #pragma once
-// One map truth (#33): the class layer's picture (PREFIX_layer_class.png) shows the costmap
-// (PREFIX_costmap.pgm) cell for cell, in the PGM's orientation (x right, y up). Header-only (MRPT
-// tests only: the support library stays free of MRPT).
+// The map files of a run: their names (kMapFiles), and one map truth (#33): the class layer's
+// picture (PREFIX_layer_class.png) shows the costmap (PREFIX_costmap.pgm) cell for cell, in the
+// PGM's orientation (x right, y up). Header-only (MRPT tests only: the support library stays free
+// of MRPT).
 
 #include <gseg/map/column_class.hpp>
 #include <gseg/map/map_colours.hpp>
@@ -19,6 +20,13 @@
 #include <vector>
 
 namespace gseg::test {
+
+/// The 17 files of `rawlog-octomap -o PREFIX` (and of map 00 of gseg-observations2map), PREFIX-relative,
+/// stated here apart from the library's list (TraversabilityMap::outputPaths()) for the tests to check it.
+inline const std::vector<std::string> kMapFiles = {
+    "_ground.bt", "_obstacles.bt", "_traversability.ot", "_traversability.png", "_traversability.ply", "_traversability.3Dscene",
+    "_costmap.pgm", "_costmap.yaml", "_layers.tif", "_layer_elevation.png", "_layer_slope.png", "_layer_step.png",
+    "_layer_roughness.png", "_layer_clearance.png", "_layer_class.png", "_layer_cost.png", "_layer_source.png"};
 
 /// A binary PGM (P5, maxval 255): width, height and the pixels, row 0 at the top.
 struct Pgm {

@@ -2,6 +2,7 @@
 /// \file paths.hpp
 /// Where tests find the shared real data and the built tools.
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,9 @@ std::string sharedData(const std::string& relative);
 
 /// Message for GTEST_SKIP() when shared data is absent.
 std::string missingDataMessage(const std::string& relative);
+
+/// `path` in single quotes: one word of a shell command line (runCommand()); `path` holds no quote.
+inline std::string q(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
 
 /// Path of a built executable (`<build>/bin/<name>`).
 std::string tool(const std::string& name);

@@ -171,7 +171,7 @@ using gseg::test::streetScan;
 
 namespace {
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+using gseg::test::q;
 
 /// sensorLabels of every observation, entry by entry (a sensory frame's joined by '+').
 std::vector<std::string> entryLabels(const std::string& rawlog) {

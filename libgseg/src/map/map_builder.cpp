@@ -51,9 +51,7 @@ bool toWorld(const ScanParts& parts, const ::mrpt::poses::CPose3D& robotPose, gs
         r.skipped = e.what();
         return false;
     }
-    r.reflections = world.reflections;
-    r.heightNote = world.heightNote;
-    r.heightWarning = world.heightWarning;
+    r.notes = world.notes;
     return true;
 }
 
@@ -102,8 +100,8 @@ void MapBuilder::integrate(const ScanResult& r) {
     map_.apply(r.update);
     tally_.times.mapUpdate += secondsSince(t0);
     tally_.presegmented += r.presegmented;
-    tally_.reflections += r.reflections;
-    if (!r.heightNote.empty()) tally_.heightFallbacks.push_back(r.describe + ": " + r.heightNote);
+    tally_.reflections += r.notes.reflections;
+    if (!r.notes.heightNote.empty()) tally_.heightFallbacks.push_back(r.describe + ": " + r.notes.heightNote);
 }
 
 std::size_t MapBuilder::inFlight(const BuildOptions& o) { return 2 * std::size_t(std::max(1u, o.threads + o.remoteWorkers)) + 2; }

@@ -110,8 +110,8 @@ std::string encodeScanResult(const ScanResult& r) {
     ByteWriter out;
     out.u64(kResult).str(serializeScanUpdate(r.update));
     out.f64(r.times.segmentation).f64(r.times.transform).f64(r.times.rayCasting);
-    out.str(r.skipped).str(r.describe).u64(r.presegmented).f64(r.fraction).u64(r.reflections).str(r.heightNote);
-    out.str(r.heightWarning);
+    out.str(r.skipped).str(r.describe).u64(r.presegmented).f64(r.fraction).u64(r.notes.reflections);
+    out.str(r.notes.heightNote).str(r.notes.heightWarning);
     out.u64(std::uint64_t(r.rank));
     return out.bytes();
 }
@@ -129,9 +129,9 @@ ScanResult decodeScanResult(const std::string& bytes) {
     r.skipped = in.str(), r.describe = in.str();
     r.presegmented = in.u64() != 0;
     r.fraction = in.f64();
-    r.reflections = std::size_t(in.u64());
-    r.heightNote = in.str();
-    r.heightWarning = in.str();
+    r.notes.reflections = std::size_t(in.u64());
+    r.notes.heightNote = in.str();
+    r.notes.heightWarning = in.str();
     r.rank = int(in.u64());
     return r;
 }

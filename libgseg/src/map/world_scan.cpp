@@ -41,8 +41,8 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
     const PointCloudView cloud(levelled.data(), levelled.size() / 4, 4 * sizeof(float));
     WorldScan out;
     gseg::mrpt::ScanSegmentation seg = segmenter.segment(cloud, false, check);
-    if (seg.heightFallback()) out.heightNote = seg.height.describe();
-    out.heightWarning = std::move(seg.heightWarning);
+    if (seg.heightFallback()) out.notes.heightNote = seg.height.describe();
+    out.notes.heightWarning = std::move(seg.heightWarning);
     const Result& r = seg.result;
     const auto t1 = std::chrono::steady_clock::now();
 
@@ -54,7 +54,7 @@ WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::pos
     out.ground.reserve(3 * r.numGround);
     out.obstacles.reserve(3 * r.numNonGround);
     // Points without a return, and reflections below the ground, are neither ground nor obstacles.
-    out.reflections = r.belowGround.size();
+    out.notes.reflections = r.belowGround.size();
     gseg::mrpt::forEachSplitPoint(cloud, r, [&](std::size_t i, bool ground) {
         pushWorld(levelledToWorld, &levelled[4 * i], ground ? out.ground : out.obstacles);
     });

@@ -91,7 +91,6 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     out.distToGround = seg.distToGround;
     out.distToGroundEstimated = seg.distToGroundEstimated;
     out.heightWarning = seg.heightWarning;
-    out.nonFinitePoints = seg.result.numNonFinite;
     if (robotPose) relabelWithDrive(sensorXyzi, *robotPose + sensorPose, out);
 
     // The two halves, in the frame asked for.
@@ -99,7 +98,7 @@ GroundFilter::Output GroundFilter::split(const std::vector<float>& sensorXyzi, c
     auto ground = ::mrpt::maps::CPointsMapXYZI::Create(), obstacles = ::mrpt::maps::CPointsMapXYZI::Create();
     ground->reserve(out.result.numGround);
     out.reflections = out.result.belowGround.size();
-    obstacles->reserve(out.result.numNonGround - out.nonFinitePoints - out.reflections);
+    obstacles->reserve(out.result.numNonGround - out.result.numNonFinite - out.reflections);
     gm::forEachSplitPoint(cloud, out.result, [&](std::size_t i, bool isGround) {  // reflections and NaN points: neither
         const float* p = &sensorXyzi[4 * i];
         double x = p[0], y = p[1], z = p[2];

@@ -139,7 +139,7 @@ std::vector<::mrpt::obs::CObservation::Ptr> RawlogSegmenter::outputOf(const ::mr
     report.ms = s.ms;
     report.points = o.result.labels.size();
     report.ground = o.result.numGround;
-    report.nonFinite = o.nonFinitePoints;
+    report.nonFinite = o.result.numNonFinite;
     report.driveRelabelled = o.driveRelabelled;
     report.driveDropped = o.driveDropped;
     totals_.withDrive += report.withDrive ? 1 : 0;

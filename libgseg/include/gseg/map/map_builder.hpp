@@ -41,9 +41,7 @@ struct ScanResult {
     std::string describe;   ///< the scan, for messages
     bool presegmented = false;
     double fraction = 0;    ///< of the rawlog read (progress)
-    std::size_t reflections = 0;  ///< points left out: far below the ground (Result::belowGround)
-    std::string heightNote;       ///< distToGround: auto found no estimate: what was used instead
-    std::string heightWarning;    ///< the first scan contradicts the fixed distToGround (checked on scan 0 only)
+    ScanNotes notes;              ///< the WorldScan's (heightWarning: checked on scan 0 only)
     int rank = 0;                 ///< the process that did the work (MPI rank; 0 in one process)
 };
 

@@ -22,14 +22,20 @@ class CPose3D;
 
 namespace gseg::map {
 
+/// What segmenting a scan says besides its points; carried as it is from the WorldScan to the
+/// ScanResult (map_builder.hpp). Empty for a rawlog-gseg pair's parts (not segmented again).
+struct ScanNotes {
+    std::size_t reflections = 0;  ///< points left out: more than belowGroundMargin below the ground (Result::belowGround)
+    std::string heightNote;       ///< distToGround: auto could not estimate this scan: what was used instead
+    std::string heightWarning;    ///< checkHeight: the scan contradicts the fixed distToGround (gseg::checkDistToGround())
+};
+
 /// One scan in the world frame.
 struct WorldScan {
     std::vector<float> ground;     ///< x, y, z triples [m], world frame
     std::vector<float> obstacles;  ///< x, y, z triples [m], world frame
     Eigen::Vector3d sensorOrigin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
-    std::size_t reflections = 0;   ///< points left out: more than belowGroundMargin below the ground (Result::belowGround)
-    std::string heightNote;        ///< distToGround: auto could not estimate this scan: what was used instead
-    std::string heightWarning;     ///< checkHeight: the scan contradicts the fixed distToGround (gseg::checkDistToGround())
+    ScanNotes notes;
     PointCloudView groundView() const { return PointCloudView(ground.data(), ground.size() / 3); }
     PointCloudView obstaclesView() const { return PointCloudView(obstacles.data(), obstacles.size() / 3); }
 };
@@ -48,10 +54,10 @@ struct ScanTimes {
 
 /// Segments a 3D LiDAR observation (in its levelled frame, see observation_points.hpp) with the
 /// configured height policy (gseg::mrpt::ScanSegmenter: fixed, or `distToGround: auto` per scan
-/// with the configured fallback; heightNote says when the fallback was used) and puts both classes
+/// with the configured fallback; notes.heightNote says when the fallback was used) and puts both classes
 /// into the world frame with `robotPose` + the observation's sensorPose. Points without a return
 /// and reflections below the ground (Result::belowGround) go into neither class. `check`: when a
-/// fixed height is checked against the scan (heightWarning; costs about one segmentation: the map
+/// fixed height is checked against the scan (notes.heightWarning; costs about one segmentation: the map
 /// builder checks the first scan of a drive). `times`: its segmentation and transform seconds are
 /// added to. Throws std::invalid_argument for a non-LiDAR observation or an empty scan.
 WorldScan segmentToWorld(const ::mrpt::obs::CObservation& obs, const ::mrpt::poses::CPose3D& robotPose,

@@ -39,7 +39,7 @@ public:
     enum class OutputFrame { Sensor, Vehicle };
 
     /// The two halves of one scan. ground->pointcloud->size() + obstacles->...size() +
-    /// nonFinitePoints + reflections equals the input's point count; both keep the input's
+    /// result.numNonFinite + reflections equals the input's point count; both keep the input's
     /// timestamp, sensorPose (in Sensor frame) and intensity, and are labelled
     /// "<sensorLabel>_ground" / "<sensorLabel>_obstacles". Points with a NaN or infinite coordinate
     /// (no return) and reflections far below the ground (result.belowGround) are labelled
@@ -51,7 +51,6 @@ public:
         /// A fixed distToGround that the filter's first scan contradicts (see
         /// gseg::checkDistToGround()): "" otherwise, and on every later scan.
         std::string heightWarning;
-        std::size_t nonFinitePoints = 0;  ///< input points with a NaN or infinite coordinate
         std::size_t reflections = 0;      ///< points more than belowGroundMargin below the ground (result.belowGround)
         std::size_t driveRelabelled = 0;  ///< points the drive's terrain model turned ground (filter() with a pose)
         std::size_t driveDropped = 0;     ///< ground points it turned non-ground (the feet of what stands)
