@@ -228,6 +228,10 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     how.threads = how.remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
     if (remote) how.remoteWork = [remote](unsigned slot, const ScanJob& job) { return (*remote)(slot, job); };
     how.ranks = std::size_t(remote ? remote->processes() : 1);
+    if (remote && remote->holders() > 1) {  // the voxels shared by the ranks (#35): each applies its own
+        how.voxelRanks = remote->processes();
+        how.worked = [remote](const ScanJob& job, ScanResult& r) { remote->route(job, r); };
+    }
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
     // Memory, before any work: the first two scans (the second gives the rawlog's bytes per scan).
     const std::deque<ScanJob>& first = phase("reading the first scans", cli, [&]() -> const std::deque<ScanJob>& { return stream.prefetch(2); });
@@ -254,6 +258,14 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
     builder.run(stream, how);  // gseg::map::OutOfMemory says what was being done and the options memory follows
+    double mergeSeconds = 0;  // counted as map update
+    if (how.voxelRanks > 1) {  // the other ranks' voxels, after their last scan
+        const auto t0 = std::chrono::steady_clock::now();
+        phase("merging the voxels of the other ranks", cli, [&] {
+            remote->mergeVoxels(builder, builder.map().path().size() + builder.tally().skipped.size());
+        });
+        mergeSeconds = gseg::secondsSince(t0);
+    }
     if (memory.known()) gseg::tools::detail("rawlog-octomap: memory estimated for the drive: %s\n", memory.summary().c_str());
     const gseg::map::TraversabilityMap& map = builder.map();
     const gseg::map::BuildTally& tally = builder.tally();
@@ -266,6 +278,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     RunReport report;
     report.workers = how.threads + how.remoteWorkers;
     report.times = tally.times;
+    report.times.mapUpdate += mergeSeconds;
     report.presegmented = tally.presegmented, report.reflections = tally.reflections;
     report.heightFallbacks = tally.heightFallbacks, report.skipped = tally.skipped;
     report.height = gseg::mrpt::heightSummary(cfg, cli.config);

@@ -224,6 +224,44 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
 
 void TraversabilityMap::setUpdateThreads(unsigned threads) { voxels_->setThreads(threads); }
 
+int voxelOwner(std::uint64_t code, int ranks) { return int(detail::BrickMap::shardOfVoxel(code) % unsigned(std::max(1, ranks))); }
+
+ScanUpdate voxelPart(const ScanUpdate& u, int rank, int ranks) {
+    ScanUpdate part;
+    part.origin = u.origin;
+    auto keep = [&](const std::vector<std::uint64_t>& from, std::vector<std::uint64_t>& to) {
+        for (std::uint64_t code : from)
+            if (voxelOwner(code, ranks) == rank) to.push_back(code);
+    };
+    keep(u.free, part.free);
+    keep(u.groundHits, part.groundHits);
+    keep(u.obstacleHits, part.obstacleHits);
+    return part;
+}
+
+void dropVoxels(ScanUpdate& u, int rank, int ranks) {
+    for (std::vector<std::uint64_t>* codes : {&u.free, &u.groundHits})
+        codes->erase(std::remove_if(codes->begin(), codes->end(), [&](std::uint64_t c) { return voxelOwner(c, ranks) == rank; }),
+                     codes->end());
+}
+
+void TraversabilityMap::shareVoxels(int rank, int ranks) {
+    if (ranks < 1 || rank < 0 || rank >= ranks)
+        throw std::invalid_argument("TraversabilityMap::shareVoxels: rank " + std::to_string(rank) + " of " + std::to_string(ranks));
+    unsigned mask = 0;
+    for (unsigned s = 0; s < detail::BrickMap::shards(); ++s)
+        if (int(s % unsigned(ranks)) == rank) mask |= 1u << s;
+    voxels_->setOwnedShards(mask);
+}
+
+std::string TraversabilityMap::voxelBytes() const { return voxels_->encode(); }
+
+void TraversabilityMap::mergeVoxels(const std::string& bytes) {
+    voxels_->merge(bytes);
+    groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
+    costmapScans_ = 0;
+}
+
 std::unique_ptr<octomap::ColorOcTree> TraversabilityMap::colouredTree() const {
     auto tree = std::make_unique<octomap::ColorOcTree>(options_.resolution);
     tree->setOccupancyThres(options_.occupancyThreshold);
