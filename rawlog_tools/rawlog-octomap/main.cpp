@@ -194,6 +194,13 @@ void printReport(const RunReport& r, double resolution) {
         for (std::size_t p = 0; p < processes; ++p)
             split += (p ? ", " : "") + std::to_string(r.scansByProcess[p]) + " on rank " + std::to_string(p);
         gseg::tools::say("scans worked on: %s\n", split.c_str());
+        if (!r.bricksByHolder.empty()) {  // #35: the voxels the ranks held and updated, merged on rank 0
+            std::size_t others = 0;
+            std::string held;
+            for (std::size_t q = 0; q < r.bricksByHolder.size(); ++q)
+                others += r.bricksByHolder[q], held += ", " + std::to_string(r.bricksByHolder[q]) + " on rank " + std::to_string(q + 1);
+            gseg::tools::say("voxel bricks held and updated: %zu on rank 0%s\n", s.bricks - std::min(s.bricks, others), held.c_str());
+        }
     }
     for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
 }
@@ -259,10 +266,11 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     };
     builder.run(stream, how);  // gseg::map::OutOfMemory says what was being done and the options memory follows
     double mergeSeconds = 0;  // counted as map update
+    std::vector<std::size_t> bricksByHolder;
     if (how.voxelRanks > 1) {  // the other ranks' voxels, after their last scan
         const auto t0 = std::chrono::steady_clock::now();
         phase("merging the voxels of the other ranks", cli, [&] {
-            remote->mergeVoxels(builder, builder.map().path().size() + builder.tally().skipped.size());
+            bricksByHolder = remote->mergeVoxels(builder, builder.map().path().size() + builder.tally().skipped.size());
         });
         mergeSeconds = gseg::secondsSince(t0);
     }
@@ -279,6 +287,7 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     report.workers = how.threads + how.remoteWorkers;
     report.times = tally.times;
     report.times.mapUpdate += mergeSeconds;
+    report.bricksByHolder = bricksByHolder;
     report.presegmented = tally.presegmented, report.reflections = tally.reflections;
     report.heightFallbacks = tally.heightFallbacks, report.skipped = tally.skipped;
     report.height = gseg::mrpt::heightSummary(cfg, cli.config);

@@ -155,7 +155,7 @@ void RemoteWorkers::route(const ScanJob& job, ScanResult& r) {
     }
 }
 
-void RemoteWorkers::mergeVoxels(gseg::map::MapBuilder& builder, std::size_t scans) {
+std::vector<std::size_t> RemoteWorkers::mergeVoxels(gseg::map::MapBuilder& builder, std::size_t scans) {
     merged_ = true;
     for (int q = 1; q < holders(); ++q) ranks_.send(q, kPartTag, ByteWriter().u64(kEnd).u64(scans).take());
     std::vector<std::string> replies;  // every holder's, before any error is thrown (none is left sending)
@@ -164,12 +164,16 @@ void RemoteWorkers::mergeVoxels(gseg::map::MapBuilder& builder, std::size_t scan
         ByteReader in(reply);
         if (in.u64() != 0) throw std::runtime_error(in.str());
     }
+    std::vector<std::size_t> bricks;
     for (std::string& reply : replies) {
         ByteReader in(reply);
         in.u64();
-        builder.mergeVoxels(in.str());
+        const std::string voxels = in.str();
+        builder.mergeVoxels(voxels);  // GSB1, then the brick count
+        bricks.push_back(std::size_t(ByteReader(voxels, "voxels", 4).u64()));
         std::string().swap(reply);
     }
+    return bricks;
 }
 
 ScanResult RemoteWorkers::operator()(unsigned slot, const ScanJob& job) {

@@ -49,8 +49,8 @@ public:
     void route(const ScanJob& job, ScanResult& r);
     /// After the last scan (`scans` of them, skipped ones included): has every other holder apply
     /// its last parts and merges its voxels into `builder`'s map. Throws std::runtime_error with
-    /// a holder's error.
-    void mergeVoxels(gseg::map::MapBuilder& builder, std::size_t scans);
+    /// a holder's error. Returns the bricks each other holder had (ranks 1, 2, ...).
+    std::vector<std::size_t> mergeVoxels(gseg::map::MapBuilder& builder, std::size_t scans);
 
 private:
     gseg::tools::Ranks& ranks_;
