@@ -28,7 +28,7 @@ constexpr int kHelloTag = gseg::tools::Ranks::kFirstToolTag;  // rank r -> 0: it
 constexpr int kJobTag = kHelloTag + 1000;                      // + thread: 0 -> r, a scan ("" = stop)
 constexpr int kResultTag = kJobTag + 1000;                     // + thread: r -> 0, its result
 constexpr int kPartTag = kResultTag + 1000;                    // 0 -> holder: a scan's voxels, the end, or stop
-constexpr int kVoxelsTag = kPartTag + 1;                       // holder -> 0: its voxels (or its error)
+constexpr int kVoxelsTag = kPartTag + 1;                       // holder -> 0: its voxels ("GSB1...") or "E" and its error
 enum PartKind : std::uint64_t { kPart = 0, kEnd = 1, kStop = 2 };
 
 /// A holder of voxels on rank r > 0 (#35): its part of every scan's update, from rank 0 (the scans
@@ -109,11 +109,12 @@ private:
         lock.unlock();
         std::string reply;
         try {
-            if (failed.empty()) reply = ByteWriter().u64(0).str(map_->voxelBytes()).take();
+            if (failed.empty()) reply = map_->voxelBytes();  // "GSB1...": the voxels
+            map_.reset();
         } catch (const std::bad_alloc&) {
             failed = "out of memory sending the voxels of rank " + std::to_string(ranks_.rank());
         }
-        if (!failed.empty()) reply = ByteWriter().u64(1).str("rank " + std::to_string(ranks_.rank()) + ": " + failed).take();
+        if (!failed.empty()) reply = "E" + ("rank " + std::to_string(ranks_.rank()) + ": " + failed);
         ranks_.send(0, kVoxelsTag, reply);
     }
 
@@ -149,9 +150,8 @@ int RemoteWorkers::holders() const { return std::min(ranks_.size(), int(gseg::ma
 void RemoteWorkers::route(const ScanJob& job, ScanResult& r) {
     for (int q = 1; q < holders(); ++q) {
         if (q == r.rank) continue;  // it kept its part
-        const std::string part = gseg::map::serializeScanUpdate(gseg::map::voxelPart(r.update, q, ranks_.size()));
+        const std::string part = gseg::map::serializeScanUpdate(gseg::map::takeVoxels(r.update, q, ranks_.size()));
         ranks_.send(q, kPartTag, ByteWriter().u64(kPart).u64(job.index).str(part).take());
-        gseg::map::dropVoxels(r.update, q, ranks_.size());
     }
 }
 
@@ -160,17 +160,12 @@ std::vector<std::size_t> RemoteWorkers::mergeVoxels(gseg::map::MapBuilder& build
     for (int q = 1; q < holders(); ++q) ranks_.send(q, kPartTag, ByteWriter().u64(kEnd).u64(scans).take());
     std::vector<std::string> replies;  // every holder's, before any error is thrown (none is left sending)
     for (int q = 1; q < holders(); ++q) replies.push_back(ranks_.receive(q, kVoxelsTag));
-    for (const std::string& reply : replies) {
-        ByteReader in(reply);
-        if (in.u64() != 0) throw std::runtime_error(in.str());
-    }
+    for (const std::string& reply : replies)
+        if (reply.compare(0, 1, "E") == 0) throw std::runtime_error(reply.substr(1));
     std::vector<std::size_t> bricks;
     for (std::string& reply : replies) {
-        ByteReader in(reply);
-        in.u64();
-        const std::string voxels = in.str();
-        builder.mergeVoxels(voxels);  // GSB1, then the brick count
-        bricks.push_back(std::size_t(ByteReader(voxels, "voxels", 4).u64()));
+        builder.mergeVoxels(reply);  // GSB1, then the brick count
+        bricks.push_back(std::size_t(ByteReader(reply, "voxels", 4).u64()));
         std::string().swap(reply);
     }
     return bricks;
@@ -206,8 +201,7 @@ void serveScans(gseg::tools::Ranks& ranks, const Cli& cli) {
                 ScanResult r = workers[thread](job);
                 r.rank = ranks.rank();
                 if (holder) {  // its part of the voxels stays here
-                    holder->add(job.index, gseg::map::voxelPart(r.update, ranks.rank(), ranks.size()));
-                    gseg::map::dropVoxels(r.update, ranks.rank(), ranks.size());
+                    holder->add(job.index, gseg::map::takeVoxels(r.update, ranks.rank(), ranks.size()));
                 }
                 reply = gseg::map::encodeScanResult(r);
             } catch (const std::bad_alloc&) {

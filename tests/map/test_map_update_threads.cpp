@@ -77,7 +77,7 @@ void expectSameMapsForAnyThreads(const std::vector<Scan>& scans, const gseg::map
 }
 
 /// #35, MPI: the voxels shared by `ranks` maps as rawlog-octomap's ranks share them (rank 0 applies
-/// every update less the other holders' free and ground voxels, each other holder its voxelPart()
+/// every update less the other holders' free and ground voxels, each other holder its takeVoxels()
 /// through the wire format), merged into rank 0's map: every file the same bytes as one map's.
 void expectSameMapsForAnyRanks(const std::vector<Scan>& scans, const gseg::map::TraversabilityOptions& o, const std::string& name) {
     std::vector<gseg::map::ScanUpdate> updates;
@@ -101,12 +101,15 @@ void expectSameMapsForAnyRanks(const std::vector<Scan>& scans, const gseg::map::
         for (const auto& u : updates) {
             gseg::map::ScanUpdate mine = u;
             for (int r = 1; r < ranks; ++r) {
-                const gseg::map::ScanUpdate part = gseg::map::voxelPart(u, r, ranks);
+                const gseg::map::ScanUpdate part = gseg::map::takeVoxels(mine, r, ranks);
+                for (const auto* codes : {&part.free, &part.groundHits, &part.obstacleHits})
+                    for (std::uint64_t c : *codes) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), r);
                 held[std::size_t(r)] += part.free.size() + part.groundHits.size() + part.obstacleHits.size();
                 maps[std::size_t(r)].apply(gseg::map::deserializeScanUpdate(gseg::map::serializeScanUpdate(part)));
-                gseg::map::dropVoxels(mine, r, ranks);
             }
             for (std::uint64_t c : mine.free) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
+            for (std::uint64_t c : mine.groundHits) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
+            EXPECT_EQ(mine.obstacleHits, u.obstacleHits) << "the obstacle hits stay whole";
             held[0] += mine.free.size();
             maps[0].apply(mine);
         }

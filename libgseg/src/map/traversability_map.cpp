@@ -226,23 +226,23 @@ void TraversabilityMap::setUpdateThreads(unsigned threads) { voxels_->setThreads
 
 int voxelOwner(std::uint64_t code, int ranks) { return int(detail::BrickMap::shardOfVoxel(code) % unsigned(std::max(1, ranks))); }
 
-ScanUpdate voxelPart(const ScanUpdate& u, int rank, int ranks) {
+ScanUpdate takeVoxels(ScanUpdate& u, int rank, int ranks) {
     ScanUpdate part;
     part.origin = u.origin;
-    auto keep = [&](const std::vector<std::uint64_t>& from, std::vector<std::uint64_t>& to) {
-        for (std::uint64_t code : from)
-            if (voxelOwner(code, ranks) == rank) to.push_back(code);
+    bool mine[4];  // by shard
+    for (unsigned s = 0; s < 4; ++s) mine[s] = voxelOwner(std::uint64_t(s) << 9, ranks) == rank;
+    auto take = [&](std::vector<std::uint64_t>& from, std::vector<std::uint64_t>& to, bool leave) {
+        std::size_t kept = 0;
+        for (std::uint64_t code : from) {
+            if (mine[(code >> 9) & 3]) to.push_back(code);
+            if (leave || !mine[(code >> 9) & 3]) from[kept++] = code;
+        }
+        from.resize(kept);
     };
-    keep(u.free, part.free);
-    keep(u.groundHits, part.groundHits);
-    keep(u.obstacleHits, part.obstacleHits);
+    take(u.free, part.free, false);
+    take(u.groundHits, part.groundHits, false);
+    take(u.obstacleHits, part.obstacleHits, true);
     return part;
-}
-
-void dropVoxels(ScanUpdate& u, int rank, int ranks) {
-    for (std::vector<std::uint64_t>* codes : {&u.free, &u.groundHits})
-        codes->erase(std::remove_if(codes->begin(), codes->end(), [&](std::uint64_t c) { return voxelOwner(c, ranks) == rank; }),
-                     codes->end());
 }
 
 void TraversabilityMap::shareVoxels(int rank, int ranks) {

@@ -96,7 +96,7 @@ struct BuildOptions {
     /// merges them back (MapBuilder::mergeVoxels()) before the map is written.
     int voxelRanks = 1;
     /// Called on the worker's thread with each scan's result (local or remote) before it is
-    /// integrated: e.g. sends other processes their voxels (voxelPart()) and drops them (dropVoxels()).
+    /// integrated: e.g. sends other processes their voxels (takeVoxels()).
     std::function<void(const ScanJob& job, ScanResult& result)> worked;
     /// Called on the integrating thread after each scan, in scan order (k = 0, 1, ...), skipped
     /// scans included: progress and messages.

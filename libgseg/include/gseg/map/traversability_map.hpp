@@ -42,12 +42,11 @@ class GroundCells;
 /// brick, a checkerboard of 2 x 2 bricks dealt round robin (processes 4 and up hold none).
 int voxelOwner(std::uint64_t code, int ranks);
 constexpr int kVoxelHolders = 4;  ///< processes that can hold voxels (voxelOwner() < 4)
-/// The voxels of `u` that `rank` holds: its free, groundHits and obstacleHits (sorted, as in
-/// `u`) with its origin; the other fields empty (what that process applies).
-ScanUpdate voxelPart(const ScanUpdate& u, int rank, int ranks);
-/// Removes `rank`'s voxels from u.free and u.groundHits (they went to that process in a
-/// voxelPart()); u.obstacleHits stays whole (the memory guard reads it), the map skips them.
-void dropVoxels(ScanUpdate& u, int rank, int ranks);
+/// The voxels of `u` that `rank` holds, taken out of it: their free, groundHits and obstacleHits
+/// (sorted, as in `u`) with u's origin, the other fields empty (what that process applies). They
+/// leave u.free and u.groundHits; u.obstacleHits stays whole (the memory guard reads it; a map
+/// holding other voxels skips them).
+ScanUpdate takeVoxels(ScanUpdate& u, int rank, int ranks);
 }  // namespace gseg::map
 namespace gseg {
 class TerrainModel;
@@ -106,7 +105,7 @@ public:
 
     /// The voxels shared by `ranks` processes (#35): this map holds those of `rank`
     /// (voxelOwner()) and apply() leaves the others alone; each process applies every scan's
-    /// update (or its voxelPart()) in scan order, so every voxel sees what it would in one map.
+    /// update (or its takeVoxels() part) in scan order, so every voxel sees what it would in one map.
     /// Before writing, the others' voxelBytes() are merged with mergeVoxels(). Default (0, 1):
     /// every voxel. Throws std::invalid_argument unless 0 <= rank < ranks.
     void shareVoxels(int rank, int ranks);
