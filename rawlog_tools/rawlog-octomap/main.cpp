@@ -5,7 +5,8 @@
 // by rawlog-gseg as it is), put it into the world frame and ray-cast it into a ScanUpdate, and one
 // thread applies the updates to the maps strictly in scan order (gseg::runOrdered, in gseg::map::MapBuilder), so the
 // maps do not depend on the number of threads. At most a few scans are in memory at a time.
-// Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline
+// Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline,
+// and ranks 0-3 each hold and update a share of the voxels, merged on rank 0 before writing
 // (remote_workers.hpp): the maps are the same bytes as one process's.
 
 #include "rawlog_octomap.hpp"
@@ -63,7 +64,7 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         "Traversability OctoMaps (ground / obstacles), the costmap a planner loads (PREFIX_costmap.pgm + .yaml, "
         "map_server format) and the 2.5D layers from a rawlog of 3D LiDAR scans. Writes " + std::to_string(files.size()) +
         " files: " + fileList + " (refused if one exists, unless -w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
-        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
+        "mpirun or srun rank 0 reads, merges and writes the maps, ranks 0-3 each update their share of the voxels, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
         "usage, 3 maps written but scans skipped (named).",
         true, printing);
     TCLAP::CmdLine& cmd = line.cmd();

@@ -53,9 +53,12 @@ public:
     VoxelHolder(const VoxelHolder&) = delete;
     VoxelHolder& operator=(const VoxelHolder&) = delete;
 
-    /// A scan's part, cast here.
+    /// A scan's part, cast here. Waits while kMaxWaiting parts wait to be applied (unless this
+    /// one is the next), so this rank's workers do not run ahead of its voxels; rank 0's parts
+    /// are taken at once (the one needed next may come after them).
     void add(std::size_t scan, gseg::map::ScanUpdate part) {
-        std::lock_guard<std::mutex> lock(m_);
+        std::unique_lock<std::mutex> lock(m_);
+        changed_.wait(lock, [&] { return stop_ || scan == next_ || waiting_.size() < kMaxWaiting; });
         waiting_.emplace(scan, std::move(part));
         changed_.notify_all();
     }
@@ -94,6 +97,7 @@ private:
             if (stop_) return;
             if (next_ == total_) break;
             auto node = waiting_.extract(next_++);
+            changed_.notify_all();  // room for a part add() holds back
             if (failed.empty() && !error_.empty()) failed = error_;
             lock.unlock();
             try {
@@ -118,6 +122,7 @@ private:
         ranks_.send(0, kVoxelsTag, reply);
     }
 
+    static constexpr std::size_t kMaxWaiting = 8;
     gseg::tools::Ranks& ranks_;
     std::unique_ptr<gseg::map::TraversabilityMap> map_;
     std::mutex m_;
