@@ -5,7 +5,8 @@
 // by rawlog-gseg as it is), put it into the world frame and ray-cast it into a ScanUpdate, and one
 // thread applies the updates to the maps strictly in scan order (gseg::runOrdered, in gseg::map::MapBuilder), so the
 // maps do not depend on the number of threads. At most a few scans are in memory at a time.
-// Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline
+// Under mpirun/srun the worker threads of the other ranks are more workers of the same pipeline,
+// and ranks 0-3 each hold and update a share of the voxels, merged on rank 0 before writing
 // (remote_workers.hpp): the maps are the same bytes as one process's.
 
 #include "rawlog_octomap.hpp"
@@ -63,7 +64,7 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
         "Traversability OctoMaps (ground / obstacles), the costmap a planner loads (PREFIX_costmap.pgm + .yaml, "
         "map_server format) and the 2.5D layers from a rawlog of 3D LiDAR scans. Writes " + std::to_string(files.size()) +
         " files: " + fileList + " (refused if one exists, unless -w). Scans are segmented with GSeg3D unless a _ground / _obstacles pair (rawlog-gseg) follows them. Under "
-        "mpirun or srun rank 0 reads and maps, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
+        "mpirun or srun rank 0 reads, merges and writes the maps, ranks 0-3 each update their share of the voxels, and every rank works on scans. Exit code: 0 done, 1 bad input, 2 bad "
         "usage, 3 maps written but scans skipped (named).",
         true, printing);
     TCLAP::CmdLine& cmd = line.cmd();
@@ -196,6 +197,13 @@ void printReport(const RunReport& r, double resolution) {
         for (std::size_t p = 0; p < processes; ++p)
             split += (p ? ", " : "") + std::to_string(tally.scansByRank[p]) + " on rank " + std::to_string(p);
         gseg::tools::say("scans worked on: %s\n", split.c_str());
+        if (!r.bricksByHolder.empty()) {  // #35: the voxels the ranks held and updated, merged on rank 0
+            std::size_t others = 0;
+            std::string held;
+            for (std::size_t q = 0; q < r.bricksByHolder.size(); ++q)
+                others += r.bricksByHolder[q], held += ", " + std::to_string(r.bricksByHolder[q]) + " on rank " + std::to_string(q + 1);
+            gseg::tools::say("voxel bricks held and updated: %zu on rank 0%s\n", s.bricks - std::min(s.bricks, others), held.c_str());
+        }
     }
     for (const auto& p : r.written) gseg::tools::say("wrote %s\n", p.c_str());
 }
@@ -230,6 +238,10 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     how.threads = how.remoteWorkers == 0 ? cli.threads : cli.rank0MapsOnly ? 0u : std::max(1u, cli.threads);
     if (remote) how.remoteWork = [remote](unsigned slot, const ScanJob& job) { return (*remote)(slot, job); };
     how.ranks = std::size_t(remote ? remote->processes() : 1);
+    if (remote && remote->holders() > 1) {  // the voxels shared by the ranks (#35): each applies its own
+        how.voxelRanks = remote->processes();
+        how.worked = [remote](const ScanJob& job, ScanResult& r) { remote->route(job, r); };
+    }
     gseg::Progress progress(gseg::tools::progressOut(), "rawlog-octomap", "scans");
     // Memory, before any work: the first two scans (the second gives the rawlog's bytes per scan).
     const std::deque<ScanJob>& first = phase("reading the first scans", cli, [&]() -> const std::deque<ScanJob>& { return stream.prefetch(2); });
@@ -256,6 +268,15 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
         if (!quiet && r.skipped.empty()) gseg::tools::detail("rawlog-octomap: %s mapped\n", r.describe.c_str());
     };
     builder.run(stream, how);  // gseg::map::OutOfMemory says what was being done and the options memory follows
+    double mergeSeconds = 0;  // counted as map update
+    std::vector<std::size_t> bricksByHolder;
+    if (how.voxelRanks > 1) {  // the other ranks' voxels, after their last scan
+        const auto t0 = std::chrono::steady_clock::now();
+        phase("merging the voxels of the other ranks", cli, [&] {
+            bricksByHolder = remote->mergeVoxels(builder, builder.map().path().size() + builder.tally().skipped.size());
+        });
+        mergeSeconds = gseg::secondsSince(t0);
+    }
     if (memory.known()) gseg::tools::detail("rawlog-octomap: memory estimated for the drive: %s\n", memory.summary().c_str());
     const gseg::map::TraversabilityMap& map = builder.map();
     const gseg::map::BuildTally& tally = builder.tally();
@@ -268,6 +289,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     RunReport report;
     report.workers = how.threads + how.remoteWorkers;
     report.tally = tally;
+    report.tally.times.mapUpdate += mergeSeconds;
+    report.bricksByHolder = bricksByHolder;
     report.height = gseg::mrpt::heightSummary(cfg, cli.config);
     report.rawWithPair = stream.rawScansSeenWithTheirPair();
     report.origin = stream.origin();

@@ -48,6 +48,7 @@ struct RunReport {
     std::optional<Eigen::Vector3d> origin;  ///< world shift (--origin)
     std::string poseSource;                 ///< "the rawlog" or the pose file
     unsigned workers = 0;                   ///< worker threads, on every process
+    std::vector<std::size_t> bricksByHolder;  ///< under MPI, the voxel bricks ranks 1, 2, ... held (rank 0: the rest)
 };
 
 /// Builds the maps of `cli.input` and writes them to `cli.prefix`; progress on stderr unless

@@ -76,6 +76,70 @@ void expectSameMapsForAnyThreads(const std::vector<Scan>& scans, const gseg::map
     }
 }
 
+/// #35, MPI: the voxels shared by `ranks` maps as rawlog-octomap's ranks share them (rank 0 applies
+/// every update less the other holders' free and ground voxels, each other holder its takeVoxels()
+/// through the wire format), merged into rank 0's map: every file the same bytes as one map's.
+void expectSameMapsForAnyRanks(const std::vector<Scan>& scans, const gseg::map::TraversabilityOptions& o, const std::string& name) {
+    std::vector<gseg::map::ScanUpdate> updates;
+    for (const Scan& s : scans)
+        updates.push_back(gseg::map::castScan(gseg::PointCloudView(s.ground.data(), s.ground.size() / 3),
+                                              gseg::PointCloudView(s.obstacles.data(), s.obstacles.size() / 3), s.origin, o));
+    gseg::map::TraversabilityMap one(o);
+    for (const auto& u : updates) one.apply(u);
+    const fs::path oneDir = gseg::test::freshDir("update_ranks", name + "one");
+    const std::vector<std::string> reference = filesOf(one, oneDir);
+    fs::remove_all(oneDir);
+    const gseg::map::MapStats referenceStats = one.stats();
+    for (int ranks : {2, 3, 4, 5}) {
+        SCOPED_TRACE(name + ", " + std::to_string(ranks) + " ranks");
+        std::vector<gseg::map::TraversabilityMap> maps;
+        for (int r = 0; r < ranks; ++r) {
+            maps.emplace_back(o);
+            maps.back().shareVoxels(r, ranks);
+        }
+        std::vector<std::size_t> held(std::size_t(ranks), 0);  // voxels of each holder's parts
+        for (const auto& u : updates) {
+            gseg::map::ScanUpdate mine = u;
+            for (int r = 1; r < ranks; ++r) {
+                const gseg::map::ScanUpdate part = gseg::map::takeVoxels(mine, r, ranks);
+                for (const auto* codes : {&part.free, &part.groundHits, &part.obstacleHits})
+                    for (std::uint64_t c : *codes) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), r);
+                held[std::size_t(r)] += part.free.size() + part.groundHits.size() + part.obstacleHits.size();
+                maps[std::size_t(r)].apply(gseg::map::deserializeScanUpdate(gseg::map::serializeScanUpdate(part)));
+            }
+            for (std::uint64_t c : mine.free) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
+            for (std::uint64_t c : mine.groundHits) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
+            EXPECT_EQ(mine.obstacleHits, u.obstacleHits) << "the obstacle hits stay whole";
+            held[0] += mine.free.size();
+            maps[0].apply(mine);
+        }
+        for (int r = 0; r < ranks; ++r) {
+            if (r < gseg::map::kVoxelHolders) EXPECT_GT(held[std::size_t(r)], 10000u) << "rank " << r << " holds voxels";
+            else EXPECT_EQ(held[std::size_t(r)], 0u) << "rank " << r << " holds none";
+        }
+        EXPECT_LT(maps[0].stats().freeVoxels, referenceStats.freeVoxels) << "rank 0 alone holds part of them";
+        for (int r = 1; r < ranks; ++r) maps[0].mergeVoxels(maps[std::size_t(r)].voxelBytes());
+        const fs::path dir = gseg::test::freshDir("update_ranks", name + std::to_string(ranks));
+        const std::vector<std::string> files = filesOf(maps[0], dir);
+        fs::remove_all(dir);
+        ASSERT_EQ(files.size(), reference.size());
+        for (std::size_t i = 0; i < files.size(); ++i) EXPECT_TRUE(files[i] == reference[i]) << "file " << i;
+        const gseg::map::MapStats s = maps[0].stats();
+        EXPECT_EQ(s.groundVoxels, referenceStats.groundVoxels);
+        EXPECT_EQ(s.obstacleVoxels, referenceStats.obstacleVoxels);
+        EXPECT_EQ(s.freeVoxels, referenceStats.freeVoxels);
+        EXPECT_EQ(s.clearedObstacleVoxels, referenceStats.clearedObstacleVoxels);
+        EXPECT_EQ(s.brickValueBlocks, referenceStats.brickValueBlocks);
+        EXPECT_EQ(s.bricks, referenceStats.bricks);
+        if (ranks == 2) {  // a brick held twice, or bytes that are not voxels: refused, saying so
+            EXPECT_THROW(maps[0].mergeVoxels(maps[1].voxelBytes()), std::runtime_error);
+            EXPECT_THROW(maps[1].mergeVoxels("GSB1"), std::runtime_error);
+            EXPECT_THROW(maps[1].mergeVoxels("not voxels"), std::runtime_error);
+            EXPECT_THROW(maps[1].shareVoxels(2, 2), std::invalid_argument);
+        }
+    }
+}
+
 TEST(MapUpdateThreads, TheSixSequence00ScansAsADriveGiveTheSameBytesOnAnyNumberOfThreads) {
     std::vector<Scan> scans;
     for (int k = 0; k < 6; ++k) {
@@ -116,6 +180,26 @@ TEST(MapUpdateThreads, ASyntheticDriveAtNegativeCoordinatesGivesTheSameBytesOnAn
     gseg::map::TraversabilityOptions o;
     o.resolution = 0.15, o.maxRange = 30;
     expectSameMapsForAnyThreads(scans, o, "synthetic_");
+}
+
+TEST(MapUpdateThreads, VoxelsSharedByTwoToFiveRanksAndMergedGiveTheSameBytesAsOneMap) {
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    std::vector<Scan> scans;
+    for (int k = 0; k < 4; ++k) {
+        Scan s;
+        s.origin = Eigen::Vector3d(-3.0 * k + 0.4, 1.1 * k - 0.02, 1.7);
+        for (int i = 0; i < 30000; ++i) {
+            const float az = 6.2831853f * u(rng), r = 2.f + 28.f * u(rng);
+            const float x = float(s.origin.x()) + r * std::cos(az), y = float(s.origin.y()) + r * std::sin(az);
+            if (i % 4 == 0) s.obstacles.insert(s.obstacles.end(), {x, y, 0.3f + 2.5f * u(rng)});
+            else s.ground.insert(s.ground.end(), {x, y, 0.04f * std::cos(0.2f * y) + 0.02f * u(rng)});
+        }
+        scans.push_back(std::move(s));
+    }
+    gseg::map::TraversabilityOptions o;
+    o.resolution = 0.2, o.maxRange = 25;
+    expectSameMapsForAnyRanks(scans, o, "ranks_");
 }
 
 }  // namespace

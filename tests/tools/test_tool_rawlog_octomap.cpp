@@ -24,6 +24,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
+#include <string>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -548,6 +550,58 @@ TEST(RawlogOctomapTool, TwoMpiRanksWriteTheMapsOfOneProcess) {
     const auto voxels = [](const std::string& out) { return out.substr(out.find("voxels ("), out.find("map memory") - out.find("voxels (")); };
     EXPECT_EQ(voxels(both.out), voxels(one.out));
     EXPECT_EQ(messageLines(both.err).size(), 0u) << "progress only, from rank 0: " << both.err;
+    fs::remove_all(dir);
+}
+
+// #35: ranks 0..3 each hold part of the voxels (bricks dealt by voxelOwner()) and apply their part of
+// every scan in scan order; rank 0 merges them before writing: the files of one process, for 2 and
+// 3 ranks, 1 to 3 threads each, and with rank 0 working on no scan.
+TEST(RawlogOctomapTool, RanksHoldingPartsOfTheVoxelsWriteTheMapsOfOneProcess) {
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun2, 2);
+    GSEG_TEST_MPIRUN_OR_SKIP(mpirun3, 3);
+    const std::string dir = driveDir("mpi_voxels");
+    const std::string args = "-i " + dir + "/drive.rawlog -c " + dir + "/gseg.yaml -o " + dir;
+    const ToolRun one = runTool("rawlog-octomap", args + "/one --threads 1", dir);
+    ASSERT_EQ(one.status, 0) << one.err;
+    EXPECT_EQ(one.out.find("voxel bricks held"), std::string::npos) << "one process holds every voxel: " << one.out;
+    const std::size_t bricks = std::stoul(one.out.substr(one.out.find(" MB (") + 5));
+    ASSERT_GT(bricks, 100u) << one.out;
+    struct Case {
+        const std::string& mpirun;
+        int ranks;
+        std::string options;
+    };
+    int run = 0;
+    for (const Case& c : {Case{mpirun3, 3, "--threads 1"}, Case{mpirun2, 2, "--threads 3"}, Case{mpirun3, 3, "--threads 2 --rank0-maps-only"}}) {
+        SCOPED_TRACE(std::to_string(c.ranks) + " ranks, " + c.options);
+        const std::string name = "run" + std::to_string(++run);
+        const ToolRun r = runTool("rawlog-octomap", args + "/" + name + " " + c.options, dir, "", c.mpirun);
+        ASSERT_EQ(r.status, 0) << r.err;
+        std::size_t files = 0;  // every file of one process's, byte for byte
+        for (const auto& e : fs::directory_iterator(dir)) {
+            const std::string f = e.path().filename().string();
+            if (f.rfind("one_", 0) != 0) continue;
+            ++files;
+            std::string theirs = gseg::test::readText(dir + "/" + name + f.substr(3));
+            for (std::size_t at; (at = theirs.find(name + "_")) != std::string::npos;) theirs.replace(at, name.size(), "one");  // the YAML names its PGM
+            EXPECT_TRUE(gseg::test::readText(e.path().string()) == theirs) << f;
+        }
+        EXPECT_GE(files, 17u);
+        // Every rank held and updated part of the voxels, the bricks of one process between them.
+        const std::size_t at = r.out.find("voxel bricks held and updated: ");
+        ASSERT_NE(at, std::string::npos) << r.out;
+        std::istringstream held(r.out.substr(at + 31, r.out.find('\n', at) - at - 31));
+        std::size_t sum = 0;
+        for (int q = 0; q < c.ranks; ++q) {
+            std::size_t n = 0;
+            std::string on, rank, number;
+            held >> n >> on >> rank >> number;
+            EXPECT_EQ(number.substr(0, 1), std::to_string(q)) << r.out;
+            EXPECT_GT(n, bricks / 8) << "rank " << q << " holds its share: " << r.out;
+            sum += n;
+        }
+        EXPECT_EQ(sum, bricks) << r.out;
+    }
     fs::remove_all(dir);
 }
 

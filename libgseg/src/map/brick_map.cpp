@@ -2,6 +2,8 @@
 // OctoMap byte encoders are in brick_map_octomap_bytes.cpp.
 #include "brick_map.hpp"
 
+#include <gseg/io/bytes.hpp>
+
 #include <algorithm>
 #include <exception>
 #include <system_error>
@@ -131,6 +133,10 @@ void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vect
             const std::uint64_t brick = codes[i] >> 9;
             std::size_t j = i;
             while (j < codes.size() && codes[j] >> 9 == brick) ++j;
+            if (!(owned_ >> shardOf(brick) & 1)) {  // another process's brick (setOwnedShards())
+                i = j;
+                continue;
+            }
             const Brick& b = brickOf(brick);
             runs.push_back({std::uint32_t(&b - bricks_.data()), shardOf(brick), codes.data() + i, codes.data() + j});
             i = j;
@@ -169,6 +175,67 @@ void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vect
     for (std::thread& h : helpers) h.join();
     for (const std::exception_ptr& e : errors)
         if (e) std::rethrow_exception(e);
+}
+
+std::string BrickMap::encode() const {
+    gseg::io::ByteWriter out;
+    out.raw("GSB1", 4).u64(bricks_.size());
+    for (std::size_t b = 0; b < bricks_.size(); ++b) {
+        out.u64(codes_[b]);
+        for (unsigned w = 0; w < 8; ++w) out.u64(bricks_[b].everObstacle[w]);
+        for (const Words& t : bricks_[b].map)
+            for (unsigned w = 0; w < 8; ++w) {
+                out.u64(t.exists[w]);
+                if (!t.exists[w]) continue;
+                out.u32((t.block[w] >= 0 ? 1u : 0u) | unsigned(t.atMin[w]) << 8 | unsigned(t.atMax[w]) << 16);
+                if (t.block[w] < 0) {
+                    out.f32(t.uniform[w]);
+                    continue;
+                }
+                const float* v = block(t.block[w]);
+                for (unsigned k = 0; k < 64; ++k) out.f32(v[k]);
+            }
+    }
+    return out.take();
+}
+
+void BrickMap::merge(const std::string& bytes) {
+    if (bytes.compare(0, 4, "GSB1") != 0) throw std::runtime_error("the voxels of another process: not GSB1 bytes");
+    gseg::io::ByteReader in(bytes, "the voxels of another process", 4);
+    const std::uint64_t n = in.u64();
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const std::uint64_t code = in.u64();
+        bool inserted = false;
+        const std::uint32_t at = index_.insert(code, inserted);
+        if (!inserted) throw std::runtime_error("the voxels of another process: brick " + std::to_string(code) + " held twice");
+        codes_.push_back(code), bricks_.emplace_back();
+        Brick& b = bricks_[at];
+        for (unsigned w = 0; w < 8; ++w) b.everObstacle[w] = in.u64();
+        for (unsigned m = 0; m < 2; ++m) {
+            Words& t = b.map[m];
+            Pool& pool = pools_[m * kShards + shardOf(code)];
+            const auto poolBits = std::int32_t((m * kShards + shardOf(code)) << kPoolShift);
+            for (unsigned w = 0; w < 8; ++w) {
+                t.exists[w] = in.u64();
+                if (!t.exists[w]) continue;
+                const std::uint32_t head = in.u32();
+                t.atMin[w] = std::uint8_t(head >> 8), t.atMax[w] = std::uint8_t(head >> 16);
+                if (head & 1) {
+                    if (pool.free.empty()) {
+                        if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
+                        pool.free.push_back(poolBits | std::int32_t(pool.count++));
+                    }
+                    t.block[w] = pool.free.back();
+                    pool.free.pop_back();
+                    float* values = block(t.block[w]);
+                    for (unsigned k = 0; k < 64; ++k) values[k] = in.f32();
+                } else {
+                    t.uniform[w] = in.f32();
+                }
+            }
+        }
+    }
+    if (!in.done()) throw std::runtime_error("the voxels of another process: bytes left over");
 }
 
 std::size_t BrickMap::clearedObstacles() const {

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <memory>
 #include <ostream>
+#include <string>
 #include <vector>
 
 namespace gseg::map::detail {
@@ -39,6 +40,20 @@ public:
     /// position, each shard is updated by one thread in list order, with value blocks of its own
     /// (one pool per map and shard), so every voxel sees the same operations in the same order.
     void setThreads(unsigned threads) { threads_ = threads < 1 ? 1 : threads; }
+
+    /// The shards of the bricks this map holds (bit s: shard s; default all): applyScan() skips
+    /// the voxels of the others (held by another process, merged with merge() before writing).
+    /// Every voxel still sees the same updates in the same order as in one map.
+    void setOwnedShards(unsigned mask) { owned_ = mask & ((1u << kShards) - 1); }
+    /// The shard of a voxel (Morton code at map resolution): its brick's (shardOf()).
+    static unsigned shardOfVoxel(std::uint64_t code) { return shardOf(code >> 9); }
+    static constexpr unsigned shards() { return kShards; }
+
+    /// Every brick as bytes (codes, voxels, values), for merge() in another process.
+    std::string encode() const;
+    /// Adds the bricks of `bytes` (encode() of a map holding other shards): none may exist here.
+    /// Throws std::runtime_error on malformed bytes or a brick held by both.
+    void merge(const std::string& bytes);
 
     /// One scan: misses on `free` in both maps (ground: only where not occupied), hits on the
     /// ground and obstacle voxels in their own map (which are remembered as ever obstacle). All
@@ -134,6 +149,7 @@ private:
     std::vector<Brick> bricks_;
     Pool pools_[2 * kShards];
     unsigned threads_ = 1;
+    unsigned owned_ = (1u << kShards) - 1;  ///< setOwnedShards()
 
     const float* block(std::int32_t b) const {
         const std::size_t local = std::size_t(b) & ((std::size_t(1) << kPoolShift) - 1);

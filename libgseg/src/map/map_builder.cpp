@@ -134,7 +134,9 @@ public:
 
     ScanResult work(unsigned w, ScanJob& job) {
         return guarded(options(), [&] { return "segmenting and ray casting " + job.describe(); }, [&] {
-            return w < o_.threads || o_.remoteWorkers == 0 ? workers_[w](job) : o_.remoteWork(w - o_.threads, job);
+            ScanResult r = w < o_.threads || o_.remoteWorkers == 0 ? workers_[w](job) : o_.remoteWork(w - o_.threads, job);
+            if (o_.worked) o_.worked(job, r);
+            return r;
         });
     }
 
@@ -158,6 +160,7 @@ private:
 void MapBuilder::run(ScanStream& stream, const BuildOptions& o) {
     if (o.remoteWorkers > 0 && !o.remoteWork) throw std::invalid_argument("MapBuilder::run: remote workers without remoteWork");
     startWorkers(std::max(1u, o.threads));
+    map_.shareVoxels(0, std::max(1, o.voxelRanks));
     if (tally_.scansByRank.size() < o.ranks) tally_.scansByRank.resize(o.ranks, 0);
     RunSteps steps(*this, workers_, stream, o);
     const double readBefore = stream.readSeconds();

@@ -224,6 +224,44 @@ void TraversabilityMap::apply(const ScanUpdate& u) {
 
 void TraversabilityMap::setUpdateThreads(unsigned threads) { voxels_->setThreads(threads); }
 
+int voxelOwner(std::uint64_t code, int ranks) { return int(detail::BrickMap::shardOfVoxel(code) % unsigned(std::max(1, ranks))); }
+
+ScanUpdate takeVoxels(ScanUpdate& u, int rank, int ranks) {
+    ScanUpdate part;
+    part.origin = u.origin;
+    bool mine[4];  // by shard
+    for (unsigned s = 0; s < 4; ++s) mine[s] = voxelOwner(std::uint64_t(s) << 9, ranks) == rank;
+    auto take = [&](std::vector<std::uint64_t>& from, std::vector<std::uint64_t>& to, bool leave) {
+        std::size_t kept = 0;
+        for (std::uint64_t code : from) {
+            if (mine[(code >> 9) & 3]) to.push_back(code);
+            if (leave || !mine[(code >> 9) & 3]) from[kept++] = code;
+        }
+        from.resize(kept);
+    };
+    take(u.free, part.free, false);
+    take(u.groundHits, part.groundHits, false);
+    take(u.obstacleHits, part.obstacleHits, true);
+    return part;
+}
+
+void TraversabilityMap::shareVoxels(int rank, int ranks) {
+    if (ranks < 1 || rank < 0 || rank >= ranks)
+        throw std::invalid_argument("TraversabilityMap::shareVoxels: rank " + std::to_string(rank) + " of " + std::to_string(ranks));
+    unsigned mask = 0;
+    for (unsigned s = 0; s < detail::BrickMap::shards(); ++s)
+        if (int(s % unsigned(ranks)) == rank) mask |= 1u << s;
+    voxels_->setOwnedShards(mask);
+}
+
+std::string TraversabilityMap::voxelBytes() const { return voxels_->encode(); }
+
+void TraversabilityMap::mergeVoxels(const std::string& bytes) {
+    voxels_->merge(bytes);
+    groundTree_.reset(), obstacleTree_.reset(), topDown_.reset();
+    costmapScans_ = 0;
+}
+
 std::unique_ptr<octomap::ColorOcTree> TraversabilityMap::colouredTree() const {
     auto tree = std::make_unique<octomap::ColorOcTree>(options_.resolution);
     tree->setOccupancyThres(options_.occupancyThreshold);

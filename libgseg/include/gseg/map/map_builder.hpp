@@ -89,6 +89,13 @@ struct BuildOptions {
     unsigned remoteWorkers = 0;
     std::function<ScanResult(unsigned slot, const ScanJob& job)> remoteWork;
     std::size_t ranks = 1;  ///< processes taking part (the size of BuildTally::scansByRank)
+    /// Processes sharing the voxels (TraversabilityMap::shareVoxels(); 1: this map holds them
+    /// all): this map holds process 0's and the caller sends the others theirs (`worked`) and
+    /// merges them back (MapBuilder::mergeVoxels()) before the map is written.
+    int voxelRanks = 1;
+    /// Called on the worker's thread with each scan's result (local or remote) before it is
+    /// integrated: e.g. sends other processes their voxels (takeVoxels()).
+    std::function<void(const ScanJob& job, ScanResult& result)> worked;
     /// Called on the integrating thread after each scan, in scan order (k = 0, 1, ...), skipped
     /// scans included: progress and messages.
     std::function<void(std::size_t k, const ScanResult& result)> onScan;
@@ -128,6 +135,8 @@ public:
     void clear();
 
     const TraversabilityMap& map() const { return map_; }
+    /// After run() with BuildOptions::voxelRanks > 1: another process's voxels (TraversabilityMap::mergeVoxels()).
+    void mergeVoxels(const std::string& bytes) { map_.mergeVoxels(bytes); }
     const BuildTally& tally() const { return tally_; }
     const gseg::mrpt::LoadedConfig& config() const { return config_; }
 

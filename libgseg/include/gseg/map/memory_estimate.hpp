@@ -55,6 +55,9 @@ struct MemoryEstimate {
     /// [bytes] The peak of a whole run, writing included: peak() and then, while the files are
     /// written, what they take beside the maps (writingPerMapByte() per byte of the maps: the
     /// voxel lists, trees and scene) and the 2.5D layers' `layers` bytes (layerBytes()).
+    /// Under MPI (rawlog-octomap, #35) this is rank 0's peak, above the other ranks': ranks 1-3
+    /// hold a share of the maps while integrating and rank 0 all of them after merging; the merge
+    /// holds the other shares as bytes (about their size) for a moment, less than the writing.
     double peakWithWriting(std::size_t inFlight, std::size_t scans, double layers) const;
 };
 

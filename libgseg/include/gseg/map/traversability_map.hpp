@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +36,17 @@ class BrickMap;    // the voxels while a drive is integrated (implementation det
 
 struct ScanUpdate;
 class GroundCells;
+
+/// The process (of `ranks`, from 0) that holds a voxel (an OctoMap Morton code at the map's
+/// resolution) when the voxels are shared (TraversabilityMap::shareVoxels()): by its 8 x 8 x 8
+/// brick, a checkerboard of 2 x 2 bricks dealt round robin (processes 4 and up hold none).
+int voxelOwner(std::uint64_t code, int ranks);
+constexpr int kVoxelHolders = 4;  ///< processes that can hold voxels (voxelOwner() < 4)
+/// The voxels of `u` that `rank` holds, taken out of it: their free, groundHits and obstacleHits
+/// (sorted, as in `u`) with u's origin, the other fields empty (what that process applies). They
+/// leave u.free and u.groundHits; u.obstacleHits stays whole (the memory guard reads it; a map
+/// holding other voxels skips them).
+ScanUpdate takeVoxels(ScanUpdate& u, int rank, int ranks);
 }  // namespace gseg::map
 namespace gseg {
 class TerrainModel;
@@ -90,6 +102,18 @@ public:
     void apply(const ScanUpdate& update);
     /// Threads apply() may use for the voxels (default 1): the maps are the same for any number.
     void setUpdateThreads(unsigned threads);
+
+    /// The voxels shared by `ranks` processes (#35): this map holds those of `rank`
+    /// (voxelOwner()) and apply() leaves the others alone; each process applies every scan's
+    /// update (or its takeVoxels() part) in scan order, so every voxel sees what it would in one map.
+    /// Before writing, the others' voxelBytes() are merged with mergeVoxels(). Default (0, 1):
+    /// every voxel. Throws std::invalid_argument unless 0 <= rank < ranks.
+    void shareVoxels(int rank, int ranks);
+    /// The voxels this map holds, as bytes for mergeVoxels() in another process.
+    std::string voxelBytes() const;
+    /// Adds another process's voxelBytes() (voxels of other owners) to this map: then it holds
+    /// both. Throws std::runtime_error on malformed bytes or a voxel held by both.
+    void mergeVoxels(const std::string& bytes);
 
     bool empty() const { return stats_.scans == 0; }
     /// The maps as OctoMap trees (built when first asked for after a scan; pruned where eight
