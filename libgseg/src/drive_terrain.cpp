@@ -54,11 +54,11 @@ std::vector<TerrainSample> terrainSamples(const PointCloudView& world, const Res
 }
 
 std::size_t DriveTerrain::label(const PointCloudView& world, Result& result, const Eigen::Vector3d& sensor, std::size_t* promoted) {
-    return onResult(result, promoted, [&](std::vector<std::uint8_t>& labels, std::size_t& promoted) { return label(world, labels, sensor, &promoted); });
+    return onResult(result, promoted, [&](std::vector<std::uint8_t>& labels, std::size_t& up) { return label(world, labels, sensor, &up); });
 }
 
 std::size_t relabelWithModel(const TerrainModel& model, const PointCloudView& world, Result& result, std::size_t* promoted) {
-    return onResult(result, promoted, [&](std::vector<std::uint8_t>& labels, std::size_t& promoted) { return model.relabel(world, labels, &promoted); });
+    return onResult(result, promoted, [&](std::vector<std::uint8_t>& labels, std::size_t& up) { return model.relabel(world, labels, &up); });
 }
 
 }  // namespace gseg

@@ -61,10 +61,12 @@ void GroundFilter::relabelWithDrive(const std::vector<float>& sensorXyzi, const 
     if (collect_) {
         out.driveEvidence = gseg::terrainSamples(cloud, out.result, t.terrainOptions().cellSize, t.maxRange, sensor);
     } else if (driveModel_) {
-        out.driveDropped = gseg::relabelWithModel(*driveModel_, cloud, out.result, &out.driveRelabelled) - out.driveRelabelled;
+        const std::size_t changed = gseg::relabelWithModel(*driveModel_, cloud, out.result, &out.driveRelabelled);
+        out.driveDropped = changed - out.driveRelabelled;  // after the call: the operands of '-' are unsequenced
     } else {
         if (!causal_) causal_ = std::make_unique<gseg::DriveTerrain>(t.terrainOptions(), t.maxRange);
-        out.driveDropped = causal_->label(cloud, out.result, sensor, &out.driveRelabelled) - out.driveRelabelled;
+        const std::size_t changed = causal_->label(cloud, out.result, sensor, &out.driveRelabelled);
+        out.driveDropped = changed - out.driveRelabelled;
     }
 }
 
