@@ -3,6 +3,7 @@
 #include <gseg/io/bytes.hpp>
 
 #include "voxel_keys.hpp"
+#include "../cpu_features.hpp"
 
 #include <octomap/OcTree.h>
 
@@ -74,6 +75,69 @@ struct Ray {
     return more;
 }
 
+// ---- four rays at a time ----
+//
+// The loop above waits on its branches: which axis steps next changes from step to step in a way
+// the CPU cannot predict, and each step depends on the last. Four rays stepped together, without
+// branches (the axis chosen by masks, the other axes' tMax growing by +0.0, which leaves them as
+// they are), keep four independent chains busy: each lane does walkRay()'s comparisons and
+// additions in its order, so the same voxels.
+
+using V4d = double __attribute__((vector_size(32)));
+using V4u = std::uint64_t __attribute__((vector_size(32)));
+using V4l = std::int64_t __attribute__((vector_size(32)));
+
+/// The state of four rays (walkRay()'s Ray, one lane each) and each lane's last voxel written.
+struct Lanes {
+    V4d t0, t1, t2, d0, d1, d2, length;
+    V4u code, end, f0, f1, f2, last;
+};
+
+/// Steps the four lanes until a lane's ray ends (its end's voxel, or min(tMax) > length) or
+/// `room` steps are taken. Every step writes the four lanes' voxels to out[4 * step + lane]; a lane
+/// whose ray ends in that step writes its last voxel again instead (already written, or the
+/// origin's). Returns the steps taken; `ended` gets bit i for each lane i whose ray ended.
+[[gnu::always_inline]] inline std::size_t stepLanesBody(Lanes& s, std::uint64_t* out, std::size_t room, unsigned& ended) {
+    const V4u m0 = V4u{} + kAxisMask[0], m1 = V4u{} + kAxisMask[1], m2 = V4u{} + kAxisMask[2];
+    const V4d d0 = s.d0, d1 = s.d1, d2 = s.d2, length = s.length;
+    const V4u f0 = s.f0, f1 = s.f1, f2 = s.f2, end = s.end;
+    V4d t0 = s.t0, t1 = s.t1, t2 = s.t2;
+    V4u code = s.code, last = s.last;
+    std::size_t n = 0;
+    ended = 0;
+    while (n < room) {
+        const V4l lt01 = t0 < t1, lt12 = t1 < t2;
+        const V4l a0 = lt01 & (t0 < t2), a1 = ~lt01 & lt12, a2 = ~(a0 | a1);
+        const V4u m = (V4u(a0) & m0) | (V4u(a1) & m1) | (V4u(a2) & m2);
+        const V4u f = (V4u(a0) & f0) | (V4u(a1) & f1) | (V4u(a2) & f2);
+        code = ((((((code ^ f) | ~m) + 1) & m) ^ f) | (code & ~m));
+        t0 += V4d(V4l(d0) & a0);
+        t1 += V4d(V4l(d1) & a1);
+        t2 += V4d(V4l(d2) & a2);
+        const V4l done = V4l(code == end) | ((t0 > length) & (t1 > length) & (t2 > length));
+        last = (V4u(done) & last) | (V4u(~done) & code);
+        std::memcpy(out + 4 * n, &last, sizeof last);
+        ++n;
+        if ((done[0] | done[1] | done[2] | done[3]) != 0) {
+            for (unsigned i = 0; i < 4; ++i) ended |= unsigned(done[i] != 0) << i;
+            break;
+        }
+    }
+    s.t0 = t0, s.t1 = t1, s.t2 = t2, s.code = code, s.last = last;
+    return n;
+}
+
+[[gnu::noinline]] std::size_t stepLanes(Lanes& s, std::uint64_t* out, std::size_t room, unsigned& ended) {
+    return stepLanesBody(s, out, room, ended);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+/// The same on CPUs with AVX2: one instruction for the four lanes where SSE2 takes two.
+__attribute__((target("avx2"))) [[gnu::noinline]] std::size_t stepLanesAvx2(Lanes& s, std::uint64_t* out, std::size_t room, unsigned& ended) {
+    return stepLanesBody(s, out, room, ended);
+}
+#endif
+
 /// Ray casting of one scan. The voxels are exactly those OcTree::computeRayKeys() gives (the same
 /// traversal with the same floating-point operations), so the maps are OctoMap's; but the keys go
 /// straight into the brick sets as Morton codes. Buffers are kept between scans (one per thread).
@@ -143,11 +207,44 @@ public:
         }
     }
 
-    /// Every voxel from the origin's up to (not including) each ray end's.
+    /// Every voxel from the origin's up to (not including) each ray end's: four rays at a time
+    /// (stepLanes()), the last ones one at a time.
     void castRays() {
-        bool any = false;
-        for (std::size_t r = 0; r < endPoints_.size(); ++r) any |= castRay(endPoints_[r], endCodes_[r]);
-        if (any) crossed_.insert(originCode_);  // every ray that leaves the origin's voxel starts there
+        std::size_t next = 0, active = 0;
+        Lanes lanes{};
+        unsigned free = 0;  // lanes without a ray
+        for (unsigned i = 0; i < 4; ++i) {
+            Ray ray{};
+            if (!nextRay(next, ray)) {
+                free |= 1u << i;
+                continue;
+            }
+            ++active;
+            setLane(lanes, i, ray);
+        }
+        if (active == 0) return;
+        crossed_.insert(originCode_);  // every ray that leaves the origin's voxel starts there
+        std::size_t rows = 0;
+        const bool avx2 = gseg::detail::cpuHasAvx2();
+        while (free == 0) {
+            if (rows == kRows) crossed_.insertAll(path_.data(), 4 * rows), rows = 0;
+            unsigned ended = 0;
+#if defined(__GNUC__) && defined(__x86_64__)
+            rows += avx2 ? stepLanesAvx2(lanes, path_.data() + 4 * rows, kRows - rows, ended)
+                         : stepLanes(lanes, path_.data() + 4 * rows, kRows - rows, ended);
+#else
+            rows += stepLanes(lanes, path_.data() + 4 * rows, kRows - rows, ended);
+#endif
+            for (unsigned i = 0; i < 4; ++i) {
+                if (!(ended >> i & 1)) continue;
+                Ray ray{};
+                if (nextRay(next, ray)) setLane(lanes, i, ray);
+                else free |= 1u << i;
+            }
+        }
+        crossed_.insertAll(path_.data(), 4 * rows);
+        for (unsigned i = 0; i < 4; ++i)  // the rays still going, to their ends
+            if (!(free >> i & 1)) walk(laneRay(lanes, i));
     }
     std::size_t rays() const { return endPoints_.size(); }
     const BrickSet& crossed() const { return crossed_; }
@@ -169,36 +266,54 @@ private:
         return geometry_->coordToKeyChecked(p, key);
     }
 
-    /// OcTree::computeRayKeys(origin, end) (OctoMap 1.9.7) without the origin's voxel, marking each
-    /// key in crossed_; false if the end lies in the origin's voxel (no ray).
-    bool castRay(const octomap::point3d& end, std::uint64_t endCode) {
+    /// The start of OcTree::computeRayKeys(origin, end) (OctoMap 1.9.7) as `ray`; false if the end
+    /// lies in the origin's voxel (no ray).
+    bool rayOf(const octomap::point3d& end, std::uint64_t endCode, Ray& ray) const {
         if (endCode == originCode_) return false;
         octomap::point3d direction = (end - origin_);
         const float length = float(direction.norm());
         direction /= length;
-        int step[3];
-        double tMax[3], tDelta[3];
         const double resolution = geometry_->getResolution();
         for (int i = 0; i < 3; ++i) {
-            step[i] = direction(i) > 0.0 ? 1 : direction(i) < 0.0 ? -1 : 0;
-            if (step[i] != 0) {
+            const int step = direction(i) > 0.0 ? 1 : direction(i) < 0.0 ? -1 : 0;
+            ray.flip[i] = step < 0 ? kAxisMask[i] : 0;
+            if (step != 0) {
                 double voxelBorder = geometry_->keyToCoord(originKey_[unsigned(i)]);
-                voxelBorder += float(step[i] * resolution * 0.5);
-                tMax[i] = (voxelBorder - origin_(i)) / direction(i);
-                tDelta[i] = resolution / std::fabs(direction(i));
+                voxelBorder += float(step * resolution * 0.5);
+                ray.t[i] = (voxelBorder - origin_(i)) / direction(i);
+                ray.delta[i] = resolution / std::fabs(direction(i));
             } else {
-                tMax[i] = tDelta[i] = std::numeric_limits<double>::max();
+                ray.t[i] = ray.delta[i] = std::numeric_limits<double>::max();
             }
         }
-        walk(tMax, tDelta, step, double(length), endCode);
+        ray.length = double(length), ray.code = originCode_, ray.end = endCode;
         return true;
     }
 
-    /// OctoMap's incremental loop, kPath voxels at a time (walkRay()), each batch then marked in
-    /// crossed_ brick by brick.
-    void walk(const double tMax[3], const double tDelta[3], const int step[3], const double length, const std::uint64_t endCode) {
-        Ray ray{{tMax[0], tMax[1], tMax[2]}, {tDelta[0], tDelta[1], tDelta[2]}, {}, length, originCode_, endCode};
-        for (int a = 0; a < 3; ++a) ray.flip[a] = step[a] < 0 ? kAxisMask[a] : 0;
+    /// The next ray of the scan from endpoint `next` on (skipping ends in the origin's voxel);
+    /// false when none is left.
+    bool nextRay(std::size_t& next, Ray& ray) const {
+        while (next < endPoints_.size()) {
+            const std::size_t r = next++;
+            if (rayOf(endPoints_[r], endCodes_[r], ray)) return true;
+        }
+        return false;
+    }
+
+    void setLane(Lanes& s, unsigned i, const Ray& r) const {
+        s.t0[i] = r.t[0], s.t1[i] = r.t[1], s.t2[i] = r.t[2];
+        s.d0[i] = r.delta[0], s.d1[i] = r.delta[1], s.d2[i] = r.delta[2];
+        s.f0[i] = r.flip[0], s.f1[i] = r.flip[1], s.f2[i] = r.flip[2];
+        s.length[i] = r.length, s.code[i] = r.code, s.end[i] = r.end, s.last[i] = originCode_;
+    }
+
+    static Ray laneRay(const Lanes& s, unsigned i) {
+        return Ray{{s.t0[i], s.t1[i], s.t2[i]}, {s.d0[i], s.d1[i], s.d2[i]}, {s.f0[i], s.f1[i], s.f2[i]}, s.length[i], s.code[i], s.end[i]};
+    }
+
+    /// OctoMap's incremental loop from `ray`'s state to its end, kPath voxels at a time (walkRay()),
+    /// each batch then marked in crossed_ brick by brick.
+    void walk(Ray ray) {
         bool more = true;
         while (more) {
             std::size_t n = 0;
@@ -207,8 +322,8 @@ private:
         }
     }
 
-    static constexpr std::size_t kPath = 4096;
-    std::array<std::uint64_t, kPath> path_;  ///< the voxels of the ray being cast
+    static constexpr std::size_t kRows = 1024, kPath = 4 * kRows;
+    std::array<std::uint64_t, kPath> path_;  ///< the voxels of the rays being cast (four lanes, or one ray)
 };
 
 // ---- byte encoding (gseg/io/bytes.hpp) ----
