@@ -399,6 +399,7 @@ RawlogReader::RawlogReader(const std::string& path, unsigned decodeThreads) : im
     refuseFolder(path);
     if (auto members = openMembers(path, impl_->size)) {
         impl_->threads = decodeThreads > 0 ? decodeThreads : usableCores();
+        ::mrpt::rtti::registerAllPendingClasses();  // before the decode threads look classes up
         impl_->members = std::make_unique<MemberPipeline>(std::move(members), path, impl_->threads);
         return;
     }
