@@ -235,8 +235,9 @@ std::string inflateMember(const Member& m, std::unique_ptr<unsigned char[]>& out
     if (!d) throw std::bad_alloc();
     std::size_t in = 0, made = 0;
     const auto r = libdeflate_gzip_decompress_ex(d.get(), m.bytes.data(), m.bytes.size(), out.get(), size, &in, &made);
-    if (r == LIBDEFLATE_INSUFFICIENT_SPACE || (r == LIBDEFLATE_SUCCESS && made != size)) return "its size field or its trailer is wrong: it does not inflate to the size its trailer gives";
-    if (r != LIBDEFLATE_SUCCESS) return "it does not inflate, or its CRC-32 does not match";
+    if (r == LIBDEFLATE_INSUFFICIENT_SPACE || (r == LIBDEFLATE_SUCCESS && made != size))
+        return "it does not inflate to the " + std::to_string(size) + " bytes its trailer gives: damaged, or a wrong size field";
+    if (r != LIBDEFLATE_SUCCESS) return "it does not inflate, or its CRC-32 does not match: damaged";
     if (in != m.bytes.size())
         return "its size field gives " + std::to_string(m.bytes.size()) + " bytes, the gzip member ends after " + std::to_string(in);
     return "";
