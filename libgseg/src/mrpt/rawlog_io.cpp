@@ -294,7 +294,8 @@ unsigned usableCores() {
 struct Stopped {};
 
 /// Reads the members on a thread of its own, decodes them on `threads` workers (gseg::runOrdered)
-/// and hands them over in file order, with a bounded number in flight.
+/// and hands them over in file order: at most threads + 2 members in memory (in the pipeline, one
+/// decoded and waiting, the one next() returns objects from).
 class MemberPipeline {
 public:
     MemberPipeline(std::unique_ptr<MemberFile> file, std::string name, unsigned threads)
@@ -329,7 +330,7 @@ private:
         try {
             runOrdered<Member, Decoded>([&](Member& m) { return file.read(m); },
                                         [&](unsigned, Member& m) { return decodeMember(m, name); },
-                                        [&](std::size_t, Decoded& d) { hand(d); }, PipelineOptions{threads, threads + 1});
+                                        [&](std::size_t, Decoded& d) { hand(d); }, PipelineOptions{threads, threads});
         } catch (const Stopped&) {
         } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(m_);
