@@ -176,6 +176,9 @@ struct Member {
 /// A member's objects, in order; `error` (if any) is the entry after them that could not be read.
 struct Decoded {
     std::vector<ObjectPtr> objects;
+    /// [bytes] where each object ends in the file: its end in the inflated member scaled to the
+    /// member's compressed bytes (what fraction() reports, as the serial reader's compressed offset)
+    std::vector<std::uint64_t> ends;
     std::string error;
     std::uint64_t end = 0;  ///< [bytes] where the member ends in the file
 };
@@ -187,7 +190,7 @@ std::string entryError(const std::string& name, std::size_t index, const std::st
 /// Reads the members of a rawlog in gseg's layout one after the other: the compressed bytes only.
 class MemberFile {
 public:
-    MemberFile(std::FILE* f, std::string name) : f_(f), name_(std::move(name)) {}
+    MemberFile(std::FILE* f, std::string name, std::uint64_t fileSize) : f_(f), name_(std::move(name)), fileSize_(fileSize) {}
     ~MemberFile() { std::fclose(f_); }
     MemberFile(const MemberFile&) = delete;
     MemberFile& operator=(const MemberFile&) = delete;
@@ -206,7 +209,10 @@ public:
         if (got < kHeader) fail("the file ends inside a gzip member header at byte " + std::to_string(offset_) + ": truncated");
         if (!memberHeader(m.bytes.data(), size, m.entries))
             fail("byte " + std::to_string(offset_) + " is not the start of a gzip member with gseg's size field");
-        if (size < kHeader + 10) fail("the gzip member at byte " + std::to_string(offset_) + " has a size field of " + std::to_string(size) + " bytes");
+        const std::string at = "the gzip member at byte " + std::to_string(offset_) + " has a size field of " + std::to_string(size) + " bytes";
+        if (size < kHeader + 10) fail(at + ": a wrong size field");
+        if (offset_ + size > fileSize_)  // never allocated: the file is not that long
+            fail(at + ", past the file's end at byte " + std::to_string(fileSize_) + ": truncated, or a wrong size field");
         m.bytes.resize(size);
         if (std::fread(m.bytes.data() + kHeader, 1, size - kHeader, f_) != size - kHeader)
             fail(std::ferror(f_) ? std::string("read failed: ") + std::strerror(errno)
@@ -221,6 +227,7 @@ private:
     [[noreturn]] void fail(const std::string& reason) const { throw std::runtime_error(entryError(name_, first_, reason)); }
     std::FILE* f_;
     std::string name_;
+    std::uint64_t fileSize_;
     std::uint64_t offset_ = 0;
     std::size_t first_ = 0;
     bool atEndMember_ = false;
@@ -258,7 +265,7 @@ Decoded decodeMember(const Member& m, const std::string& name) {
     memory.assignMemoryNotOwn(data.get(), size);
     ExactReads exact(memory);
     ::mrpt::serialization::CArchiveStreamBase<ExactReads> archive(exact);
-    out.objects.reserve(m.entries);
+    out.objects.reserve(std::min<std::size_t>(m.entries, 4096));  // the count is not trusted yet
     for (std::uint32_t j = 0; j < m.entries; ++j) {
         const std::size_t index = m.first + j;
         gseg::io::setActivity("reading entry " + std::to_string(index) + " of " + name);
@@ -277,10 +284,22 @@ Decoded decodeMember(const Member& m, const std::string& name) {
             return out;
         }
         out.objects.push_back(std::move(obj));
+        out.ends.push_back(m.offset + std::uint64_t(double(m.bytes.size()) * double(memory.getPosition()) / double(size)));
     }
     if (memory.getPosition() != size)
         out.error = entryError(name, m.first + m.entries, at + " holds more than the " + std::to_string(m.entries) + " entries its header counts");
     return out;
+}
+
+/// decodeMember(), with any other error (e.g. out of memory) as the error of the member's first entry.
+Decoded decodeOrSay(const Member& m, const std::string& name) {
+    try {
+        return decodeMember(m, name);
+    } catch (const std::exception& e) {
+        Decoded out;
+        out.error = entryError(name, m.first, "the gzip member at byte " + std::to_string(m.offset) + ": " + e.what());
+        return out;
+    }
 }
 
 /// The cores this process may run on (its CPU affinity), at least 1: gseg::tools::usableCores().
@@ -329,7 +348,7 @@ private:
     void run(MemberFile& file, const std::string& name, unsigned threads) {
         try {
             runOrdered<Member, Decoded>([&](Member& m) { return file.read(m); },
-                                        [&](unsigned, Member& m) { return decodeMember(m, name); },
+                                        [&](unsigned, Member& m) { return decodeOrSay(m, name); },
                                         [&](std::size_t, Decoded& d) { hand(d); }, PipelineOptions{threads, threads});
         } catch (const Stopped&) {
         } catch (const std::exception& e) {
@@ -392,7 +411,7 @@ std::unique_ptr<MemberFile> openMembers(const std::string& path, double& size) {
         return nullptr;
     }
     size = double(st.st_size);
-    return std::make_unique<MemberFile>(f, path);
+    return std::make_unique<MemberFile>(f, path, std::uint64_t(st.st_size));
 }
 
 }  // namespace
@@ -445,7 +464,11 @@ std::shared_ptr<::mrpt::serialization::CSerializable> RawlogReader::nextOfMember
 }
 
 double RawlogReader::fraction() const {
-    if (impl_->members) return impl_->size > 0 ? std::min(1.0, double(impl_->current.end) / impl_->size) : 0.0;
+    if (impl_->members) {
+        const Decoded& c = impl_->current;
+        const double at = double(impl_->taken == c.objects.size() ? c.end : impl_->taken > 0 ? c.ends[impl_->taken - 1] : 0);
+        return impl_->size > 0 ? std::min(1.0, at / impl_->size) : 0.0;
+    }
     return impl_->file ? impl_->file->fraction() : 0.0;
 }
 
