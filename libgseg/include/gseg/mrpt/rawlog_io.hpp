@@ -29,13 +29,13 @@ namespace gseg::mrpt {
 /// of its input: a corrupt file can crash it).
 ///
 /// A rawlog file written by RawlogWriter (gzip members with gseg's size field, gzip_stream.hpp) is
-/// read member by member and its members are inflated (libdeflate, CRC-32 checked) and
-/// deserialised on decode threads ahead of next(), a few members in flight; next() still returns
-/// the objects in file order. Other rawlogs (plain, one gzip stream, pipes) are read serially.
+/// read member by member, its members are inflated (libdeflate, CRC-32 checked) on decode threads
+/// ahead of next(), a few members in flight, and next() deserialises their objects from memory, in
+/// file order. Other rawlogs (plain, one gzip stream, pipes) are read serially.
 class RawlogReader {
 public:
     /// Opens `path`. Throws std::runtime_error naming it if it cannot be opened or is a folder.
-    /// `decodeThreads`: threads decoding gseg's gzip members; 0: the cores this process may use.
+    /// `decodeThreads`: threads inflating gseg's gzip members; 0: the cores this process may use.
     explicit RawlogReader(const std::string& path, unsigned decodeThreads = 0);
     /// Reads from an open stream (plain or already decompressed); `name` stands for it in messages.
     RawlogReader(::mrpt::io::CStream& stream, std::string name);
@@ -51,7 +51,7 @@ public:
     std::size_t index() const { return index_ - 1; }
     /// Fraction of the file read so far (compressed bytes for gzip), 0..1; 0 for a pipe.
     double fraction() const;
-    /// Threads decoding gzip members ahead of next(); 0 when the rawlog is read serially.
+    /// Threads inflating gzip members ahead of next(); 0 when the rawlog is read serially.
     unsigned decodeThreads() const;
 
 private:
