@@ -203,6 +203,11 @@ public:
         std::lock_guard<std::mutex> lock(m_);
         free_.push_back(std::move(p));
     }
+    /// Unmaps the buffers not in use (at the end of the file).
+    void clear() {
+        std::lock_guard<std::mutex> lock(m_);
+        free_.clear();
+    }
 
 private:
     std::mutex m_;
@@ -342,6 +347,8 @@ public:
 
     /// Takes back the buffer of a member next() has read.
     void recycle(Pages p) { pool_.give(std::move(p)); }
+    /// Unmaps the buffers kept for reuse: the reading is over.
+    void release() { pool_.clear(); }
 
     /// The next member in file order; false at the end. Throws what reading the file threw.
     bool pop(Decoded& out) {
@@ -483,7 +490,10 @@ std::shared_ptr<::mrpt::serialization::CSerializable> RawlogReader::nextOfMember
             fail(entryError(name_, index_, at() + " holds more than the " + std::to_string(r.taken) + " entries its header counts"));
         r.memory.reset();
         r.members->recycle(std::move(r.current.data));
-        if (!r.members->pop(r.current)) return nullptr;
+        if (!r.members->pop(r.current)) {
+            r.members->release();
+            return nullptr;
+        }
         if (!r.current.error.empty()) fail(r.current.error);
         r.taken = 0;
         r.memory = std::make_unique<::mrpt::io::CMemoryStream>();

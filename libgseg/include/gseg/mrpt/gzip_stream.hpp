@@ -51,7 +51,7 @@ public:
     /// big enough. No-op for one member. Throws std::runtime_error (a member over 4 GiB).
     void endEntry();
 
-    static constexpr std::size_t kRawlogMemberBytes = 4u << 20;  ///< [bytes] uncompressed, per rawlog member
+    static constexpr std::size_t kRawlogMemberBytes = 1u << 20;  ///< [bytes] uncompressed, per rawlog member (members in flight: memory)
     static constexpr std::size_t kMemberHeaderBytes = 24;         ///< gzip header with gseg's subfield
 
     size_t Read(void*, size_t) override;                                     ///< throws: write-only
