@@ -5,6 +5,13 @@
 /// MRPT 2.5.8's CFileGZOutputStream does not report a failed final flush, so a full disk gave a
 /// truncated file and exit code 0. Level 1 and no time stamp, as MRPT writes: the same objects
 /// give the same bytes.
+///
+/// Rawlogs (RawlogWriter) are written as a sequence of gzip members of whole entries, each member's
+/// header carrying gseg's FEXTRA subfield 'G','S' (LEN 8: uint32 LE size of the member in bytes,
+/// header and trailer included; uint32 LE number of entries in it), the idea of BGZF's BSIZE. The
+/// last member is an empty one (0 entries): the end mark. Concatenated members are one standard
+/// gzip stream for every other reader (zlib, zcat, MRPT); gseg's RawlogReader finds the members
+/// without inflating and decodes several at once.
 
 #include <mrpt/io/CStream.h>
 
@@ -26,10 +33,13 @@ namespace gseg::mrpt {
 class GzipOutputStream : public ::mrpt::io::CStream {
 public:
     using Sink = std::function<void(const void*, std::size_t)>;
-    /// Compresses into `sink` (which throws on failure); `name` stands for it in messages.
-    GzipOutputStream(Sink sink, std::string name);
+    /// Compresses into `sink` (which throws on failure); `name` stands for it in messages;
+    /// `memberBytes` as below.
+    GzipOutputStream(Sink sink, std::string name, std::size_t memberBytes = 0);
     /// Compresses into `file` (not committed here: finish(), then commit the file or its set).
-    explicit GzipOutputStream(gseg::io::AtomicFile& file);
+    /// `memberBytes` 0: one gzip member (scenes, simple maps); > 0: the rawlog layout, a member is
+    /// closed at endEntry() once it holds at least this many uncompressed bytes.
+    explicit GzipOutputStream(gseg::io::AtomicFile& file, std::size_t memberBytes = 0);
     ~GzipOutputStream() override;
     GzipOutputStream(const GzipOutputStream&) = delete;
     GzipOutputStream& operator=(const GzipOutputStream&) = delete;
@@ -37,6 +47,12 @@ public:
     size_t Write(const void* buffer, size_t count) override;
     /// Ends the gzip stream (its last block and trailer go to the sink). Throws std::runtime_error.
     void finish();
+    /// The rawlog layout: one entry (a whole object) has been written; closes the member if it is
+    /// big enough. No-op for one member. Throws std::runtime_error (a member over 4 GiB).
+    void endEntry();
+
+    static constexpr std::size_t kRawlogMemberBytes = 1u << 20;  ///< [bytes] uncompressed, per rawlog member (members in flight: memory)
+    static constexpr std::size_t kMemberHeaderBytes = 24;         ///< gzip header with gseg's subfield
 
     size_t Read(void*, size_t) override;                                     ///< throws: write-only
     uint64_t Seek(int64_t, CStream::TSeekOrigin = sFromBeginning) override;  ///< throws: not seekable
@@ -47,6 +63,9 @@ public:
 private:
     void pump(const void* data, std::size_t size, int flush);
     void flushPending();
+    void emit(const void* data, std::size_t size);
+    void startMember();
+    void closeMember();
     static constexpr std::size_t kPending = 1 << 16;  ///< [bytes] gathered before deflate()
     Sink sink_;
     std::string name_;
@@ -57,6 +76,12 @@ private:
     std::vector<char> pending_;
     uint64_t written_ = 0;
     bool finished_ = false;
+    std::size_t memberBytes_ = 0;       ///< 0: one member; else the rawlog layout
+    std::vector<unsigned char> member_; ///< the compressed member being written (rawlog layout)
+    std::vector<unsigned char> extra_;  ///< its subfield, read by zlib when it writes the header
+    void* header_ = nullptr;            ///< gz_header
+    uint64_t memberStart_ = 0;          ///< written_ when the member began
+    std::uint32_t memberEntries_ = 0;
 };
 
 /// Serialises `object` (a scene, a simple map) gzip-compressed into `file` (not committed).

@@ -27,10 +27,16 @@ namespace gseg::mrpt {
 /// fuzz_rawlog), never a smaller object. The entry being read is also the activity named by the
 /// crash message of gseg::io::installTemporaryCleanup() (MRPT's deserializer trusts the size fields
 /// of its input: a corrupt file can crash it).
+///
+/// A rawlog file written by RawlogWriter (gzip members with gseg's size field, gzip_stream.hpp) is
+/// read member by member, its members are inflated (libdeflate, CRC-32 checked) on decode threads
+/// ahead of next(), a few members in flight, and next() deserialises their objects from memory, in
+/// file order. Other rawlogs (plain, one gzip stream, pipes) are read serially.
 class RawlogReader {
 public:
     /// Opens `path`. Throws std::runtime_error naming it if it cannot be opened or is a folder.
-    explicit RawlogReader(const std::string& path);
+    /// `decodeThreads`: threads inflating gseg's gzip members; 0: the cores this process may use.
+    explicit RawlogReader(const std::string& path, unsigned decodeThreads = 0);
     /// Reads from an open stream (plain or already decompressed); `name` stands for it in messages.
     RawlogReader(::mrpt::io::CStream& stream, std::string name);
     ~RawlogReader();
@@ -45,8 +51,11 @@ public:
     std::size_t index() const { return index_ - 1; }
     /// Fraction of the file read so far (compressed bytes for gzip), 0..1; 0 for a pipe.
     double fraction() const;
+    /// Threads inflating gzip members ahead of next(); 0 when the rawlog is read serially.
+    unsigned decodeThreads() const;
 
 private:
+    std::shared_ptr<::mrpt::serialization::CSerializable> nextOfMembers();
     struct Impl;
     std::unique_ptr<Impl> impl_;
     std::string name_;
