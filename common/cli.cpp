@@ -13,10 +13,8 @@
 #include <iostream>
 #include <map>
 #include <stdexcept>
-#include <thread>
 #include <vector>
 
-#include <sched.h>
 
 namespace gseg::tools {
 namespace {
@@ -88,16 +86,6 @@ void noteWarnings(const std::string& tool, const std::vector<std::string>& warni
 
 std::string versionLine(const std::string& toolName) {
     return toolName + (toolName.rfind("gseg", 0) == 0 ? " " : " (gseg) ") + GSEG_VERSION;
-}
-
-unsigned usableCores() {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    if (::sched_getaffinity(0, sizeof set, &set) == 0) {
-        const int n = CPU_COUNT(&set);
-        if (n > 0) return unsigned(n);
-    }
-    return std::max(1u, std::thread::hardware_concurrency());
 }
 
 double parseMemorySize(const std::string& flag, const std::string& value) {

@@ -56,12 +56,6 @@ void noteWarnings(const std::string& tool, const std::vector<std::string>& warni
 /// "rawlog-gseg (gseg) 0.1.0", "gseg segment 0.1.0": what --version prints.
 std::string versionLine(const std::string& toolName);
 
-/// The cores this process may run on: its CPU affinity (taskset, a Slurm or container cpuset, an
-/// MPI launcher's binding: `mpirun -np 1` binds its rank to one core), at least 1. The default
-/// worker count of every tool: std::thread::hardware_concurrency() counts the machine's cores,
-/// and threads beyond the process's own only take turns on them.
-unsigned usableCores();
-
 /// [bytes] A memory size given as `flag` (e.g. --max-memory): a number of MB ("500"), or with a
 /// unit K, M, G or T (powers of 1000, "2G", "1.5GB"). Throws std::invalid_argument naming `flag`.
 double parseMemorySize(const std::string& flag, const std::string& value);

@@ -536,7 +536,7 @@ int runEval(int argc, char** argv, tools::Ranks& ranks) {
     TCLAP::ValueArg<std::string> report("", "report", "write PREFIX_frames.csv, _sequences.csv, _table.md, "
                                         "_range.png (the folder is made if missing)", false, "", "PREFIX", cmd);
     TCLAP::ValueArg<int> threads("", "threads", "worker threads (default: the cores this process may use)",
-                                 false, int(gseg::tools::usableCores()), "N", cmd);
+                                 false, int(gseg::usableCores()), "N", cmd);
     TCLAP::ValueArg<std::string> scan("", "scan", "score one scan instead of a tree", false, "", "X.bin", cmd);
     TCLAP::ValueArg<std::string> labels("", "labels", "label file of --scan", false, "", "X.label", cmd);
     TCLAP::ValueArg<std::string> preds("", "labels-out-dir", "write each frame's predictions (1 byte per point, "

@@ -23,6 +23,7 @@
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <gseg/mrpt/rawlog_segmenter.hpp>
 #include <gseg/progress.hpp>
+#include <gseg/ordered_pipeline.hpp>
 
 #include <mrpt/serialization/CSerializable.h>
 
@@ -387,7 +388,7 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
     ranks.setTimeout("rawlog-gseg", line.mpiTimeout());
     const Cli cli = {in.getValue(),       list.getValue(),   outArg.getValue(), cfg.getValue(),
                      frame.getValue(),    sensor.getValue(), replace.getValue(), line.overwrite(), !noDrive.getValue(),
-                     ranks.size() > 1 ? 1u : gseg::tools::usableCores()};
+                     ranks.size() > 1 ? 1u : gseg::usableCores()};
     gseg::io::installTemporaryCleanup("rawlog-gseg");
     try {
         return runBatch(cli, ranks);

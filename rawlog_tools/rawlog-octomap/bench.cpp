@@ -14,6 +14,7 @@
 
 #include <gseg/map/world_scan.hpp>
 #include <gseg/text.hpp>
+#include <gseg/ordered_pipeline.hpp>
 
 #include <octomap/OcTree.h>
 
@@ -116,7 +117,7 @@ void runBench(const Cli& cli) {
 #endif
     gseg::tools::say("rawlog-octomap --bench: %s, %d round(s), build %s, %u hardware thread(s) (%u usable), %u worker thread(s)\n",
                 cli.input.c_str(), cli.benchRounds, build, std::thread::hardware_concurrency(),
-                gseg::tools::usableCores(), cli.threads);
+                gseg::usableCores(), cli.threads);
     gseg::tools::say("%-6s %-16s %10s %12s\n", "round", "run", "wall [s]", "note");
     std::vector<double> plain, plainInsert, fast;
     RunReport last;

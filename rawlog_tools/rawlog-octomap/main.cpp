@@ -22,6 +22,7 @@
 #include <gseg/mrpt/segment_scan.hpp>
 #include <gseg/progress.hpp>
 #include <gseg/text.hpp>
+#include <gseg/ordered_pipeline.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -107,7 +108,7 @@ int parseCli(int argc, char** argv, bool printing, Cli& c) {
                                        "PREFIX_bench*", false, "", "N", cmd);
     if (const int code = line.parse(argc, argv); code >= 0) return code;
     try {
-        c.threads = gseg::tools::usableCores();
+        c.threads = gseg::usableCores();
         c.input = input.getValue(), c.prefix = prefix.getValue(), c.config = config.getValue();
         c.poses.poses = poses.getValue(), c.poses.calib = calib.getValue(), c.poses.origin = origin.getValue();
         auto number = [](TCLAP::ValueArg<std::string>& a, double& to) {

@@ -24,6 +24,13 @@
 
 namespace gseg {
 
+/// The cores this process may run on: its CPU affinity (taskset, a Slurm or container cpuset, an
+/// MPI launcher's binding: `mpirun -np 1` binds its rank to one core), at least 1. The default
+/// worker count of every tool and of the rawlog reader's decode threads:
+/// std::thread::hardware_concurrency() counts the machine's cores, and threads beyond the
+/// process's own only take turns on them.
+unsigned usableCores();
+
 /// How runOrdered() runs.
 struct PipelineOptions {
     unsigned workers = 2;      ///< worker threads; 0: everything on the calling thread, one item at a time

@@ -9,7 +9,6 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <libdeflate.h>
-#include <sched.h>
 #include <sys/mman.h>
 #include <zlib.h>
 
@@ -317,14 +316,6 @@ Decoded decodeMember(Member m, PagePool& pool, const std::string& name) {
     return out;
 }
 
-/// The cores this process may run on (its CPU affinity), at least 1: gseg::tools::usableCores().
-unsigned usableCores() {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    if (::sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return unsigned(CPU_COUNT(&set));
-    return std::max(1u, std::thread::hardware_concurrency());
-}
-
 struct Stopped {};
 
 /// Reads the members on a thread of its own, inflates them on `threads` workers (gseg::runOrdered)
@@ -444,7 +435,7 @@ std::unique_ptr<MemberFile> openMembers(const std::string& path, double& size) {
 RawlogReader::RawlogReader(const std::string& path, unsigned decodeThreads) : impl_(std::make_unique<Impl>()), name_(path) {
     refuseFolder(path);
     if (auto members = openMembers(path, impl_->size)) {
-        impl_->threads = decodeThreads > 0 ? decodeThreads : usableCores();
+        impl_->threads = decodeThreads > 0 ? decodeThreads : gseg::usableCores();
         ::mrpt::rtti::registerAllPendingClasses();  // before the decode threads look classes up
         impl_->members = std::make_unique<MemberPipeline>(std::move(members), path, impl_->threads);
         return;
