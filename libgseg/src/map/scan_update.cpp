@@ -210,19 +210,19 @@ public:
     /// Every voxel from the origin's up to (not including) each ray end's: four rays at a time
     /// (stepLanes()), the last ones one at a time.
     void castRays() {
-        std::size_t next = 0, active = 0;
+        std::size_t next = 0;
         Lanes lanes{};
-        unsigned free = 0;  // lanes without a ray
-        for (unsigned i = 0; i < 4; ++i) {
-            Ray ray{};
-            if (!nextRay(next, ray)) {
-                free |= 1u << i;
-                continue;
+        unsigned free = 0;  // lanes left without a ray
+        auto fill = [&](unsigned lanesToFill) {  // the next rays into these lanes
+            for (unsigned i = 0; i < 4; ++i) {
+                Ray ray{};
+                if (!(lanesToFill >> i & 1)) continue;
+                if (nextRay(next, ray)) setLane(lanes, i, ray);
+                else free |= 1u << i;
             }
-            ++active;
-            setLane(lanes, i, ray);
-        }
-        if (active == 0) return;
+        };
+        fill(0xf);
+        if (free == 0xf) return;  // no ray leaves the origin's voxel
         crossed_.insert(originCode_);  // every ray that leaves the origin's voxel starts there
         std::size_t rows = 0;
         const bool avx2 = gseg::detail::cpuHasAvx2();
@@ -235,12 +235,7 @@ public:
 #else
             rows += stepLanes(lanes, path_.data() + 4 * rows, kRows - rows, ended);
 #endif
-            for (unsigned i = 0; i < 4; ++i) {
-                if (!(ended >> i & 1)) continue;
-                Ray ray{};
-                if (nextRay(next, ray)) setLane(lanes, i, ray);
-                else free |= 1u << i;
-            }
+            fill(ended);
         }
         crossed_.insertAll(path_.data(), 4 * rows);
         for (unsigned i = 0; i < 4; ++i)  // the rays still going, to their ends

@@ -226,8 +226,7 @@ struct Member {
 struct Decoded {
     Pages data;                             ///< its serialised entries
     std::size_t size = 0;                   ///< [bytes] of them
-    Member member;                          ///< its place in the file (without its compressed bytes)
-    std::size_t compressed = 0;             ///< [bytes] of the member in the file
+    Member member;                          ///< its place and size in the file (without its compressed bytes)
     std::string error;                      ///< the whole message, naming its first entry
 };
 
@@ -304,7 +303,6 @@ std::string inflateMember(const Member& m, PagePool& pool, Pages& out, std::size
 /// objects made on the decode threads raised rawlog-octomap's peak by 15-80 MB).
 Decoded decodeMember(Member m, PagePool& pool, const std::string& name) {
     Decoded out;
-    out.compressed = m.size;
     try {
         if (const std::string bad = inflateMember(m, pool, out.data, out.size); !bad.empty())
             out.error = entryError(name, m.first, "the gzip member at byte " + std::to_string(m.offset) + ": " + bad);
@@ -512,7 +510,7 @@ double RawlogReader::fraction() const {
     if (!r.members) return r.file ? r.file->fraction() : 0.0;
     // Compressed bytes: the member's start, and of its bytes the share deserialised
     const double read = r.memory && r.current.size > 0 ? double(r.memory->getPosition()) / double(r.current.size) : 1.0;
-    return r.size > 0 ? std::min(1.0, (double(r.current.member.offset) + double(r.current.compressed) * read) / r.size) : 0.0;
+    return r.size > 0 ? std::min(1.0, (double(r.current.member.offset) + double(r.current.member.size) * read) / r.size) : 0.0;
 }
 
 unsigned RawlogReader::decodeThreads() const { return impl_->threads; }
