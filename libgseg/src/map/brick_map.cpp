@@ -4,6 +4,10 @@
 
 #include <gseg/io/bytes.hpp>
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include <algorithm>
 #include <exception>
 #include <system_error>
@@ -31,51 +35,101 @@ inline void BrickMap::collapseIfUniform(Words& t, Pool& pool) {
     }
 }
 
-inline void BrickMap::update(Words& t, unsigned local, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits) {
-    const unsigned w = local >> 6, v = local & 63;
+namespace {
+
+/// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics) on
+/// voxel v of a word whose values are `values` (a block of 64), `exists` and its counts of values
+/// at each bound.
+inline void updateVoxel(float* values, std::uint64_t& exists, std::uint8_t& atMin, std::uint8_t& atMax, unsigned v, float delta,
+                        bool skipOccupied, const LogOdds& l) {
     const std::uint64_t bit = 1ULL << v;
-    const bool exists = t.exists[w] & bit;
-    const float old = exists ? valueOf(t, w, v) : 0.f;
-    if (skipOccupied && exists && old >= l_.occupied) return;  // ground does not move
+    const bool had = exists & bit;
+    const float old = had ? values[v] : 0.f;
+    if (skipOccupied && had && old >= l.occupied) return;  // ground does not move
     float value = old + delta;  // OcTreeNode::addValue(), then the clamping of updateNodeLogOdds()
-    if (value < l_.clampMin) value = l_.clampMin;
-    else if (value > l_.clampMax) value = l_.clampMax;
-    if (exists && value == old) return;  // at the bound already
-    if (t.block[w] < 0) {  // one value for the word so far: give it 64
+    if (value < l.clampMin) value = l.clampMin;
+    else if (value > l.clampMax) value = l.clampMax;
+    if (had && value == old) return;  // at the bound already
+    if (had) {
+        atMin -= old == l.clampMin;
+        atMax -= old == l.clampMax;
+    }
+    exists |= bit;
+    values[v] = value;
+    atMin += value == l.clampMin;
+    atMax += value == l.clampMax;
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+/// updateVoxel() for every voxel of `bits`, eight at a time: each lane does updateVoxel()'s
+/// addition, clamping and comparisons (IEEE single precision, the same values).
+__attribute__((target("avx2,popcnt"))) void updateWordAvx2(float* values, std::uint64_t bits, std::uint64_t& exists, std::uint8_t& atMin,
+                                                           std::uint8_t& atMax, float delta, bool skipOccupied, const LogOdds& l) {
+    const __m256 vDelta = _mm256_set1_ps(delta), vMin = _mm256_set1_ps(l.clampMin), vMax = _mm256_set1_ps(l.clampMax),
+                 vOccupied = _mm256_set1_ps(l.occupied);
+    const __m256i laneBits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    std::uint64_t had = exists;
+    int dMin = 0, dMax = 0;
+    for (unsigned j = 0; j < 8; ++j) {
+        const unsigned todo = unsigned(bits >> (8 * j)) & 0xffu;
+        if (!todo) continue;
+        const unsigned e = unsigned(had >> (8 * j)) & 0xffu;
+        const __m256i eLanes = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(e)), laneBits), laneBits);
+        const __m256 old = _mm256_and_ps(_mm256_loadu_ps(values + 8 * j), _mm256_castsi256_ps(eLanes));  // a new voxel: 0
+        const __m256 value = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(old, vDelta), vMin), vMax);
+        unsigned act = todo;
+        if (skipOccupied) act &= ~(e & unsigned(_mm256_movemask_ps(_mm256_cmp_ps(old, vOccupied, _CMP_GE_OQ))));
+        const unsigned changed = act & ~(e & unsigned(_mm256_movemask_ps(_mm256_cmp_ps(value, old, _CMP_EQ_OQ))));
+        if (!changed) continue;
+        const __m256i store = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(changed)), laneBits), laneBits);
+        _mm256_maskstore_ps(values + 8 * j, store, value);
+        const unsigned wasMin = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(old, vMin, _CMP_EQ_OQ)));
+        const unsigned wasMax = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(old, vMax, _CMP_EQ_OQ)));
+        const unsigned isMin = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(value, vMin, _CMP_EQ_OQ)));
+        const unsigned isMax = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(value, vMax, _CMP_EQ_OQ)));
+        dMin += __builtin_popcount(changed & isMin) - __builtin_popcount(changed & e & wasMin);
+        dMax += __builtin_popcount(changed & isMax) - __builtin_popcount(changed & e & wasMax);
+        exists |= std::uint64_t(changed) << (8 * j);
+    }
+    atMin = std::uint8_t(atMin + dMin), atMax = std::uint8_t(atMax + dMax);
+}
+#endif
+
+}  // namespace
+
+inline void BrickMap::updateWord(Words& t, unsigned w, std::uint64_t bits, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits) {
+    if (t.block[w] < 0) {  // one value for the word so far: a block of 64 only where a voxel changes
+        const float u = t.uniform[w];
+        float value = u + delta;
+        if (value < l_.clampMin) value = l_.clampMin;
+        else if (value > l_.clampMax) value = l_.clampMax;
+        const bool existingStay = (skipOccupied && u >= l_.occupied) || value == u;
+        if (!(bits & ~t.exists[w]) && existingStay) return;  // most of a long drive's free space, seen again and again
         if (pool.free.empty()) {
             if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
             pool.free.push_back(poolBits | std::int32_t(pool.count++));
         }
         t.block[w] = pool.free.back();
         pool.free.pop_back();
-        std::fill(block(t.block[w]), block(t.block[w]) + 64, t.uniform[w]);
+        std::fill(block(t.block[w]), block(t.block[w]) + 64, u);
     }
-    if (exists) {
-        t.atMin[w] -= old == l_.clampMin;
-        t.atMax[w] -= old == l_.clampMax;
-    }
-    t.exists[w] |= bit;
-    block(t.block[w])[v] = value;
-    t.atMin[w] += value == l_.clampMin;
-    t.atMax[w] += value == l_.clampMax;
+    float* values = block(t.block[w]);
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (avx2_) return updateWordAvx2(values, bits, t.exists[w], t.atMin[w], t.atMax[w], delta, skipOccupied, l_);
+#endif
+    for (; bits; bits &= bits - 1) updateVoxel(values, t.exists[w], t.atMin[w], t.atMax[w], unsigned(__builtin_ctzll(bits)), delta, skipOccupied, l_);
 }
 
-/// Calls f(word, bits, from, to) for each word of a brick's sorted voxels [from, to): its
-/// voxels are consecutive, `bits` has one per voxel.
+/// Calls f(word, bits) for each word of a brick's sorted voxels [from, to): `bits` has one per
+/// voxel of the word.
 template <class F>
 inline void forEachWord(const std::uint64_t* from, const std::uint64_t* to, F&& f) {
     for (const std::uint64_t* c = from; c != to;) {
         const unsigned w = unsigned(*c >> 6) & 7;
         std::uint64_t bits = 0;
-        const std::uint64_t* e = c;
-        for (; e != to && (unsigned(*e >> 6) & 7) == w; ++e) bits |= 1ULL << (*e & 63);
-        f(w, bits, c, e);
-        c = e;
+        for (; c != to && (unsigned(*c >> 6) & 7) == w; ++c) bits |= 1ULL << (*c & 63);
+        f(w, bits);
     }
-}
-
-inline bool BrickMap::unchangedBy(const Words& t, unsigned w, std::uint64_t bits, float delta) const {
-    return t.block[w] < 0 && t.uniform[w] == (delta <= 0 ? l_.clampMin : l_.clampMax) && !(bits & ~t.exists[w]);
 }
 
 void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const std::vector<Run>& groundHits,
@@ -85,17 +139,14 @@ void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const st
     const auto groundBits = std::int32_t((kGround * kShards + shard) << kPoolShift);
     const auto obstacleBits = std::int32_t((kObstacles * kShards + shard) << kPoolShift);
     // Word by word; the two maps of a brick are apart (their own words and value pools), so each
-    // map's voxels are updated in list order, one map after the other. A word left as it is
-    // (unchangedBy()) is skipped: most of a long drive's free space, seen again and again.
+    // map's voxels are updated in list order, one map after the other (a voxel's update does not
+    // depend on another's: a word's voxels are updated together, updateWord()).
     for (const Run& r : free) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits, const std::uint64_t* from, const std::uint64_t* to) {
-            if (!unchangedBy(b.map[kGround], w, bits, l_.miss))
-                for (const std::uint64_t* c = from; c != to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.miss, true, groundPool, groundBits);
-            if (!unchangedBy(b.map[kObstacles], w, bits, l_.miss))
-                for (const std::uint64_t* c = from; c != to; ++c)
-                    update(b.map[kObstacles], unsigned(*c & 511), l_.miss, false, obstaclePool, obstacleBits);
+        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits) {
+            updateWord(b.map[kGround], w, bits, l_.miss, true, groundPool, groundBits);
+            updateWord(b.map[kObstacles], w, bits, l_.miss, false, obstaclePool, obstacleBits);
         });
         collapseIfUniform(b.map[kGround], groundPool);
         collapseIfUniform(b.map[kObstacles], obstaclePool);
@@ -103,19 +154,14 @@ void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const st
     for (const Run& r : groundHits) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits, const std::uint64_t* from, const std::uint64_t* to) {
-            if (!unchangedBy(b.map[kGround], w, bits, l_.hit))
-                for (const std::uint64_t* c = from; c != to; ++c) update(b.map[kGround], unsigned(*c & 511), l_.hit, false, groundPool, groundBits);
-        });
+        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits) { updateWord(b.map[kGround], w, bits, l_.hit, false, groundPool, groundBits); });
         collapseIfUniform(b.map[kGround], groundPool);
     }
     for (const Run& r : obstacleHits) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits, const std::uint64_t* from, const std::uint64_t* to) {
-            if (!unchangedBy(b.map[kObstacles], w, bits, l_.hit))
-                for (const std::uint64_t* c = from; c != to; ++c)
-                    update(b.map[kObstacles], unsigned(*c & 511), l_.hit, false, obstaclePool, obstacleBits);
+        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits) {
+            updateWord(b.map[kObstacles], w, bits, l_.hit, false, obstaclePool, obstacleBits);
             b.everObstacle[w] |= bits;
         });
         collapseIfUniform(b.map[kObstacles], obstaclePool);

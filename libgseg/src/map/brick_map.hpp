@@ -12,6 +12,7 @@
 /// the exact bytes of that tree. A word whose existing voxels all sit at the same clamping bound
 /// keeps one value instead of 64 (as OctoMap prunes such subtrees): most of a drive's free space.
 
+#include "../cpu_features.hpp"
 #include "map_tree.hpp"
 #include "voxel_keys.hpp"
 
@@ -40,6 +41,9 @@ public:
     /// position, each shard is updated by one thread in list order, with value blocks of its own
     /// (one pool per map and shard), so every voxel sees the same operations in the same order.
     void setThreads(unsigned threads) { threads_ = threads < 1 ? 1 : threads; }
+    /// Whether a word's voxels are updated eight at a time where the CPU has AVX2 (the default),
+    /// or one at a time; the values are the same (tested).
+    void setEightAtOnce(bool on) { avx2_ = on && gseg::detail::cpuHasAvx2(); }
 
     /// The shards of the bricks this map holds (bit s: shard s; default all): applyScan() skips
     /// the voxels of the others (held by another process, merged with merge() before writing).
@@ -149,6 +153,7 @@ private:
     std::vector<Brick> bricks_;
     Pool pools_[2 * kShards];
     unsigned threads_ = 1;
+    bool avx2_ = gseg::detail::cpuHasAvx2();  ///< updateWord() eight voxels at a time
     unsigned owned_ = (1u << kShards) - 1;  ///< setOwnedShards()
 
     const float* block(std::int32_t b) const {
@@ -159,11 +164,10 @@ private:
     float valueOf(const Words& t, unsigned w, unsigned v) const { return t.block[w] >= 0 ? block(t.block[w])[v] : t.uniform[w]; }
     Brick& brickOf(std::uint64_t brickCode);
     void collapseIfUniform(Words& t, Pool& pool);
-    /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics).
-    void update(Words& t, unsigned local, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits);
-    /// True if update(t, v, delta) changes nothing for any voxel v of word w in `bits`: the word has
-    /// one value for all, at the bound `delta` pushes towards, and every such voxel exists.
-    bool unchangedBy(const Words& t, unsigned w, std::uint64_t bits, float delta) const;
+    /// OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics) for every voxel of
+    /// word w in `bits`; `skipOccupied`: an occupied voxel keeps its value. A word with one value
+    /// for all gets a block of 64 only where a voxel changes.
+    void updateWord(Words& t, unsigned w, std::uint64_t bits, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits);
     /// The voxels of one brick in one of a scan's lists (applyScan()).
     struct Run {
         std::uint32_t brick;       ///< position in bricks_
