@@ -257,10 +257,13 @@ AtomicFileSet::AtomicFileSet(const std::vector<std::string>& paths) {
     if (!paths.empty())  // what a signal's message names from here on (no longer the last entry read)
         setActivity("writing " + paths.front() +
                     (paths.size() > 1 ? " and the other " + std::to_string(paths.size() - 1) + " outputs" : std::string()));
-    for (const std::string& p : paths) {
-        files_.push_back(std::make_unique<AtomicFile>(p));
-        files_.back()->inSet_ = true;
-    }
+    for (const std::string& p : paths) add(p);
+}
+
+AtomicFile& AtomicFileSet::add(const std::string& path) {
+    files_.push_back(std::make_unique<AtomicFile>(path));
+    files_.back()->inSet_ = true;
+    return *files_.back();
 }
 
 std::vector<std::string> AtomicFileSet::paths() const {

@@ -396,11 +396,40 @@ void MapOutputOptions::validate() const {
 std::vector<std::string> TraversabilityMap::write(const std::string& prefix, const MapOutputOptions& how) const {
     if (empty()) throw std::logic_error("TraversabilityMap::write: no scan was inserted");
     how.validate();
-    const LayerTiles tiles = layerTiles();
-    const bool tiled = how.tiled(tiles.boxWidth(), tiles.boxHeight());
     // The files: the voxel maps and pictures (0-5), the costmap (one PGM + YAML, or the tiles'
-    // metadata and a PGM + YAML per tile), the layers' GeoTIFF, the layer pictures.
+    // metadata and a PGM + YAML per tile), the layers' GeoTIFF, the layer pictures. Each is
+    // written straight to its temporary, in this order, with the same bytes whatever `writers`.
+    //
+    // With two writers, a second thread builds the layers (the drive's terrain model and gap
+    // filling: seconds on a long drive) while this one writes the voxel maps, the top-down
+    // picture and the point cloud, which do not need them; then the second thread writes the
+    // costmap and the GeoTIFF and encodes the layer pictures while this one writes the scene.
+    // They share only what neither changes (the voxels, the layers once built).
+    const bool second = how.writers >= 2;
+    std::future<LayerTiles> tilesBuilt =
+        std::async(second ? std::launch::async : std::launch::deferred, [this] { return layerTiles(); });
     std::vector<std::string> paths = outputPaths(prefix);
+    gseg::io::AtomicFileSet files({paths.begin(), paths.begin() + 6});
+    const double res = configured_->getResolution();
+    {
+        const std::string topDownPng = encodeTopDownPng(topDown(), path_, pictureTitle());
+        files[0].write([&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
+        files[1].write([&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
+        files[2].write([&](std::ostream& out) {
+            const octomap::ColorOcTree defaults(res);  // colouredTree() leaves the hit probability as it is
+            const Rgb g = colourOf(ColumnClass::Traversable), o = colourOf(ColumnClass::Obstacle);
+            const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
+            voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
+        });
+        files[3].write(topDownPng.data(), topDownPng.size());
+    }
+    const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
+    {
+        const std::string ply = mapPlyBytes(v, res);
+        files[4].write(ply.data(), ply.size());
+    }
+    const LayerTiles tiles = tilesBuilt.get();
+    const bool tiled = how.tiled(tiles.boxWidth(), tiles.boxHeight());
     std::vector<std::pair<std::int64_t, std::int64_t>> costTiles;
     if (tiled) {
         costTiles = costmapTiles(tiles, how.costmapTile);
@@ -412,75 +441,44 @@ std::vector<std::string> TraversabilityMap::write(const std::string& prefix, con
         paths.erase(paths.begin() + 6, paths.begin() + 8);
         paths.insert(paths.begin() + 6, costmap.begin(), costmap.end());
     }
+    for (std::size_t i = 6; i < paths.size(); ++i) files.add(paths[i]);
     const std::size_t tif = paths.size() - terrainLayerNames().size() - 1;
-    // One file at a time, straight to its temporary: the peak memory is the map plus one file.
-    gseg::io::AtomicFileSet files(paths);
-    const double res = configured_->getResolution();
-    // With two writers the pictures are encoded on a second thread (from data of their own: the
-    // top-down grid, the layers' grid) while this one writes the voxel maps, the scene, the costmap
-    // and the GeoTIFF; the files are written in the same order, with the same bytes.
-    const bool second = how.writers >= 2;
-    std::string topDownPng;
-    auto encodeTopDown = [this, &topDownPng](const TopDownGrid& top) { topDownPng = encodeTopDownPng(top, path_, pictureTitle()); };
-    std::future<void> topDownDone;
-    if (second) topDownDone = std::async(std::launch::async, [encodeTopDown, top = topDown()] { encodeTopDown(top); });
-    else encodeTopDown(topDown());
-    files[0].write([&](std::ostream& out) { voxels_->writeBinary(kGround, out, res); });
-    files[1].write([&](std::ostream& out) { voxels_->writeBinary(kObstacles, out, res); });
-    files[2].write([&](std::ostream& out) {
-        const octomap::ColorOcTree defaults(res);  // colouredTree() leaves the hit probability as it is
-        const Rgb g = colourOf(ColumnClass::Traversable), o = colourOf(ColumnClass::Obstacle);
-        const std::uint8_t ground[3] = {g.r, g.g, g.b}, obstacle[3] = {o.r, o.g, o.b};
-        voxels_->writeColoured(out, res, defaults.getProbHitLog(), ground, obstacle);
-    });
-    if (topDownDone.valid()) topDownDone.get();
-    files[3].write(topDownPng.data(), topDownPng.size());
-    topDownPng = std::string();
-    const OccupiedVoxels v = occupiedVoxels(*voxels_, *configured_);
-    const std::string ply = mapPlyBytes(v, res);
-    files[4].write(ply.data(), ply.size());
     countCostmapCells(tiles, costmapCells_);
     costmapScans_ = stats_.scans;
     // A small map: one dense grid of its box; a tiled one: an overview for the scene and pictures.
     const int factor = tiled ? int((std::max(tiles.boxWidth(), tiles.boxHeight()) + how.pictureSide - 1) / how.pictureSide) : 1;
     const LayerGrid grid = tiled ? tiles.overview(factor).dense() : tiles.dense();
     const std::vector<std::string>& names = terrainLayerNames();
-    auto encodeLayer = [&](std::size_t i) {
-        LayerPictureOptions o;
-        o.title = pictureTitle();
-        if (names[i] == "cost") o.min = 0, o.max = 100;
-        return encodeLayerPng(grid, names[i], o);
-    };
-    std::vector<std::string> layerPngs(names.size());
-    std::future<void> layersDone;
-    if (second)
-        layersDone = std::async(std::launch::async, [&] {
-            for (std::size_t i = 0; i < names.size(); ++i) layerPngs[i] = encodeLayer(i);
-        });
-    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid, v.groundUnderObstacles);
-    if (!tiled) {
-        writeCostmap(files, 6, costmapOf(grid));
-        const std::string bytes = encodeLayersGeoTiff(grid);
-        files[tif].write(bytes.data(), bytes.size());
-    } else {
-        const std::string metadata = costmapMetadata(prefix, costTiles, how.costmapTile, res);
-        files[6].write(metadata.data(), metadata.size());
-        for (std::size_t k = 0; k < costTiles.size(); ++k) {
-            const int edge = how.costmapTile;
-            writeCostmap(files, 7 + 2 * k, costmapOf(tiles.window(costTiles[k].first * edge, costTiles[k].second * edge, edge, edge)));
+    auto costmapAndLayers = [&] {  // the costmap, the GeoTIFF and the layer pictures
+        if (!tiled) {
+            writeCostmap(files, 6, costmapOf(grid));
+            const std::string bytes = encodeLayersGeoTiff(grid);
+            files[tif].write(bytes.data(), bytes.size());
+        } else {
+            const std::string metadata = costmapMetadata(prefix, costTiles, how.costmapTile, res);
+            files[6].write(metadata.data(), metadata.size());
+            for (std::size_t k = 0; k < costTiles.size(); ++k) {
+                const int edge = how.costmapTile;
+                writeCostmap(files, 7 + 2 * k, costmapOf(tiles.window(costTiles[k].first * edge, costTiles[k].second * edge, edge, edge)));
+            }
+            const std::string bytes = encodeLayersCog(tiles);
+            files[tif].write(bytes.data(), bytes.size());
         }
-        const std::string bytes = encodeLayersCog(tiles);
-        files[tif].write(bytes.data(), bytes.size());
-    }
-    if (layersDone.valid()) {
-        layersDone.get();
-        for (std::size_t i = 0; i < names.size(); ++i) files[tif + 1 + i].write(layerPngs[i].data(), layerPngs[i].size());
-    } else {
         for (std::size_t i = 0; i < names.size(); ++i) {  // one at a time
-            const std::string png = encodeLayer(i);
+            LayerPictureOptions o;
+            o.title = pictureTitle();
+            if (names[i] == "cost") o.min = 0, o.max = 100;
+            const std::string png = encodeLayerPng(grid, names[i], o);
             files[tif + 1 + i].write(png.data(), png.size());
         }
-    }
+    };
+    // (A future of std::async waits for its task when destroyed: on an error here, before `files`
+    // and `grid` go.)
+    std::future<void> layersWritten;
+    if (second) layersWritten = std::async(std::launch::async, costmapAndLayers);
+    detail::writeMapScene(files[5], v.xyz, v.labels, res, path_, &grid, v.groundUnderObstacles);
+    if (layersWritten.valid()) layersWritten.get();
+    else costmapAndLayers();
     files.commit();
     return files.paths();
 }

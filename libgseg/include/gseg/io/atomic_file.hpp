@@ -77,6 +77,9 @@ public:
     /// One AtomicFile per path (empty paths are not allowed). Throws as AtomicFile.
     explicit AtomicFileSet(const std::vector<std::string>& paths);
     AtomicFile& operator[](std::size_t i) { return *files_[i]; }
+    /// One more file of the set (where its name is known only after some of the others are
+    /// written). Throws as AtomicFile.
+    AtomicFile& add(const std::string& path);
     std::size_t size() const { return files_.size(); }
     std::vector<std::string> paths() const;
 
