@@ -4,7 +4,7 @@
 
 #include <mrpt/serialization/CArchive.h>
 
-#include <zlib.h>
+#include <libdeflate.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -13,118 +13,81 @@ namespace gseg::mrpt {
 
 GzipOutputStream::GzipOutputStream(Sink sink, std::string name, std::size_t memberBytes)
     : sink_(std::move(sink)), name_(std::move(name)), memberBytes_(memberBytes) {
-    pending_.reserve(kPending);
-    auto* z = new z_stream{};
-    // windowBits 15 + 16: the gzip wrapper (no time stamp), which MRPT's readers detect; level 1 as MRPT writes.
-    if (deflateInit2(z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
-        delete z;
-        throw std::runtime_error(name_ + ": cannot start the gzip compressor");
-    }
-    z_ = z;
-    if (memberBytes_ > 0) {
-        header_ = new gz_header{};
-        startMember();
-    }
+    compressor_ = libdeflate_alloc_compressor(1);  // level 1, as MRPT writes
+    if (!compressor_) throw std::runtime_error(name_ + ": cannot start the gzip compressor");
+    in_.reserve(memberBytes_ > 0 ? memberBytes_ + (memberBytes_ >> 2) : kMemberBytes);
 }
 
 GzipOutputStream::GzipOutputStream(gseg::io::AtomicFile& file, std::size_t memberBytes)
     : GzipOutputStream([&file](const void* d, std::size_t n) { file.write(d, n); }, file.path(), memberBytes) {}
 
-GzipOutputStream::~GzipOutputStream() {
-    auto* z = static_cast<z_stream*>(z_);
-    deflateEnd(z);
-    delete z;
-    delete static_cast<gz_header*>(header_);
-}
+GzipOutputStream::~GzipOutputStream() { libdeflate_free_compressor(static_cast<libdeflate_compressor*>(compressor_)); }
 
-void GzipOutputStream::emit(const void* data, std::size_t size) {
-    if (memberBytes_ == 0) return sink_(data, size);
-    const auto* p = static_cast<const unsigned char*>(data);
-    member_.insert(member_.end(), p, p + size);
-}
-
-// A new member: its header carries the subfield 'G','S' whose size and entry count closeMember()
-// fills in (zlib writes the header: FLG FEXTRA, no time stamp, XFL and OS as without one).
-void GzipOutputStream::startMember() {
-    auto* z = static_cast<z_stream*>(z_);
-    extra_ = {'G', 'S', 8, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-    auto* h = static_cast<gz_header*>(header_);
-    *h = gz_header{};
-    h->os = 3;  // Unix, zlib's own choice here
-    h->extra = extra_.data();
-    h->extra_len = uInt(extra_.size());
-    if (deflateReset(z) != Z_OK || deflateSetHeader(z, h) != Z_OK) throw std::runtime_error(name_ + ": cannot start a gzip member");
-    memberStart_ = written_;
-    memberEntries_ = 0;
-}
-
+// One member: the gzip header (no name, no time stamp; XFL 4, the fastest level, and OS 3, Unix, as
+// zlib writes them), in the rawlog layout with the subfield 'G','S' (the member's size in bytes and
+// its entry count), then the deflate stream of in_, its CRC-32 and its size.
 void GzipOutputStream::closeMember() {
-    flushPending();
-    pump(nullptr, 0, Z_FINISH);
-    const std::uint64_t size = member_.size();
-    if (size > 0xffffffffu || written_ - memberStart_ > 0xffffffffu)
+    const bool rawlog = memberBytes_ > 0;
+    if (rawlog && in_.size() > 0xffffffffu)
         throw std::runtime_error(name_ + ": an entry of more than 4 GiB, more than a rawlog's gzip member holds");
+    auto* c = static_cast<libdeflate_compressor*>(compressor_);
+    const std::size_t header = rawlog ? kMemberHeaderBytes : 10;
+    out_.resize(header + libdeflate_deflate_compress_bound(c, in_.size()) + 8);
+    const std::size_t packed = libdeflate_deflate_compress(c, in_.data(), in_.size(), out_.data() + header, out_.size() - header - 8);
+    if (packed == 0) throw std::runtime_error(name_ + ": gzip compression failed");
+    out_.resize(header + packed + 8);
     const auto put32 = [this](std::size_t at, std::uint64_t v) {
-        for (int i = 0; i < 4; ++i) member_[at + std::size_t(i)] = static_cast<unsigned char>(v >> (8 * i));
+        for (int i = 0; i < 4; ++i) out_[at + std::size_t(i)] = static_cast<unsigned char>(v >> (8 * i));
     };
-    put32(16, size);  // 10 bytes of header, XLEN, SI1 SI2 LEN: then the subfield's data
-    put32(20, memberEntries_);
-    sink_(member_.data(), member_.size());
-    member_.clear();
-    startMember();
+    const unsigned char plain[10] = {0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 4, 3};
+    std::copy(plain, plain + 10, out_.begin());
+    if (rawlog) {
+        if (out_.size() > 0xffffffffu)
+            throw std::runtime_error(name_ + ": an entry of more than 4 GiB, more than a rawlog's gzip member holds");
+        out_[3] = 4;  // FLG: FEXTRA
+        const unsigned char extra[6] = {12, 0, 'G', 'S', 8, 0};  // XLEN 12; SI1 SI2, LEN 8
+        std::copy(extra, extra + 6, out_.begin() + 10);
+        put32(16, out_.size());
+        put32(20, memberEntries_);
+    }
+    put32(header + packed, libdeflate_crc32(0, in_.data(), in_.size()));
+    put32(header + packed + 4, in_.size());  // ISIZE: the size modulo 2^32
+    sink_(out_.data(), out_.size());
+    in_.clear();
+    memberEntries_ = 0;
+    ++members_;
 }
 
 void GzipOutputStream::endEntry() {
     if (memberBytes_ == 0) return;
     ++memberEntries_;
-    if (written_ - memberStart_ >= memberBytes_) closeMember();
-}
-
-void GzipOutputStream::pump(const void* data, std::size_t size, int flush) {
-    auto* z = static_cast<z_stream*>(z_);
-    z->next_in = static_cast<Bytef*>(const_cast<void*>(data));
-    z->avail_in = uInt(size);
-    for (;;) {
-        Bytef out[1 << 16];
-        z->next_out = out;
-        z->avail_out = sizeof out;
-        const int r = deflate(z, flush);
-        if (r == Z_STREAM_ERROR) throw std::runtime_error(name_ + ": gzip compression failed");
-        if (const std::size_t n = sizeof out - z->avail_out) emit(out, n);
-        if (flush == Z_FINISH ? r == Z_STREAM_END : z->avail_out != 0) break;
-    }
+    if (in_.size() >= memberBytes_) closeMember();
 }
 
 size_t GzipOutputStream::Write(const void* buffer, size_t count) {
     if (finished_) throw std::logic_error(name_ + ": write after the gzip stream was finished");
-    const auto* p = static_cast<const char*>(buffer);
+    const auto* p = static_cast<const unsigned char*>(buffer);
     written_ += count;
-    if (pending_.size() + count <= kPending) {  // small writes: gathered (the same compressed bytes)
-        pending_.insert(pending_.end(), p, p + count);
+    if (memberBytes_ > 0) {  // the rawlog layout: a member holds whole entries (endEntry())
+        in_.insert(in_.end(), p, p + count);
         return count;
     }
-    flushPending();
-    for (size_t left = count; left > 0;) {  // zlib counts in unsigned int
-        const std::size_t chunk = std::min<size_t>(left, 1u << 30);
-        pump(p, chunk, Z_NO_FLUSH);
-        p += chunk, left -= chunk;
+    for (std::size_t left = count; left > 0;) {
+        const std::size_t n = std::min(left, kMemberBytes - in_.size());
+        in_.insert(in_.end(), p, p + n);
+        p += n, left -= n;
+        if (in_.size() == kMemberBytes) closeMember();
     }
     return count;
-}
-
-void GzipOutputStream::flushPending() {
-    if (!pending_.empty()) pump(pending_.data(), pending_.size(), Z_NO_FLUSH);
-    pending_.clear();
 }
 
 void GzipOutputStream::finish() {
     if (finished_) return;
     if (memberBytes_ > 0) {
-        if (memberEntries_ > 0 || written_ > memberStart_) closeMember();
+        if (memberEntries_ > 0 || !in_.empty()) closeMember();
         closeMember();  // the empty member that marks the end: a file cut at a member's end is not whole
-    } else {
-        flushPending();
-        pump(nullptr, 0, Z_FINISH);
+    } else if (!in_.empty() || members_ == 0) {
+        closeMember();  // (an empty stream is one empty member)
     }
     finished_ = true;
 }
