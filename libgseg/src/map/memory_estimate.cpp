@@ -126,11 +126,14 @@ constexpr double kBytesPerTileLayer = LayerTiles::kTileBytes * 1.1;
 // costmap and its PGM (2 B).
 constexpr double kBytesPerDenseCell = 32 + 32 + 4 + 2;
 
-// A layer picture being encoded on the second writer (MapOutputOptions::writers 2) while the
-// GeoTIFF is: per pixel of its map area the canvas (3 B), the block values and colours (8 B) and
-// the PNG's share, and the second thread's malloc arena. (The top-down picture is encoded beside
-// the voxel maps' files, whose memory the estimate already adds to the layers'.) Measured on the
-// 60-scan drive (0.27 M cells): the peak with writing 273-277 MB with one writer, 286-288 MB with two.
+// A layer picture being encoded on the second writer (MapOutputOptions::writers 2) beside the
+// scene: per pixel of its map area the canvas (3 B), the block values and colours (8 B) and the
+// PNG's share, and the second thread's malloc arena. (The layers are built there while the voxel
+// maps' files are written, whose memory the estimate already adds to the layers'.) Measured on the
+// 60-scan drive (0.27 M cells): the peak with writing 273-277 MB with one writer, 286-288 MB with
+// two; since the layers are built beside the voxel files (2026-12-07), 600 scans: 860-869 MB ->
+// 893-921 MB, 4,542 scans: 3,663-3,687 -> 3,761-3,763 MB (the shared drives' whole runs stay within 25 % of the
+// estimate: MemoryEstimate.TheWholeRunIsWithin25PercentOfThePeakOnTheSharedDrives).
 constexpr double kBytesPerPicturePixel = 16;
 constexpr double kSecondWriterBytes = 8e6;
 

@@ -62,9 +62,10 @@ struct MapOutputOptions {
     int tiledAbove = 4096;   ///< [cells] write tiles when the map's box is wider or higher than this (--tiled-above), >= 1
     int costmapTile = 1024;  ///< [cells] edge of a costmap tile, 64 to 16384
     int pictureSide = 2048;  ///< [cells] a tiled map's pictures show an overview at most this many cells a side, >= 16
-    /// Threads that write: 1, one file at a time; 2, the pictures (the top-down PNG, the layer
-    /// PNGs) are encoded on a second thread while the other files are written (the same bytes;
-    /// the memory estimate counts a picture being encoded beside the other files), 1 or 2.
+    /// Threads that write: 1, one file at a time; 2, a second thread builds the layers while the
+    /// voxel maps, the top-down picture and the point cloud are written, then writes the costmap,
+    /// the GeoTIFF and the layer pictures while the scene is (the same bytes; the memory estimate
+    /// counts a picture being encoded beside the other files), 1 or 2.
     int writers = 1;
     /// Throws std::invalid_argument naming the field of a value out of its range.
     void validate() const;
