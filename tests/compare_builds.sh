@@ -8,8 +8,9 @@
 # the three drives of semantickitti-drives) and on mrpt-common's rawlogs
 # (/usr/share/mrpt/datasets/*.rawlog), in WORK/ref and WORK/new (default: a fresh temporary
 # folder), with the same relative paths and the same config files (this checkout's config/);
-# then every output file and every exit code is compared byte for byte (rawlogs by the bytes they
-# decode to: gseg's gzip members (#35) compress the same objects into other bytes than one stream):
+# then every output file and every exit code is compared byte for byte (gzip files, rawlogs,
+# scenes and simple maps, by the bytes they decode to: gseg's gzip members (#35) compress the same
+# objects into other bytes than one zlib stream did):
 #   gseg segment --labels-out (fixed and auto height), gseg eval --report CSVs (without the ms
 #   column) and the range plot, kitti2rawlog (rawlog + simplemap), rawlog-gseg, rawlog-octomap (the
 #   six map files; raw and pre-segmented input), gseg-observations2map (the six files).
@@ -148,7 +149,7 @@ done
 # Compare: every file (logs apart), both ways.
 same_file() {
     cmp -s "$1" "$2" && return 0
-    case "$1" in *.rawlog) cmp -s <(zcat -f -- "$1") <(zcat -f -- "$2") ;; *) return 1 ;; esac
+    case "$1" in *.rawlog | *.3Dscene | *.simplemap) cmp -s <(zcat -f -- "$1") <(zcat -f -- "$2") ;; *) return 1 ;; esac
 }
 differ=0 same=0
 while IFS= read -r rel; do
