@@ -37,6 +37,14 @@ inline void BrickMap::collapseIfUniform(Words& t, Pool& pool) {
 
 namespace {
 
+/// `old + delta` clamped as OcTreeNode::addValue() and updateNodeLogOdds() do.
+inline float clamped(float old, float delta, const LogOdds& l) {
+    float value = old + delta;
+    if (value < l.clampMin) value = l.clampMin;
+    else if (value > l.clampMax) value = l.clampMax;
+    return value;
+}
+
 /// One voxel's update: OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics) on
 /// voxel v of a word whose values are `values` (a block of 64), `exists` and its counts of values
 /// at each bound.
@@ -46,9 +54,7 @@ inline void updateVoxel(float* values, std::uint64_t& exists, std::uint8_t& atMi
     const bool had = exists & bit;
     const float old = had ? values[v] : 0.f;
     if (skipOccupied && had && old >= l.occupied) return;  // ground does not move
-    float value = old + delta;  // OcTreeNode::addValue(), then the clamping of updateNodeLogOdds()
-    if (value < l.clampMin) value = l.clampMin;
-    else if (value > l.clampMax) value = l.clampMax;
+    const float value = clamped(old, delta, l);
     if (had && value == old) return;  // at the bound already
     if (had) {
         atMin -= old == l.clampMin;
@@ -100,10 +106,7 @@ __attribute__((target("avx2,popcnt"))) void updateWordAvx2(float* values, std::u
 inline void BrickMap::updateWord(Words& t, unsigned w, std::uint64_t bits, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits) {
     if (t.block[w] < 0) {  // one value for the word so far: a block of 64 only where a voxel changes
         const float u = t.uniform[w];
-        float value = u + delta;
-        if (value < l_.clampMin) value = l_.clampMin;
-        else if (value > l_.clampMax) value = l_.clampMax;
-        const bool existingStay = (skipOccupied && u >= l_.occupied) || value == u;
+        const bool existingStay = (skipOccupied && u >= l_.occupied) || clamped(u, delta, l_) == u;
         if (!(bits & ~t.exists[w]) && existingStay) return;  // most of a long drive's free space, seen again and again
         if (pool.free.empty()) {
             if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
