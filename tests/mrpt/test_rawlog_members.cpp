@@ -1,7 +1,9 @@
 // The rawlog layout of RawlogWriter (gzip members of whole entries with gseg's size field) and
 // RawlogReader's decode threads: seeded synthetic observations written, read back object by object
 // with 1, 2 and 4 threads and by MRPT's own reader; a wrong size field, a flipped byte and a cut
-// file are errors naming the entry; rawlogs of one gzip stream and plain ones still read.
+// file are errors naming the entry; rawlogs of one gzip stream and plain ones still read; an object
+// bigger than a member (a scene, a simple map) read back through MRPT.
+#include <gseg/io/atomic_file.hpp>
 #include <gseg/mrpt/gzip_stream.hpp>
 #include <gseg/mrpt/rawlog_io.hpp>
 #include <support/child.hpp>
@@ -293,3 +295,36 @@ TEST(RawlogMembersEmpty, EmptyRawlogIsOneEndMember) {
     EXPECT_EQ(ms[0].entries, 0u);
     EXPECT_TRUE(readAll(path, 2).empty());
 }
+
+namespace {
+
+TEST(GzipMembers, AnObjectOfSeveralMembersReadsBackThroughMrptsReader) {
+    // A scene or simple map is written as plain gzip members of kMemberBytes (libdeflate, one call
+    // each): one of 3 million points (36 MB serialised) makes several, and MRPT's own reader (what
+    // SceneViewer3D and observations2map use) reads them as one stream.
+    auto pts = mrpt::maps::CSimplePointsMap::Create();
+    std::mt19937 rng(43);
+    std::uniform_int_distribution<int> cm(-5000, 5000);
+    for (int k = 0; k < 3000000; ++k) pts->insertPoint(0.01f * float(cm(rng)), 0.01f * float(cm(rng)), 0.001f * float(cm(rng)));
+    const std::string path = (gseg::test::freshDir("rawlog_members", "object") / "points.gz").string();
+    {
+        gseg::io::AtomicFile file(path);
+        gseg::mrpt::writeGzipObject(file, *pts);
+        file.commit();
+    }
+    const std::string bytes = readFile(path);
+    std::size_t headers = 0;  // plain gzip headers: deflate, no flags, no time stamp, XFL 4, OS 3
+    for (std::size_t at = bytes.find(std::string("\x1f\x8b\x08\x00\x00\x00\x00\x00\x04\x03", 10)); at != std::string::npos;
+         at = bytes.find(std::string("\x1f\x8b\x08\x00\x00\x00\x00\x00\x04\x03", 10), at + 1))
+        ++headers;
+    const std::string want = serialised(*pts);
+    EXPECT_GE(headers, want.size() / gseg::mrpt::GzipOutputStream::kMemberBytes) << "several members";
+    mrpt::io::CFileGZInputStream in;
+    ASSERT_TRUE(in.open(path));
+    ObjectPtr got;
+    mrpt::serialization::archiveFrom(in) >> got;
+    ASSERT_NE(got, nullptr);
+    EXPECT_TRUE(serialised(*got) == want);
+}
+
+}  // namespace
