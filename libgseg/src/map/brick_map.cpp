@@ -24,6 +24,16 @@ inline BrickMap::Brick& BrickMap::brickOf(std::uint64_t brickCode) {
     return bricks_[i];
 }
 
+inline std::int32_t BrickMap::takeBlock(Pool& pool, std::int32_t poolBits) {
+    if (pool.free.empty()) {
+        if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
+        pool.free.push_back(poolBits | std::int32_t(pool.count++));
+    }
+    const std::int32_t b = pool.free.back();
+    pool.free.pop_back();
+    return b;
+}
+
 inline void BrickMap::collapseIfUniform(Words& t, Pool& pool) {
     for (unsigned w = 0; w < 8; ++w) {
         if (t.block[w] < 0) continue;
@@ -108,12 +118,7 @@ inline void BrickMap::updateWord(Words& t, unsigned w, std::uint64_t bits, float
         const float u = t.uniform[w];
         const bool existingStay = (skipOccupied && u >= l_.occupied) || clamped(u, delta, l_) == u;
         if (!(bits & ~t.exists[w]) && existingStay) return;  // most of a long drive's free space, seen again and again
-        if (pool.free.empty()) {
-            if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
-            pool.free.push_back(poolBits | std::int32_t(pool.count++));
-        }
-        t.block[w] = pool.free.back();
-        pool.free.pop_back();
+        t.block[w] = takeBlock(pool, poolBits);
         std::fill(block(t.block[w]), block(t.block[w]) + 64, u);
     }
     float* values = block(t.block[w]);
@@ -270,12 +275,7 @@ void BrickMap::merge(const std::string& bytes) {
                 const std::uint32_t head = in.u32();
                 t.atMin[w] = std::uint8_t(head >> 8), t.atMax[w] = std::uint8_t(head >> 16);
                 if (head & 1) {
-                    if (pool.free.empty()) {
-                        if (pool.count % kBlocksPerChunk == 0) pool.chunks.emplace_back(new float[kBlocksPerChunk * 64]);
-                        pool.free.push_back(poolBits | std::int32_t(pool.count++));
-                    }
-                    t.block[w] = pool.free.back();
-                    pool.free.pop_back();
+                    t.block[w] = takeBlock(pool, poolBits);
                     float* values = block(t.block[w]);
                     for (unsigned k = 0; k < 64; ++k) values[k] = in.f32();
                 } else {

@@ -163,6 +163,8 @@ private:
     float* block(std::int32_t b) { return const_cast<float*>(static_cast<const BrickMap*>(this)->block(b)); }
     float valueOf(const Words& t, unsigned w, unsigned v) const { return t.block[w] >= 0 ? block(t.block[w])[v] : t.uniform[w]; }
     Brick& brickOf(std::uint64_t brickCode);
+    /// A block of 64 values from `pool` (a free one, or a new one: poolBits say which pool).
+    std::int32_t takeBlock(Pool& pool, std::int32_t poolBits);
     void collapseIfUniform(Words& t, Pool& pool);
     /// OccupancyOcTreeBase::updateNode(key, delta) (OctoMap 1.9.7 semantics) for every voxel of
     /// word w in `bits`; `skipOccupied`: an occupied voxel keeps its value. A word with one value

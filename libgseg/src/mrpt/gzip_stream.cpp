@@ -55,7 +55,6 @@ void GzipOutputStream::closeMember() {
     sink_(out_.data(), out_.size());
     in_.clear();
     memberEntries_ = 0;
-    ++members_;
 }
 
 void GzipOutputStream::endEntry() {
@@ -86,7 +85,7 @@ void GzipOutputStream::finish() {
     if (memberBytes_ > 0) {
         if (memberEntries_ > 0 || !in_.empty()) closeMember();
         closeMember();  // the empty member that marks the end: a file cut at a member's end is not whole
-    } else if (!in_.empty() || members_ == 0) {
+    } else if (!in_.empty() || written_ == 0) {
         closeMember();  // (an empty stream is one empty member)
     }
     finished_ = true;

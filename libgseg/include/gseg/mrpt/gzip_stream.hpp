@@ -76,7 +76,6 @@ private:
     std::vector<unsigned char> in_;     ///< the member being gathered, uncompressed
     std::vector<unsigned char> out_;    ///< a member compressed (header, deflate stream, trailer)
     std::uint32_t memberEntries_ = 0;   ///< rawlog layout: entries in the member being gathered
-    uint64_t members_ = 0;              ///< members written
 };
 
 /// Serialises `object` (a scene, a simple map) gzip-compressed into `file` (not committed).
