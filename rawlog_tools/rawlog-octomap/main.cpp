@@ -248,7 +248,8 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     const std::deque<ScanJob>& first = phase("reading the first scans", cli, [&]() -> const std::deque<ScanJob>& { return stream.prefetch(2); });
     gseg::map::MemoryGuard memory;
     if (!first.empty()) {
-        memory = gseg::map::MemoryGuard(first[0], first.size() > 1 ? &first[1] : nullptr, gseg::map::MapBuilder::inFlight(how),
+        memory = gseg::map::MemoryGuard(first[0], first.size() > 1 ? &first[1] : nullptr, std::max(1u, how.threads),
+                                        gseg::map::MapBuilder::inFlight(how),
                                         cli.options, cli.outputs, cli.maxMemory);
         if (!memory.estimateLine().empty()) gseg::tools::detail("rawlog-octomap: %s\n", memory.estimateLine().c_str());
         memory.refuseIfTooBig();

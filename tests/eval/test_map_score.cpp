@@ -154,7 +154,8 @@ TEST(MapScoreTruth, FramesArePlacedByTheirPosesThroughTr) {
 
 // --- Scoring: a hand-made map on a known truth ------------------------------------------------
 
-/// Truth: a row of 10 traversable cells (cy = 0) and a row of 10 obstacle cells (cy = 3).
+/// Truth: a row of 10 traversable cells (cy = 0) and a row of 10 obstacle cells (cy = 3), in a
+/// folder of the calling test's own (ctest runs the tests that share it at once).
 DriveTruth rowTruth() {
     std::vector<Pt> pts;
     for (int cx = 0; cx < 10; ++cx) {
@@ -162,7 +163,7 @@ DriveTruth rowTruth() {
         addCell(pts, cx, 3, kRoad, 3, -1.7f);
         addCell(pts, cx, 3, kBuilding, 2, -1.0f);  // 0.7 m up: in the obstacle band, and in the baseline's
     }
-    return gseg::map::computeTruth(gseg::map::readLabelledDrive(writeDrive("rows", {pts}).string()), kGrid);
+    return gseg::map::computeTruth(gseg::map::readLabelledDrive(writeDrive(std::string("rows_") + ::testing::UnitTest::GetInstance()->current_test_info()->name(), {pts}).string()), kGrid);
 }
 
 TEST(MapScore, FiguresOfAHandMadeMapCountEveryOutcome) {

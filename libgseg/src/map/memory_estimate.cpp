@@ -31,6 +31,11 @@ constexpr double kBytesPerCastBrick = 110 * 1.5;   // a ray caster's brick set: 
 constexpr double kBytesPerMapBrick = 390;          // a map brick: two maps' words, the ever-obstacle bits, code, index
 constexpr double kBytesPerMapWord = 2 * 256;       // a word of 64 values in each of the two maps
 constexpr double kProcessBytes = 100e6;            // the process before any scan (MRPT's libraries, segmenters), measured
+// A second worker thread (rawlog-octomap --threads 2 against 1, the peak while integrating, six
+// sequence-00 scans and the shared drives' ten, 2026-12-07): 10-30 MB more at 0.4 and 0.2 m, 57-99
+// MB at 0.1 m, of which the two more scans in flight explain 1, 9 and 46 MB; the rest, about 25 MB
+// whatever the resolution, is the worker's segmenter and its malloc arena, kept between scans.
+constexpr double kWorkerBytes = 25e6;
 // Calibration (peak RSS of rawlog-octomap, six sequence-00 scans, 2 workers, 0.2 to 0.04 m):
 constexpr double kInFlightShare = 0.35;   // at the peak about a third of the scans in flight hold full voxel lists
 constexpr double kSparseGrowth = 0.06;    // of a scan's sparse cells, new in the next one (scans 0.7 m apart)
@@ -100,6 +105,7 @@ RayFootprint rayFootprint(const PointCloudView& points, const Eigen::Vector3d& s
 MemoryEstimate estimateMemory(const RayFootprint& f) {
     MemoryEstimate e;
     e.process = kProcessBytes;
+    e.perWorker = kWorkerBytes;
     e.perScan = kInFlightShare * (kBytesPerListedVoxel * f.voxels + kBytesPerCastBrick * f.bricks);
     e.firstMap = kBytesPerMapBrick * f.bricks + kBytesPerMapWord * f.words;
     e.growthPerScan = kSparseGrowth * (kBytesPerMapBrick * f.sparseBricks + kBytesPerMapWord * f.sparseWords) + kMapGrowth * e.firstMap;
@@ -146,8 +152,8 @@ double layerBytes(double tiles, double denseCells, int writers) {
 // 00 through kitti2rawlog: 6, 60 and 600 scans): the files take about this much per byte of the maps.
 constexpr double kWritingPerMapByte = 1.9;
 
-double MemoryEstimate::peakWithWriting(std::size_t inFlight, std::size_t scans, double layers) const {
-    return peak(inFlight, scans) + kWritingPerMapByte * maps(scans) + layers;
+double MemoryEstimate::peakWithWriting(std::size_t workers, std::size_t inFlight, std::size_t scans, double layers) const {
+    return peak(workers, inFlight, scans) + kWritingPerMapByte * maps(scans) + layers;
 }
 
 namespace {

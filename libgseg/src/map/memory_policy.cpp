@@ -23,7 +23,7 @@ std::string outOfMemoryMessage(const std::string& what, const TraversabilityOpti
     return head + memoryOptionsText(options) + "; nothing written";
 }
 
-MemoryGuard::MemoryGuard(const ScanJob& first, const ScanJob* second, std::size_t inFlight,
+MemoryGuard::MemoryGuard(const ScanJob& first, const ScanJob* second, std::size_t workers, std::size_t inFlight,
                          const TraversabilityOptions& options, const MapOutputOptions& outputs, double maxMemory)
     : options_(options), outputs_(outputs) {
     std::vector<float> points;
@@ -40,7 +40,7 @@ MemoryGuard::MemoryGuard(const ScanJob& first, const ScanJob* second, std::size_
     const double step = second ? second->fraction - first.fraction : 0;
     const std::size_t scans = !second ? 1 : step > 0 ? std::size_t(std::lround(std::min(1e9, 2 + (1 - second->fraction) / step))) : 2;
     const MemoryEstimate estimate = estimateMemory(f);
-    const double need = estimate.peak(inFlight, std::max<std::size_t>(1, scans));
+    const double need = estimate.peak(workers, inFlight, std::max<std::size_t>(1, scans));
     MemoryLimit limit = memoryLimit();
     if (maxMemory > 0 && (maxMemory < limit.bytes || limit.machine))  // the user's word, within ulimit's
         limit = {maxMemory, "--max-memory", false};
@@ -59,7 +59,7 @@ MemoryGuard::MemoryGuard(const ScanJob& first, const ScanJob* second, std::size_
         refusal_ = text;
         return;
     }
-    known_ = true, estimate_ = estimate, inFlight_ = inFlight, scans_ = std::max<std::size_t>(1, scans), limit_ = limit;
+    known_ = true, estimate_ = estimate, workers_ = workers, inFlight_ = inFlight, scans_ = std::max<std::size_t>(1, scans), limit_ = limit;
 }
 
 void MemoryGuard::refuseIfTooBig() const {
@@ -94,7 +94,7 @@ std::string MemoryGuard::summary() const {
     char text[240];
     std::snprintf(text, sizeof text, "%s with writing (%s while integrating, maps %s, layers in %.0f tiles over a box of "
                   "%.0f x %.0f cells, %s: %s)", formatBytes(need(layerBytes())).c_str(),
-                  formatBytes(estimate_.peak(inFlight_, scans_)).c_str(), formatBytes(estimate_.maps(scans_)).c_str(),
+                  formatBytes(estimate_.peak(workers_, inFlight_, scans_)).c_str(), formatBytes(estimate_.maps(scans_)).c_str(),
                   box_.tiles(), box_.cellsX(), box_.cellsY(), tiled() ? "tiled" : "one grid", formatBytes(layerBytes()).c_str());
     return text;
 }

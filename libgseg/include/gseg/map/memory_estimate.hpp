@@ -14,7 +14,8 @@
 /// 4x4x4 voxels (the maps' value blocks) and bricks of 8x8x8 (the maps' and the ray caster's unit),
 /// with bytes per unit from the map layer's data structures, the estimate was calibrated against
 /// the peak resident memory of rawlog-octomap on the six SemanticKITTI sequence-00 scans (README,
-/// Robustness): within 25 % at 0.2, 0.1 and 0.05 m.
+/// Robustness): within 25 % at 0.2, 0.1 and 0.05 m while integrating; a worker thread beyond the
+/// first adds its own buffers (perWorker).
 
 #include <gseg/traversability_options.hpp>
 #include <gseg/point_cloud.hpp>
@@ -48,8 +49,14 @@ struct MemoryEstimate {
     double perScan = 0;      ///< one scan in flight: its voxel lists and the caster's brick sets
     double firstMap = 0;     ///< the maps after the first scan
     double growthPerScan = 0;  ///< the maps grow by this with every further scan
-    /// [bytes] The peak with `inFlight` scans being cast or waiting at once, after `scans` scans.
-    double peak(std::size_t inFlight, std::size_t scans) const { return process + perScan * double(inFlight) + maps(scans); }
+    /// Each worker thread beyond the first (whose share `process` holds): its segmenter's and ray
+    /// caster's buffers, which its own malloc arena keeps between scans.
+    double perWorker = 0;
+    /// [bytes] The peak with `workers` local worker threads and `inFlight` scans being cast or
+    /// waiting at once, after `scans` scans.
+    double peak(std::size_t workers, std::size_t inFlight, std::size_t scans) const {
+        return process + perWorker * double(workers > 1 ? workers - 1 : 0) + perScan * double(inFlight) + maps(scans);
+    }
     /// [bytes] The maps after `scans` scans.
     double maps(std::size_t scans) const { return firstMap + growthPerScan * double(scans > 0 ? scans - 1 : 0); }
     /// [bytes] The peak of a whole run, writing included: peak() and then, while the files are
@@ -58,7 +65,7 @@ struct MemoryEstimate {
     /// Under MPI (rawlog-octomap, #35) this is rank 0's peak, above the other ranks': ranks 1-3
     /// hold a share of the maps while integrating and rank 0 all of them after merging; the merge
     /// holds the other shares as bytes (about their size) for a moment, less than the writing.
-    double peakWithWriting(std::size_t inFlight, std::size_t scans, double layers) const;
+    double peakWithWriting(std::size_t workers, std::size_t inFlight, std::size_t scans, double layers) const;
 };
 
 /// The estimate for scans like `footprint`'s (rayFootprint()).

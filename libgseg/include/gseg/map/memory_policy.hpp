@@ -36,13 +36,13 @@ public:
     /// No check (nothing to estimate from).
     MemoryGuard() = default;
 
-    /// Before any work (#18): the maps and `inFlight` scans, estimated from the first scan's rays at
+    /// Before any work (#18): the maps, `workers` local worker threads and `inFlight` scans, estimated from the first scan's rays at
     /// `options` (the second scan, if any, gives the rawlog's bytes per scan and so the number of
     /// scans), against `maxMemory` [bytes] (0: what the machine and the process's limits leave,
     /// memoryLimit()); refuseIfTooBig() says whether it fits. A first scan that gives nothing to
     /// estimate from (a 2D scan the builder will skip) checks nothing.
-    MemoryGuard(const ScanJob& first, const ScanJob* second, std::size_t inFlight, const TraversabilityOptions& options,
-                const MapOutputOptions& outputs, double maxMemory);
+    MemoryGuard(const ScanJob& first, const ScanJob* second, std::size_t workers, std::size_t inFlight,
+                const TraversabilityOptions& options, const MapOutputOptions& outputs, double maxMemory);
 
     /// Throws std::runtime_error naming the options and the estimate when the estimate before any
     /// work is over the limit.
@@ -65,14 +65,14 @@ public:
 private:
     bool tiled() const;
     double layerBytes() const;  ///< [bytes] the layers' tiles and the dense grids written from them
-    double need(double layers) const { return estimate_.peakWithWriting(inFlight_, scans_, layers); }
+    double need(double layers) const { return estimate_.peakWithWriting(workers_, inFlight_, scans_, layers); }
     std::string advice() const;  ///< what to change when the layers do not fit
 
     bool known_ = false;
     TraversabilityOptions options_;
     MapOutputOptions outputs_;
     MemoryEstimate estimate_;
-    std::size_t inFlight_ = 0, scans_ = 0;  ///< as estimated (scans from the rawlog's bytes per scan)
+    std::size_t workers_ = 1, inFlight_ = 0, scans_ = 0;  ///< as estimated (scans from the rawlog's bytes per scan)
     MemoryLimit limit_;
     std::string estimateLine_;
     std::string refusal_;  ///< the message of refuseIfTooBig() ("" when it fits)
