@@ -87,6 +87,29 @@ std::vector<std::string> shareItems(Ranks& ranks, const std::vector<std::uint64_
                                     const std::function<std::vector<std::string>(const std::vector<std::size_t>&)>& doMine,
                                     std::vector<int>* owner = nullptr);
 
+/// Collective: on rank 0 the CPUs (ascending ids) that the ranks on rank 0's machine may run on,
+/// its own included (each rank's affinity: `mpirun` binds each rank to its cores); on the other
+/// ranks an empty vector. Without MPI: this process's CPUs. For rank 0's work after the others
+/// are done (the writing): their cores are idle then.
+std::vector<int> cpusOfRanksOnThisMachine(Ranks& ranks);
+
+/// Lets the calling thread, and the threads it starts from now on, run on `cpus` as well as on
+/// its own CPUs (sched_setaffinity); the destructor gives it back its own. Nothing if `cpus` adds
+/// none or the system refuses (a cpuset without them): cpus() then says its own.
+class WiderAffinity {
+public:
+    explicit WiderAffinity(const std::vector<int>& cpus);
+    ~WiderAffinity();
+    WiderAffinity(const WiderAffinity&) = delete;
+    WiderAffinity& operator=(const WiderAffinity&) = delete;
+    /// How many CPUs the calling thread may run on now.
+    unsigned cpus() const { return count_; }
+
+private:
+    std::vector<unsigned char> own_;  ///< the thread's cpu_set_t before, restored (empty: unchanged)
+    unsigned count_ = 1;
+};
+
 /// The work of files for shareItems(): their sizes in bytes (0 where a size cannot be read).
 std::vector<std::uint64_t> fileSizes(const std::vector<std::string>& paths);
 

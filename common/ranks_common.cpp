@@ -4,7 +4,12 @@
 #include <gseg/io/bytes.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
+#include <sstream>
+
+#include <sched.h>
+#include <unistd.h>
 #include <numeric>
 #include <utility>
 #include <stdexcept>
@@ -27,6 +32,63 @@ int Ranks::exitCode(int mine) {
     for (const std::string& c : gather(std::to_string(mine)))
         if (code == 0) code = std::stoi(c);
     return std::stoi(broadcast(std::to_string(code)));
+}
+
+namespace {
+
+std::vector<int> threadCpus() {
+    std::vector<int> cpus;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (::sched_getaffinity(0, sizeof set, &set) == 0)
+        for (int c = 0; c < CPU_SETSIZE; ++c)
+            if (CPU_ISSET(c, &set)) cpus.push_back(c);
+    return cpus;
+}
+
+}  // namespace
+
+std::vector<int> cpusOfRanksOnThisMachine(Ranks& ranks) {
+    char host[256] = {};
+    if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+    std::string mine = host;
+    for (int c : threadCpus()) mine += " " + std::to_string(c);
+    const std::vector<std::string> all = ranks.gather(mine);
+    std::vector<int> cpus;
+    if (all.empty()) return cpus;
+    std::string rootHost;
+    std::istringstream(all[0]) >> rootHost;
+    for (const std::string& r : all) {
+        std::istringstream in(r);
+        std::string h;
+        in >> h;
+        if (h != rootHost) continue;
+        for (int c; in >> c;) cpus.push_back(c);
+    }
+    std::sort(cpus.begin(), cpus.end());
+    cpus.erase(std::unique(cpus.begin(), cpus.end()), cpus.end());
+    return cpus;
+}
+
+WiderAffinity::WiderAffinity(const std::vector<int>& cpus) {
+    cpu_set_t own, wide;
+    CPU_ZERO(&own);
+    if (::sched_getaffinity(0, sizeof own, &own) != 0) return;
+    count_ = unsigned(std::max(1, CPU_COUNT(&own)));
+    wide = own;
+    for (int c : cpus)
+        if (c >= 0 && c < CPU_SETSIZE) CPU_SET(c, &wide);
+    if (CPU_EQUAL(&wide, &own) || ::sched_setaffinity(0, sizeof wide, &wide) != 0) return;
+    own_.resize(sizeof own);
+    std::memcpy(own_.data(), &own, sizeof own);
+    count_ = unsigned(CPU_COUNT(&wide));
+}
+
+WiderAffinity::~WiderAffinity() {
+    if (own_.empty()) return;
+    cpu_set_t own;
+    std::memcpy(&own, own_.data(), sizeof own);
+    ::sched_setaffinity(0, sizeof own, &own);
 }
 
 std::vector<std::string> shareItems(Ranks& ranks, const std::vector<std::uint64_t>& work,

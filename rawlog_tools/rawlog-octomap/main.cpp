@@ -302,7 +302,13 @@ RunReport buildMaps(const Cli& cli, bool quiet, RemoteWorkers* remote) {
     if (!quiet && gseg::tools::progressOut())  // the writing takes seconds on a drive: say it is going on
         std::fprintf(gseg::tools::progressOut(), "rawlog-octomap: writing %zu map files (%s_*) ...\n",
                      gseg::map::TraversabilityMap::outputPaths(cli.prefix).size(), cli.prefix.c_str());
-    report.written = phase("writing the maps", cli, [&] { return map.write(cli.prefix, cli.outputs); });
+    report.written = phase("writing the maps", cli, [&] {
+        const gseg::tools::WiderAffinity cores(cli.machineCpus);  // the other ranks are done
+        if (remote && cli.outputs.writers >= 2)
+            gseg::tools::detail("rawlog-octomap: writing on %d threads, %u CPUs (the ranks' on this machine)\n",
+                                cli.outputs.writers, cores.cpus());
+        return map.write(cli.prefix, cli.outputs);
+    });
     report.tally.times.writing = gseg::secondsSince(t0);
     report.stats = map.stats();
     report.wallSeconds = gseg::secondsSince(start);
@@ -324,6 +330,10 @@ int run(int argc, char** argv, gseg::tools::Ranks& ranks) {
         std::cerr << "rawlog-octomap: --bench times one process: start it without mpirun\n";
         return gseg::tools::kBadUsage;
     }
+    // mpirun binds each rank to its cores; once the scans are done only rank 0 works (it writes):
+    // its writing threads may use the cores of the ranks on its machine.
+    cli.machineCpus = gseg::tools::cpusOfRanksOnThisMachine(ranks);
+    if (ranks.size() > 1 && cli.machineCpus.size() >= 2) cli.outputs.writers = 2;
     if (!ranks.root()) {
         serveScans(ranks, cli);
         return 0;

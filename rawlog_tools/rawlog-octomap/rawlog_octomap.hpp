@@ -32,6 +32,9 @@ struct Cli {
     double maxMemory = 0;    ///< [bytes] --max-memory (0: the machine's available memory)
     double mpiTimeout = 0;   ///< [s] --mpi-timeout (gseg::tools::Ranks::setTimeout())
     gseg::map::MapOutputOptions outputs;  ///< --tiles, --tiled-above: the costmap and GeoTIFF of a big map as tiles
+    /// Rank 0 under MPI: the CPUs of the ranks on its machine, idle while it writes (its writing
+    /// threads may use them); empty otherwise.
+    std::vector<int> machineCpus;
 };
 
 class RemoteWorkers;

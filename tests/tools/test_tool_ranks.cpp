@@ -18,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <thread>
+#include <sched.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -108,6 +110,50 @@ TEST(Ranks, WithoutALauncherTheToolIsOneProcess) {
     EXPECT_EQ(ranks.exitCode(3), 3);
     ranks.setTimeout("test", 0.5);  // nothing to watch
     EXPECT_EQ(ranks.gather("still"), (std::vector<std::string>{"still"}));
+}
+
+namespace {
+
+std::vector<int> cpusOfThisThread() {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    std::vector<int> cpus;
+    if (::sched_getaffinity(0, sizeof set, &set) == 0)
+        for (int c = 0; c < CPU_SETSIZE; ++c)
+            if (CPU_ISSET(c, &set)) cpus.push_back(c);
+    return cpus;
+}
+
+}  // namespace
+
+// #35: rank 0 writes on the cores of the ranks on its machine; one process: its own.
+TEST(Ranks, TheCpusOfOneProcessAreItsOwnAndAWiderAffinityIsGivenBack) {
+    const std::vector<int> own = cpusOfThisThread();
+    ASSERT_FALSE(own.empty());
+    EXPECT_EQ(gseg::tools::cpusOfRanksOnThisMachine(alone()), own);
+    if (own.size() < 2) GTEST_SKIP() << "one CPU: nothing to widen to";
+    // On a thread of its own, bound to the first CPU as mpirun binds a rank.
+    std::vector<int> inside, started, after;
+    unsigned counted = 0, nothingAdded = 0;
+    std::thread([&] {
+        cpu_set_t one;
+        CPU_ZERO(&one);
+        CPU_SET(own[0], &one);
+        if (::sched_setaffinity(0, sizeof one, &one) != 0) return;
+        nothingAdded = gseg::tools::WiderAffinity({own[0]}).cpus();
+        {
+            const gseg::tools::WiderAffinity wide({own[0], own[1]});
+            counted = wide.cpus();
+            inside = cpusOfThisThread();
+            std::thread([&] { started = cpusOfThisThread(); }).join();  // a writer it starts
+        }
+        after = cpusOfThisThread();
+    }).join();
+    EXPECT_EQ(nothingAdded, 1u);
+    EXPECT_EQ(counted, 2u);
+    EXPECT_EQ(inside, (std::vector<int>{own[0], own[1]}));
+    EXPECT_EQ(started, inside) << "threads started meanwhile inherit the wider set";
+    EXPECT_EQ(after, (std::vector<int>{own[0]})) << "given back";
 }
 
 namespace {

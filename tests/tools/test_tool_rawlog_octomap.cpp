@@ -2,6 +2,7 @@
 // file, raw scans or rawlog-gseg's pairs), the real SemanticKITTI sequence 00 through kitti2rawlog
 // (and rawlog-gseg), threads, progress, skipped scans, failing early, and bad input.
 #include <gseg/io/ros_map.hpp>
+#include <gseg/ordered_pipeline.hpp>
 #include <gseg/map/poses.hpp>
 #include <gseg/map/traversability_map.hpp>
 #include <support/child.hpp>
@@ -542,9 +543,12 @@ TEST(RawlogOctomapTool, TwoMpiRanksWriteTheMapsOfOneProcess) {
     EXPECT_NE(remote.out.find("(summed over 1 worker thread(s) in 2 processes)"), std::string::npos) << remote.out;
     expectSameMaps(dir + "/one", dir + "/remote");
     // --threads 0: one rank per core, both ranks work; whoever is free takes the next scan.
-    const ToolRun both = runTool("rawlog-octomap", args + "/both --threads 0", dir, "", mpirun);
+    const ToolRun both = runTool("rawlog-octomap", args + "/both --threads 0 -v", dir, "", mpirun);
     ASSERT_EQ(both.status, 0) << both.err;
     EXPECT_NE(both.out.find("(summed over 2 worker thread(s) in 2 processes)"), std::string::npos) << both.out;
+    // Rank 0 writes on two threads, which may use rank 1's core (mpirun binds each rank to one).
+    const bool twoWriters = (both.out + both.err).find("rawlog-octomap: writing on 2 threads, ") != std::string::npos;
+    EXPECT_EQ(twoWriters, gseg::usableCores() >= 2) << both.out << both.err;
     EXPECT_NE(both.out.find("scans worked on: "), std::string::npos) << both.out;
     expectSameMaps(dir + "/one", dir + "/both");
     const auto voxels = [](const std::string& out) { return out.substr(out.find("voxels ("), out.find("map memory") - out.find("voxels (")); };
