@@ -74,6 +74,49 @@ bool hitTerrain(const Terrain& t, const double* d, double best, double& at) {
     return false;
 }
 
+/// The boxes a beam can hit, by the beam's azimuth: seen from the sensor (the origin) a box's
+/// footprint spans an azimuth interval under half a turn, unless the origin is in or at the
+/// footprint (then every bin holds it). Each box is listed in the bins its interval overlaps and
+/// one more each side, so rounding never leaves out a box a beam hits, and in scene order: a beam
+/// meets the same boxes in the same order as when it is tested against every box (the same hits,
+/// the same draws of the scatter's random numbers), in a fraction of the time for scenes of
+/// thousands of boxes (a hedge of leaf clusters).
+class BoxBins {
+public:
+    explicit BoxBins(const std::vector<Box>& boxes) : bins_(kBins) {
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+            all_.push_back(i);
+            const Box& b = boxes[i];
+            constexpr double eps = 1e-6;
+            if (b.lo[0] - eps <= 0 && 0 <= b.hi[0] + eps && b.lo[1] - eps <= 0 && 0 <= b.hi[1] + eps) {
+                for (auto& bin : bins_) bin.push_back(i);
+                continue;
+            }
+            const double corners[4][2] = {{b.lo[0], b.lo[1]}, {b.hi[0], b.lo[1]}, {b.lo[0], b.hi[1]}, {b.hi[0], b.hi[1]}};
+            const double a0 = std::atan2(corners[0][1], corners[0][0]);
+            double lo = a0, hi = a0;
+            for (const auto& c : corners) {
+                const double a = a0 + std::remainder(std::atan2(c[1], c[0]) - a0, 2 * M_PI);
+                lo = std::min(lo, a), hi = std::max(hi, a);
+            }
+            const long first = long(std::floor(lo / kWidth)) - 1, last = long(std::floor(hi / kWidth)) + 1;
+            for (long k = first; k <= std::min(last, first + kBins - 1); ++k) bins_[binOf(k)].push_back(i);
+        }
+    }
+    /// The boxes, ascending, that the beam of direction `d` may hit.
+    const std::vector<std::size_t>& of(const double* d) const {
+        if (std::abs(d[0]) < 1e-9 && std::abs(d[1]) < 1e-9) return all_;  // straight up or down
+        return bins_[binOf(long(std::floor(std::atan2(d[1], d[0]) / kWidth)))];
+    }
+
+private:
+    static constexpr long kBins = 720;
+    static constexpr double kWidth = 2 * M_PI / kBins;
+    static std::size_t binOf(long k) { return std::size_t(((k % kBins) + kBins) % kBins); }
+    std::vector<std::vector<std::size_t>> bins_;
+    std::vector<std::size_t> all_;
+};
+
 }  // namespace
 
 SimScan simulate(const Scene& scene, const Lidar& lidar) {
@@ -86,6 +129,7 @@ SimScan simulate(const Scene& scene, const Lidar& lidar) {
     const double cp = std::cos(lidar.pitchDeg * kDeg), sp = std::sin(lidar.pitchDeg * kDeg);
     const double R[3][3] = {{cp, sp * sr, sp * cr}, {0, cr, -sr}, {-sp, cp * sr, cp * cr}};
     const int steps = int(std::lround(360.0 / lidar.azimuthStepDeg));
+    const BoxBins boxBins(scene.boxes);
     for (int b = 0; b < lidar.beams; ++b) {
         const double el = (lidar.minElevationDeg +
                            (lidar.beams > 1 ? b * (lidar.maxElevationDeg - lidar.minElevationDeg) / (lidar.beams - 1) : 0)) *
@@ -111,7 +155,8 @@ SimScan simulate(const Scene& scene, const Lidar& lidar) {
                 double t = 0;
                 if (hitTerrain(tr, d, best, t)) best = t, truth = tr.truth, hit = true;
             }
-            for (const Box& bx : scene.boxes) {
+            for (std::size_t i : boxBins.of(d)) {
+                const Box& bx = scene.boxes[i];
                 double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
                 for (int a = 0; a < 3 && t0 <= t1; ++a) {
                     if (std::abs(d[a]) < 1e-12) {
