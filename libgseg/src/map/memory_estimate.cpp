@@ -70,6 +70,8 @@ RayFootprint rayFootprint(const PointCloudView& points, const Eigen::Vector3d& s
     std::vector<double> ending(bins, 0.0);  // rays ending in each voxel-thick shell
     std::vector<double> reach(360 * 180, -1.0);  // [m] the longest ray of each direction bin
     RayFootprint f;
+    std::vector<std::uint64_t> ends;  // the voxels rays end in, as 21-bit keys from the sensor
+    ends.reserve(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {
         const float* p = points.point(i);
         const Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - sensorOrigin;
@@ -81,7 +83,14 @@ RayFootprint rayFootprint(const PointCloudView& points, const Eigen::Vector3d& s
         double& longest = reach[std::size_t(el * 360 + az)];
         longest = std::max(longest, std::min(r, options.maxRange));
         ending[std::min(bins - 1, std::size_t(std::min(r, options.maxRange) / res))] += 1;
+        if (r <= options.maxRange) {
+            std::uint64_t key = 0;
+            for (int a = 0; a < 3; ++a) key = key << 21 | (std::uint64_t(std::int64_t(std::floor(d[a] / res)) + (1 << 20)) & 0x1fffff);
+            ends.push_back(key);
+        }
     }
+    std::sort(ends.begin(), ends.end());
+    f.endVoxels = std::size_t(std::unique(ends.begin(), ends.end()) - ends.begin());
     // The solid angle still reached at each distance: rays to the road end early, so far away
     // only the level directions are left.
     std::vector<double> angleEnding(bins, 0.0);
@@ -106,6 +115,7 @@ MemoryEstimate estimateMemory(const RayFootprint& f) {
     MemoryEstimate e;
     e.process = kProcessBytes;
     e.perWorker = kWorkerBytes;
+    e.firstOccupied = double(f.endVoxels);
     e.perScan = kInFlightShare * (kBytesPerListedVoxel * f.voxels + kBytesPerCastBrick * f.bricks);
     e.firstMap = kBytesPerMapBrick * f.bricks + kBytesPerMapWord * f.words;
     e.growthPerScan = kSparseGrowth * (kBytesPerMapBrick * f.sparseBricks + kBytesPerMapWord * f.sparseWords) + kMapGrowth * e.firstMap;
@@ -148,12 +158,29 @@ double layerBytes(double tiles, double denseCells, int writers) {
     return std::max(14 * kBytesPerTileLayer * tiles, 8 * kBytesPerTileLayer * tiles + kBytesPerDenseCell * denseCells + picture);
 }
 
-// Calibration (peak RSS of rawlog-octomap with writing against the one before writing, sequence
-// 00 through kitti2rawlog: 6, 60 and 600 scans): the files take about this much per byte of the maps.
-constexpr double kWritingPerMapByte = 1.9;
+// What the writing takes beside the maps and the layers (2026-12-07; heaptrack of rawlog-octomap
+// on the six sequence-00 scans, the allocations under TraversabilityMap::write(): at 0.2 m about
+// 30 MB beside the layers (the ground mesh 10 MB, vectors 14 MB, a gzip member 4 MB), at 0.05 m 15
+// MB; the rest is the layers (GDAL's copy, the dense window, the tiles: 350 MB at 0.05 m). Until
+// then the estimate counted 1.9 bytes per byte of the maps, which at fine voxels are mostly free
+// space that no file holds in memory: 2.9 GB for a run of 1.38 GB at 0.05 m, 4.9 GB for 2.03 GB
+// at 0.04 m.) Per occupied voxel (the voxel lists of the .ply and the scene, the scene's boxes):
+// fitted on the 600-scan drive at 0.2 m (1.30 M occupied voxels; the peak with writing 924-938
+// MB, 426 MB before writing, 268 MB of layers).
+constexpr double kWritingBytes = 25e6;
+constexpr double kWritingPerOccupiedVoxel = 163;
+// Occupied voxels after n scans: the first scan's times 1 + g (n - 1). Measured at 0.2 m along
+// sequence 00 (6, 10, 60 and 600 scans: 2.1, 2.3, 6.5 and 43.6 times the first scan's): g 0.07 to
+// 0.22 a scan, 0.1 taken; finer voxels grow faster (six scans: 3.8 times at 0.05 m), which the
+// writing at fine voxels does not need (it reuses the freed buffers of the scans in flight there).
+constexpr double kOccupiedGrowth = 0.1;
+
+double MemoryEstimate::occupied(std::size_t scans) const {
+    return firstOccupied * (1 + kOccupiedGrowth * double(scans > 0 ? scans - 1 : 0));
+}
 
 double MemoryEstimate::peakWithWriting(std::size_t workers, std::size_t inFlight, std::size_t scans, double layers) const {
-    return peak(workers, inFlight, scans) + kWritingPerMapByte * maps(scans) + layers;
+    return peak(workers, inFlight, scans) + kWritingBytes + kWritingPerOccupiedVoxel * occupied(scans) + layers;
 }
 
 namespace {

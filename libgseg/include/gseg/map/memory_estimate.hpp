@@ -37,6 +37,7 @@ struct RayFootprint {
     double sparseVoxels = 0; ///< of those, where rays are sparser than voxels (new for every scan)
     double words = 0, sparseWords = 0;    ///< the same for words of 4x4x4 voxels
     double bricks = 0, sparseBricks = 0;  ///< the same for bricks of 8x8x8 voxels
+    std::size_t endVoxels = 0;  ///< distinct voxels the rays end in within maxRange (the scan's occupied voxels)
 };
 
 /// Counts the cells the rays of `points` from `sensorOrigin` cross (points beyond maxRange end
@@ -57,11 +58,15 @@ struct MemoryEstimate {
     double peak(std::size_t workers, std::size_t inFlight, std::size_t scans) const {
         return process + perWorker * double(workers > 1 ? workers - 1 : 0) + perScan * double(inFlight) + maps(scans);
     }
+    double firstOccupied = 0;  ///< [voxels] occupied after the first scan (the voxels its rays end in)
     /// [bytes] The maps after `scans` scans.
     double maps(std::size_t scans) const { return firstMap + growthPerScan * double(scans > 0 ? scans - 1 : 0); }
+    /// [voxels] Occupied (ground and obstacle) after `scans` scans.
+    double occupied(std::size_t scans) const;
     /// [bytes] The peak of a whole run, writing included: peak() and then, while the files are
-    /// written, what they take beside the maps (writingPerMapByte() per byte of the maps: the
-    /// voxel lists, trees and scene) and the 2.5D layers' `layers` bytes (layerBytes()).
+    /// written, what they take beside the maps (per occupied voxel: the voxel lists and the
+    /// scene's boxes; a constant part: the compressors' buffers and the ground mesh) and the 2.5D
+    /// layers' `layers` bytes (layerBytes()).
     /// Under MPI (rawlog-octomap, #35) this is rank 0's peak, above the other ranks': ranks 1-3
     /// hold a share of the maps while integrating and rank 0 all of them after merging; the merge
     /// holds the other shares as bytes (about their size) for a moment, less than the writing.
