@@ -546,9 +546,13 @@ TEST(RawlogOctomapTool, TwoMpiRanksWriteTheMapsOfOneProcess) {
     const ToolRun both = runTool("rawlog-octomap", args + "/both --threads 0 -v", dir, "", mpirun);
     ASSERT_EQ(both.status, 0) << both.err;
     EXPECT_NE(both.out.find("(summed over 2 worker thread(s) in 2 processes)"), std::string::npos) << both.out;
-    // Rank 0 writes on two threads, which may use rank 1's core (mpirun binds each rank to one).
+    // Rank 0 writes on two threads, which may use rank 1's core (mpirun binds each rank to one):
+    // wherever this test may use two CPUs (under a narrower affinity mpirun may still bind rank 1
+    // to another CPU, so the line is not ruled out there).
     const bool twoWriters = (both.out + both.err).find("rawlog-octomap: writing on 2 threads, ") != std::string::npos;
-    EXPECT_EQ(twoWriters, gseg::usableCores() >= 2) << both.out << both.err;
+    if (gseg::usableCores() >= 2) {
+        EXPECT_TRUE(twoWriters) << both.out << both.err;
+    }
     EXPECT_NE(both.out.find("scans worked on: "), std::string::npos) << both.out;
     expectSameMaps(dir + "/one", dir + "/both");
     const auto voxels = [](const std::string& out) { return out.substr(out.find("voxels ("), out.find("map memory") - out.find("voxels (")); };
