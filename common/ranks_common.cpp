@@ -6,13 +6,13 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <numeric>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include <sched.h>
 #include <unistd.h>
-#include <numeric>
-#include <utility>
-#include <stdexcept>
 
 namespace gseg::tools {
 
