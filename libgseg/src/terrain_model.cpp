@@ -75,6 +75,8 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
     std::size_t slots = 64;
     while (slots < 2 * (ground.size() + nonGround.size())) slots *= 2;
     std::vector<std::uint32_t> table(slots, 0);  // 0: empty, else index into out + 1
+    std::size_t last = 0;                         // the last point's sample + 1 (0: none): a scan's
+                                                  // next point mostly falls in the same cell
     auto add = [&](const PointCloudView& pts, bool isGround) {
         for (std::size_t i = 0; i < pts.size(); ++i) {
             if (!take(i, isGround)) continue;
@@ -84,16 +86,19 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
             if (!(dx * dx + dy * dy + dz * dz <= maxRange * maxRange)) continue;
             std::int32_t ix = 0, iy = 0;
             if (!cellIndex(p[0], cellSize, ix) || !cellIndex(p[1], cellSize, iy)) continue;
-            const std::uint64_t key = tileKey(ix, iy);
-            std::size_t h = std::size_t((key * 0x9E3779B97F4A7C15ULL) >> 20) & (slots - 1);
-            while (table[h] && !(out[table[h] - 1].ix == ix && out[table[h] - 1].iy == iy)) h = (h + 1) & (slots - 1);
-            if (!table[h]) {
-                TerrainSample n;
-                n.ix = ix, n.iy = iy, n.lowZ = n.highZ = p[2];
-                out.push_back(n);
-                table[h] = std::uint32_t(out.size());
+            if (!(last && out[last - 1].ix == ix && out[last - 1].iy == iy)) {
+                const std::uint64_t key = tileKey(ix, iy);
+                std::size_t h = std::size_t((key * 0x9E3779B97F4A7C15ULL) >> 20) & (slots - 1);
+                while (table[h] && !(out[table[h] - 1].ix == ix && out[table[h] - 1].iy == iy)) h = (h + 1) & (slots - 1);
+                if (!table[h]) {
+                    TerrainSample n;
+                    n.ix = ix, n.iy = iy, n.lowZ = n.highZ = p[2];
+                    out.push_back(n);
+                    table[h] = std::uint32_t(out.size());
+                }
+                last = table[h];
             }
-            TerrainSample& c = out[table[h] - 1];
+            TerrainSample& c = out[last - 1];
             c.lowZ = std::min(c.lowZ, p[2]), c.highZ = std::max(c.highZ, p[2]);
             if (isGround) ++c.groundCount, c.groundSumZ += p[2];
         }

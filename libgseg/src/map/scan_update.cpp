@@ -8,6 +8,7 @@
 #include <octomap/OcTree.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <iomanip>
 #include <limits>
@@ -25,6 +26,99 @@ using detail::BrickSet;
 using detail::mortonCode;
 
 constexpr std::uint64_t kAxisMask[3] = {0x249249249249ULL, 0x249249249249ULL << 1, 0x249249249249ULL << 2};
+
+/// Per-axis sum and difference of Morton codes: each axis's key added (subtracted) modulo 2^16,
+/// the carries kept within the axis by filling (clearing) the other axes' bits.
+inline std::uint64_t mortonAdd(std::uint64_t a, std::uint64_t b) {
+    std::uint64_t out = 0;
+    for (const std::uint64_t m : kAxisMask) out |= ((a | ~m) + (b & m)) & m;
+    return out;
+}
+inline std::uint64_t mortonSub(std::uint64_t a, std::uint64_t b) {
+    std::uint64_t out = 0;
+    for (const std::uint64_t m : kAxisMask) out |= ((a & m) - (b & m)) & m;
+    return out;
+}
+
+/// The voxels a scan's rays cross, one bit each in a cube of 2^kSideBits voxels per axis around
+/// the sensor (where most ray steps are: every ray starts there), a BrickSet beyond it. The rays
+/// are stepped in the cube's own codes: the Morton code of a voxel's key minus the cube's corner
+/// (per axis, modulo 2^16), so a voxel lies in the cube exactly when its code is below
+/// 2^(3 kSideBits) and marking it is one bit set at that position, with no brick to look up. The
+/// corner is a multiple of 8 voxels per axis: the cube's bricks are the map's bricks.
+class Window {
+public:
+    static constexpr unsigned kSideBits = 9;
+    static constexpr std::uint64_t kVoxels = 1ULL << (3 * kSideBits);
+    static constexpr unsigned kSide = 1u << kSideBits;
+
+    /// Centres the cube on the voxel `originCode` (map code); the cube must be empty (moveTo()).
+    void begin(std::uint64_t originCode) {
+        const octomap::OcTreeKey k = detail::keyOfCode(originCode);
+        octomap::OcTreeKey c;
+        for (unsigned a = 0; a < 3; ++a) {
+            cornerKey_[a] = (int(k[a]) - int(1u << (kSideBits - 1))) & ~7;  // may be negative at the extent's edge
+            c[a] = std::uint16_t(cornerKey_[a] & 0xffff);
+        }
+        corner_ = detail::mortonCode(c);
+        if (!words_ || dirty_) {  // first, or after a throw: zeroed pages, which take memory only once marked
+            words_.reset(static_cast<std::uint64_t*>(std::calloc(kVoxels / 64, sizeof(std::uint64_t))));
+            if (!words_) throw std::bad_alloc();
+        }
+        far_.clear();
+        dirty_ = true;
+    }
+    /// The cube's code of a map code.
+    std::uint64_t local(std::uint64_t code) const { return mortonSub(code, corner_); }
+
+    /// Marks the voxels codes[0, n) (the cube's codes).
+    void mark(const std::uint64_t* codes, std::size_t n) {
+        std::uint64_t* const words = words_.get();
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint64_t c = codes[i];
+            if (c < kVoxels) {
+                words[c >> 6] |= 1ULL << (c & 63);
+            } else {
+                far_.insert(c);
+            }
+        }
+    }
+
+    /// Every marked voxel into `out` (map codes), the cube emptied for the next scan. `lo` and
+    /// `hi`: per axis, the least and greatest key of the origin's and the ray ends' voxels. A ray
+    /// crosses only voxels within them but for rounding at a voxel border (one voxel beyond the
+    /// end's on one axis), so a margin of two voxels bounds every marked voxel.
+    void moveTo(BrickSet& out, const int lo[3], const int hi[3]) {
+        int from[3], to[3];  // the cube's bricks within the box, per axis
+        for (unsigned a = 0; a < 3; ++a) {
+            from[a] = std::max(0, lo[a] - 2 - cornerKey_[a]) >> 3;
+            to[a] = std::min(int(kSide) - 1, hi[a] + 2 - cornerKey_[a]) >> 3;
+        }
+        for (int z = from[2]; z <= to[2]; ++z)
+            for (int y = from[1]; y <= to[1]; ++y)
+                for (int x = from[0]; x <= to[0]; ++x) {
+                    const std::uint64_t brick = detail::spreadBits(unsigned(x)) | (detail::spreadBits(unsigned(y)) << 1) | (detail::spreadBits(unsigned(z)) << 2);
+                    std::uint64_t* w = &words_[brick << 3];
+                    if ((w[0] | w[1] | w[2] | w[3] | w[4] | w[5] | w[6] | w[7]) == 0) continue;
+                    out.insertBrick(mapBrick(brick), w);
+                    std::fill(w, w + 8, 0);
+                }
+        far_.forEachBrick([&](std::uint64_t brick, const std::uint64_t* w) { out.insertBrick(mapBrick(brick), w); });
+        dirty_ = false;
+    }
+
+private:
+    std::uint64_t corner_ = 0;            ///< Morton code of the cube's corner (map code)
+    int cornerKey_[3] = {0, 0, 0};        ///< the corner's key per axis
+    struct Free {
+        void operator()(std::uint64_t* p) const { std::free(p); }
+    };
+    std::unique_ptr<std::uint64_t[], Free> words_;  ///< one bit per voxel of the cube, in its codes' order
+    BrickSet far_;                        ///< the voxels beyond the cube (the cube's codes)
+    bool dirty_ = false;                  ///< begun and not emptied by moveTo()
+
+    std::uint64_t mapBrick(std::uint64_t brick) const { return mortonAdd(brick << 9, corner_) >> 9; }
+};
 
 /// The state of OctoMap's incremental ray loop (OcTree::computeRayKeys(), OctoMap 1.9.7).
 struct Ray {
@@ -157,6 +251,9 @@ public:
             throw std::out_of_range(s.str());
         }
         originCode_ = mortonCode(originKey_);
+        window_.begin(originCode_);
+        originLocal_ = window_.local(originCode_);
+        for (unsigned a = 0; a < 3; ++a) boxLo_[a] = boxHi_[a] = int(originKey_[a]);
         for (BrickSet* b : {&ends_, &groundHits_, &obstacleHits_, &crossed_}) b->clear();
         endPoints_.clear();
         endCodes_.clear();
@@ -167,22 +264,27 @@ public:
     /// Per-cell sums of the ground points within maxRange (sorted by cell).
     std::vector<GroundCellSample> groundCells(const PointCloudView& pts) {
         cells_.clear();
+        std::vector<GroundCellSample> out;
+        std::size_t last = SIZE_MAX;  // the last point's cell in out: the next point mostly shares it
         for (std::size_t i = 0; i < pts.size(); ++i) {
             const octomap::point3d p(pts.x(i), pts.y(i), pts.z(i));
             const double range = (p - origin_).norm();
             octomap::OcTreeKey key;
             if (!(range <= maxRange_) || !keyOf(p, key)) continue;
             const std::uint32_t cell = (std::uint32_t(key[0]) << 16) | key[1];
-            auto [it, added] = cells_.try_emplace(cell);
-            GroundCellSample& c = it->second;
             const double z = pts.z(i);
-            if (added) c.cell = cell, c.minZ = c.maxZ = float(z);
+            if (last == SIZE_MAX || out[last].cell != cell) {
+                bool added = false;
+                last = cells_.insert(cell, added);
+                if (added) {
+                    out.emplace_back();
+                    out.back().cell = cell, out.back().minZ = out.back().maxZ = float(z);
+                }
+            }
+            GroundCellSample& c = out[last];
             ++c.count, c.sumZ += z, c.sumZ2 += z * z, c.sumX += pts.x(i), c.sumY += pts.y(i);
             c.minZ = std::min(c.minZ, float(z)), c.maxZ = std::max(c.maxZ, float(z));
         }
-        std::vector<GroundCellSample> out;
-        out.reserve(cells_.size());
-        for (const auto& kv : cells_) out.push_back(kv.second);
         std::sort(out.begin(), out.end(), [](const GroundCellSample& a, const GroundCellSample& b) { return a.cell < b.cell; });
         return out;
     }
@@ -203,7 +305,10 @@ public:
             }
             const std::uint64_t code = mortonCode(key);
             if (hit) hits.insert(code);
-            if (ends_.insert(code)) endPoints_.push_back(p), endCodes_.push_back(code);
+            if (ends_.insert(code)) {
+                endPoints_.push_back(p), endCodes_.push_back(code);
+                for (unsigned a = 0; a < 3; ++a) boxLo_[a] = std::min(boxLo_[a], int(key[a])), boxHi_[a] = std::max(boxHi_[a], int(key[a]));
+            }
         }
     }
 
@@ -222,12 +327,12 @@ public:
             }
         };
         fill(0xf);
-        if (free == 0xf) return;  // no ray leaves the origin's voxel
-        crossed_.insert(originCode_);  // every ray that leaves the origin's voxel starts there
+        if (free == 0xf) return window_.moveTo(crossed_, boxLo_, boxHi_);  // no ray leaves the origin's voxel
+        window_.mark(&originLocal_, 1);  // every ray that leaves the origin's voxel starts there
         std::size_t rows = 0;
         const bool avx2 = gseg::detail::cpuHasAvx2();
         while (free == 0) {
-            if (rows == kRows) crossed_.insertAll(path_.data(), 4 * rows), rows = 0;
+            if (rows == kRows) window_.mark(path_.data(), 4 * rows), rows = 0;
             unsigned ended = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
             rows += avx2 ? stepLanesAvx2(lanes, path_.data() + 4 * rows, kRows - rows, ended)
@@ -237,9 +342,10 @@ public:
 #endif
             fill(ended);
         }
-        crossed_.insertAll(path_.data(), 4 * rows);
+        window_.mark(path_.data(), 4 * rows);
         for (unsigned i = 0; i < 4; ++i)  // the rays still going, to their ends
             if (!(free >> i & 1)) walk(laneRay(lanes, i));
+        window_.moveTo(crossed_, boxLo_, boxHi_);
     }
     std::size_t rays() const { return endPoints_.size(); }
     const BrickSet& crossed() const { return crossed_; }
@@ -249,11 +355,13 @@ private:
     double maxRange_ = 0, limit_ = 0;
     octomap::point3d origin_;
     octomap::OcTreeKey originKey_;
-    std::uint64_t originCode_ = 0;
+    std::uint64_t originCode_ = 0, originLocal_ = 0;  ///< the origin's voxel: map code, window_'s code
+    Window window_;  ///< the voxels the rays cross, until castRays() ends
+    int boxLo_[3] = {0, 0, 0}, boxHi_[3] = {0, 0, 0};  ///< the keys of the origin and the ray ends: the least and greatest per axis
     BrickSet ends_, groundHits_, obstacleHits_, crossed_;
     std::vector<octomap::point3d> endPoints_;
     std::vector<std::uint64_t> endCodes_;
-    std::unordered_map<std::uint32_t, GroundCellSample> cells_;
+    detail::CodeIndex cells_;  ///< groundCells(): a cell -> its place in the list
 
     bool keyOf(const octomap::point3d& p, octomap::OcTreeKey& key) const {
         for (int a = 0; a < 3; ++a)  // far outside: rejected before OctoMap's int conversion can overflow
@@ -281,7 +389,7 @@ private:
                 ray.t[i] = ray.delta[i] = std::numeric_limits<double>::max();
             }
         }
-        ray.length = double(length), ray.code = originCode_, ray.end = endCode;
+        ray.length = double(length), ray.code = originLocal_, ray.end = window_.local(endCode);
         return true;
     }
 
@@ -299,7 +407,7 @@ private:
         s.t0[i] = r.t[0], s.t1[i] = r.t[1], s.t2[i] = r.t[2];
         s.d0[i] = r.delta[0], s.d1[i] = r.delta[1], s.d2[i] = r.delta[2];
         s.f0[i] = r.flip[0], s.f1[i] = r.flip[1], s.f2[i] = r.flip[2];
-        s.length[i] = r.length, s.code[i] = r.code, s.end[i] = r.end, s.last[i] = originCode_;
+        s.length[i] = r.length, s.code[i] = r.code, s.end[i] = r.end, s.last[i] = originLocal_;
     }
 
     static Ray laneRay(const Lanes& s, unsigned i) {
@@ -313,7 +421,7 @@ private:
         while (more) {
             std::size_t n = 0;
             more = walkRay(ray, path_.data(), kPath, n);
-            crossed_.insertAll(path_.data(), n);
+            window_.mark(path_.data(), n);
         }
     }
 

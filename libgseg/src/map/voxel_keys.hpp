@@ -174,6 +174,16 @@ public:
         cachedBrick_ = CodeIndex::kEmpty;
         recentBricks_.fill(CodeIndex::kEmpty);
     }
+    /// The voxels of brick `brick` in `words` (its eight words of 64) into this set.
+    void insertBrick(std::uint64_t brick, const std::uint64_t* words) {
+        auto& m = maskOf(brick);
+        for (int w = 0; w < 8; ++w) m[std::size_t(w)] |= words[w];
+    }
+    /// Calls f(brick, words) for every brick of the set (in the order they were added).
+    template <class F>
+    void forEachBrick(F&& f) const {
+        for (std::size_t b = 0; b < bricks_.size(); ++b) f(bricks_[b], masks_[b].data());
+    }
     /// Every voxel of `other` into this set.
     void merge(const BrickSet& other) {
         for (std::size_t b = 0; b < other.bricks_.size(); ++b) {
