@@ -65,8 +65,8 @@ TEST(BrickMap, WordsUpdatedEightAtOnceOrOneAtATimeKeepOctomapsValues) {
                 }
             }
         }
-        eight.applyScan(free, groundHits, obstacleHits);
-        one.applyScan(free, groundHits, obstacleHits);
+        eight.applyScan(gseg::map::VoxelBricks::fromCodes(free), groundHits, obstacleHits);
+        one.applyScan(gseg::map::VoxelBricks::fromCodes(free), groundHits, obstacleHits);
         for (std::uint64_t c : free) ref.update(kGround, c, l.miss, true), ref.update(kObstacles, c, l.miss, false);
         for (std::uint64_t c : groundHits) ref.update(kGround, c, l.hit, false);
         for (std::uint64_t c : obstacleHits) ref.update(kObstacles, c, l.hit, false);

@@ -38,7 +38,7 @@ void expectSameMapsForAnyThreads(const std::vector<Scan>& scans, const gseg::map
     for (const Scan& s : scans) {
         updates.push_back(gseg::map::castScan(gseg::PointCloudView(s.ground.data(), s.ground.size() / 3),
                                               gseg::PointCloudView(s.obstacles.data(), s.obstacles.size() / 3), s.origin, o));
-        voxels = std::max(voxels, updates.back().free.size());
+        voxels = std::max(voxels, updates.back().free.voxels());
     }
     ASSERT_GT(voxels, 100000u) << "scans big enough to be split over threads";
     std::vector<std::string> reference;
@@ -102,15 +102,16 @@ void expectSameMapsForAnyRanks(const std::vector<Scan>& scans, const gseg::map::
             gseg::map::ScanUpdate mine = u;
             for (int r = 1; r < ranks; ++r) {
                 const gseg::map::ScanUpdate part = gseg::map::takeVoxels(mine, r, ranks);
-                for (const auto* codes : {&part.free, &part.groundHits, &part.obstacleHits})
+                const std::vector<std::uint64_t> partFree = part.free.codes();
+                for (const auto* codes : {&partFree, &part.groundHits, &part.obstacleHits})
                     for (std::uint64_t c : *codes) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), r);
-                held[std::size_t(r)] += part.free.size() + part.groundHits.size() + part.obstacleHits.size();
+                held[std::size_t(r)] += partFree.size() + part.groundHits.size() + part.obstacleHits.size();
                 maps[std::size_t(r)].apply(gseg::map::deserializeScanUpdate(gseg::map::serializeScanUpdate(part)));
             }
-            for (std::uint64_t c : mine.free) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
+            for (std::uint64_t c : mine.free.codes()) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
             for (std::uint64_t c : mine.groundHits) ASSERT_EQ(gseg::map::voxelOwner(c, ranks), 0);
             EXPECT_EQ(mine.obstacleHits, u.obstacleHits) << "the obstacle hits stay whole";
-            held[0] += mine.free.size();
+            held[0] += mine.free.voxels();
             maps[0].apply(mine);
         }
         for (int r = 0; r < ranks; ++r) {

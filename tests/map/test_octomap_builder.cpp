@@ -2,6 +2,7 @@
 // turns into a 10 % ramp, a box, a wall, and a car that leaves after the first scans.
 #include <gseg/io/ply.hpp>
 #include <gseg/io/atomic_file.hpp>
+#include <gseg/io/bytes.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/map_colours.hpp>
 #include <gseg/map/top_down_picture.hpp>
@@ -30,6 +31,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <unistd.h>
@@ -464,8 +466,9 @@ TEST(OctomapBuilder, RayCastingGivesExactlyTheVoxelsOfComputeRayKeys) {
                 if (!hits.count(k)) expected.push_back(gseg::map::detail::mortonCode(k));
             std::sort(expected.begin(), expected.end());
             EXPECT_EQ(cast.rays, ends.size());
-            EXPECT_EQ(cast.free.size(), expected.size());
-            EXPECT_TRUE(cast.free == expected) << "the free voxels differ from computeRayKeys()'s";
+            EXPECT_EQ(cast.free.voxels(), expected.size());
+            EXPECT_TRUE(cast.free.codes() == expected) << "the free voxels differ from computeRayKeys()'s";
+            EXPECT_TRUE(cast.free == gseg::map::VoxelBricks::fromCodes(expected));
             if (resolution < 0.1) {
                 EXPECT_GT(longest, 4096u) << "rays longer than one batch of the caster";
             }
@@ -478,13 +481,23 @@ TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
     std::vector<std::string> bytes;
     for (const auto& d : theScans()) {
         const auto u = gseg::map::castScan(d.groundView(), d.obstaclesView(), d.origin, o);
-        EXPECT_TRUE(std::is_sorted(u.free.begin(), u.free.end()));
+        EXPECT_TRUE(std::is_sorted(u.free.bricks.begin(), u.free.bricks.end()));
+        EXPECT_TRUE(std::adjacent_find(u.free.bricks.begin(), u.free.bricks.end()) == u.free.bricks.end()) << "no brick twice";
+        EXPECT_EQ(u.free.words.size(), 8 * u.free.bricks.size());
+        for (std::size_t b = 0; b < u.free.bricks.size(); ++b)
+            EXPECT_TRUE(std::any_of(u.free.words.begin() + std::ptrdiff_t(8 * b), u.free.words.begin() + std::ptrdiff_t(8 * b + 8),
+                                    [](std::uint64_t w) { return w != 0; }))
+                << "no empty brick";
         EXPECT_EQ(u, gseg::map::castScan(d.groundView(), d.obstaclesView(), d.origin, o)) << "deterministic";
         bytes.push_back(gseg::map::serializeScanUpdate(u));
         EXPECT_EQ(gseg::map::deserializeScanUpdate(bytes.back()), u) << "serialisation round trip";
-        // About 3 bytes a voxel code, 42 a ground cell and 25 a terrain sample (#31).
-        EXPECT_LT(bytes.back().size(), 3 * (u.free.size() + u.groundHits.size() + u.obstacleHits.size()) +
+        // About 3 bytes a voxel code, 4 + 8 per nonzero word a free brick, 42 a ground cell and 25
+        // a terrain sample (#31).
+        std::size_t freeWords = 0;
+        for (std::uint64_t w : u.free.words) freeWords += w != 0;
+        EXPECT_LT(bytes.back().size(), 4 * u.free.bricks.size() + 8 * freeWords + 3 * (u.groundHits.size() + u.obstacleHits.size()) +
                                            42 * u.groundCells.size() + 25 * u.terrain.size() + 64);
+        EXPECT_LT(bytes.back().size(), 3 * u.free.voxels()) << "smaller than the free voxels' codes";
         EXPECT_FALSE(u.terrain.empty());
     }
     // Cast in reverse order, sent as bytes, applied in scan order: the same files as inserting.
@@ -512,6 +525,29 @@ TEST(OctomapBuilder, ScanUpdatesAreValuesIndependentOfTheMap) {
     EXPECT_THROW(gseg::map::deserializeScanUpdate(cut), std::runtime_error);
     EXPECT_THROW(gseg::map::deserializeScanUpdate(bad), std::runtime_error);
     EXPECT_THROW(gseg::map::deserializeScanUpdate(bytes[0] + "x"), std::runtime_error);
+}
+
+/// A scan update's free bricks from another process that break the format are refused, not applied.
+TEST(OctomapBuilder, MalformedFreeBricksAreRefused) {
+    auto bytesWith = [](const std::function<void(gseg::io::ByteWriter&)>& freeBricks) {
+        gseg::io::ByteWriter out;
+        out.raw("GSU4", 4).f64(0).f64(0).f64(0).varint(0).varint(0).varint(0).varint(0);
+        freeBricks(out);
+        out.varint(0).varint(0).varint(0).varint(0);  // no hits, ground cells or terrain samples
+        return out.take();
+    };
+    const auto fine = gseg::map::deserializeScanUpdate(bytesWith([](auto& o) { o.varint(2).varint(5).u8(0x81).u64(3).u64(1ULL << 63).varint(7).u8(2).u64(9); }));
+    EXPECT_EQ(fine.free.bricks, (std::vector<std::uint64_t>{5, 12}));
+    EXPECT_EQ(fine.free.codes(), (std::vector<std::uint64_t>{5 * 512, 5 * 512 + 1, 5 * 512 + 511, 12 * 512 + 64, 12 * 512 + 67}));
+    for (const auto& bad : std::vector<std::function<void(gseg::io::ByteWriter&)>>{
+             [](auto& o) { o.varint(2).varint(5).u8(1).u64(3).varint(0).u8(1).u64(1); },  // the same brick twice
+             [](auto& o) { o.varint(1).varint(5).u8(0); },                                // an empty brick
+             [](auto& o) { o.varint(1).varint(5).u8(1).u64(0); },                         // an empty word
+             [](auto& o) { o.varint(1).varint(1ULL << 39).u8(1).u64(1); },                // beyond the 48-bit codes
+             [](auto& o) { o.varint(2).varint((1ULL << 39) - 1).u8(1).u64(1).varint(1).u8(1).u64(1); },
+             [](auto& o) { o.varint(1000).varint(5).u8(1).u64(1); },                     // more bricks than bytes
+         })
+        EXPECT_THROW(gseg::map::deserializeScanUpdate(bytesWith(bad)), std::runtime_error);
 }
 
 TEST(OctomapBuilder, NoOccupiedVoxelStillWritesReadableMaps) {

@@ -4,6 +4,7 @@
 // ground cells through its byte form.
 #include <gseg/io/ros_map.hpp>
 #include <gseg/map/layer_file.hpp>
+#include <gseg/io/bytes.hpp>
 #include <gseg/map/scan_update.hpp>
 #include <gseg/map/terrain_layers.hpp>
 #include <gseg/map/traversability_map.hpp>
@@ -309,6 +310,35 @@ TEST(TerrainLayers, CostmapReadsBackInMrptCellForCell) {
     }
 }
 
+/// A scan update as the versions before "GSU4" wrote it (free voxels as codes): 1 without the ground
+/// cells and terrain samples, 2 without the terrain samples, 3 with both.
+std::string olderScanUpdateBytes(const gseg::map::ScanUpdate& u, int version) {
+    gseg::io::ByteWriter out;
+    out.raw(("GSU" + std::to_string(version)).c_str(), 4);
+    for (int a = 0; a < 3; ++a) out.f64(u.origin[a]);
+    for (std::uint64_t v : {u.groundPoints, u.obstaclePoints, u.rays, u.pointsSkipped}) out.varint(v);
+    const std::vector<std::uint64_t> free = u.free.codes();
+    for (const auto* list : {&free, &u.groundHits, &u.obstacleHits}) {
+        out.varint(list->size());
+        std::uint64_t prev = 0;
+        for (std::uint64_t c : *list) out.varint(c - prev), prev = c;
+    }
+    if (version >= 2) {
+        out.varint(u.groundCells.size());
+        std::uint64_t prev = 0;
+        for (const auto& c : u.groundCells) {
+            out.varint(c.cell - prev), prev = c.cell;
+            out.varint(c.count).f64(c.sumZ).f64(c.sumZ2).f64(c.sumX).f64(c.sumY).f32(c.minZ).f32(c.maxZ);
+        }
+    }
+    if (version >= 3) {
+        out.varint(u.terrain.size());
+        for (const auto& t : u.terrain)
+            out.u64((std::uint64_t(std::uint32_t(t.ix)) << 32) | std::uint32_t(t.iy)).varint(t.groundCount).f64(t.groundSumZ).f32(t.lowZ).f32(t.highZ);
+    }
+    return out.take();
+}
+
 TEST(TerrainLayers, ScanUpdateCarriesGroundCellsThroughItsBytes) {
     const std::vector<float> ground = {1.01f, 2.05f, -0.02f, 1.07f, 2.11f, 0.02f, 5.5f, -3.3f, 0.3f},
                              obstacles = {4.0f, 0.5f, 1.0f};
@@ -322,20 +352,19 @@ TEST(TerrainLayers, ScanUpdateCarriesGroundCellsThroughItsBytes) {
     EXPECT_FLOAT_EQ(shared.minZ, -0.02f);
     EXPECT_FLOAT_EQ(shared.maxZ, 0.02f);
     const std::string bytes = gseg::map::serializeScanUpdate(u);
-    EXPECT_EQ(bytes.substr(0, 4), "GSU3");
+    EXPECT_EQ(bytes.substr(0, 4), "GSU4");
     EXPECT_TRUE(gseg::map::deserializeScanUpdate(bytes) == u);
     EXPECT_FALSE(u.terrain.empty());  // the terrain model's samples (#31) travel too
-    // Versions 2 (no terrain samples) and 1 (no ground cells either) are still read; a cut list is refused.
+    EXPECT_GT(u.free.voxels(), 100u);
+    // Versions 3 (free voxels as codes), 2 (no terrain samples) and 1 (no ground cells either) are
+    // still read; a cut list is refused.
+    EXPECT_TRUE(gseg::map::deserializeScanUpdate(olderScanUpdateBytes(u, 3)) == u);
     gseg::map::ScanUpdate v2 = u;
     v2.terrain.clear();
-    std::string older = gseg::map::serializeScanUpdate(v2);
-    older = "GSU2" + older.substr(4, older.size() - 4 - 1);  // without the (empty) terrain list
-    EXPECT_TRUE(gseg::map::deserializeScanUpdate(older) == v2);
+    EXPECT_TRUE(gseg::map::deserializeScanUpdate(olderScanUpdateBytes(u, 2)) == v2);
     gseg::map::ScanUpdate v1 = v2;
     v1.groundCells.clear();
-    std::string old = gseg::map::serializeScanUpdate(v1);
-    old = "GSU1" + old.substr(4, old.size() - 4 - 2);  // without the (empty) ground-cell and terrain lists
-    EXPECT_TRUE(gseg::map::deserializeScanUpdate(old) == v1);
+    EXPECT_TRUE(gseg::map::deserializeScanUpdate(olderScanUpdateBytes(u, 1)) == v1);
     EXPECT_THROW(gseg::map::deserializeScanUpdate(bytes.substr(0, bytes.size() - 3)), std::runtime_error);
 }
 

@@ -152,10 +152,12 @@ void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const st
     for (const Run& r : free) {
         if (r.shard != shard) continue;
         Brick& b = bricks_[r.brick];
-        forEachWord(r.from, r.to, [&](unsigned w, std::uint64_t bits) {
+        for (unsigned w = 0; w < 8; ++w) {
+            const std::uint64_t bits = r.from[w];
+            if (!bits) continue;
             updateWord(b.map[kGround], w, bits, l_.miss, true, groundPool, groundBits);
             updateWord(b.map[kObstacles], w, bits, l_.miss, false, obstaclePool, obstacleBits);
-        });
+        }
         collapseIfUniform(b.map[kGround], groundPool);
         collapseIfUniform(b.map[kObstacles], obstaclePool);
     }
@@ -176,7 +178,7 @@ void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const st
     }
 }
 
-void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
+void BrickMap::applyScan(const VoxelBricks& free, const std::vector<std::uint64_t>& groundHits,
                          const std::vector<std::uint64_t>& obstacleHits) {
     // First, on this thread, every brick the scan touches (made in list order: the same bricks in
     // the same order as one voxel at a time), as runs: the codes of one brick are consecutive in
@@ -199,11 +201,17 @@ void BrickMap::applyScan(const std::vector<std::uint64_t>& free, const std::vect
     std::vector<Run>& freeRuns = runs_[0];  // kept between scans (their memory)
     std::vector<Run>& groundRuns = runs_[1];
     std::vector<Run>& obstacleRuns = runs_[2];
-    runsOf(free, freeRuns);
+    freeRuns.clear();
+    for (std::size_t i = 0; i < free.bricks.size(); ++i) {
+        const std::uint64_t brick = free.bricks[i];
+        if (!(owned_ >> shardOf(brick) & 1)) continue;  // another process's brick (setOwnedShards())
+        const Brick& b = brickOf(brick);
+        freeRuns.push_back({std::uint32_t(&b - bricks_.data()), shardOf(brick), &free.words[8 * i], &free.words[8 * i] + 8});
+    }
     runsOf(groundHits, groundRuns);
     runsOf(obstacleHits, obstacleRuns);
     auto part = [&](unsigned shard) { applyShard(shard, freeRuns, groundRuns, obstacleRuns); };
-    const std::size_t voxels = free.size() + groundHits.size() + obstacleHits.size();
+    const std::size_t voxels = free.voxels() + groundHits.size() + obstacleHits.size();
     const unsigned threads = voxels < 20000 ? 1u : std::min(threads_, kShards);  // small scans: not worth a thread
     if (threads <= 1) {
         for (unsigned k = 0; k < kShards; ++k) part(k);

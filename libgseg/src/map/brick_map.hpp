@@ -12,6 +12,8 @@
 /// the exact bytes of that tree. A word whose existing voxels all sit at the same clamping bound
 /// keeps one value instead of 64 (as OctoMap prunes such subtrees): most of a drive's free space.
 
+#include <gseg/map/scan_update.hpp>
+
 #include "../cpu_features.hpp"
 #include "map_tree.hpp"
 #include "voxel_keys.hpp"
@@ -60,9 +62,9 @@ public:
     void merge(const std::string& bytes);
 
     /// One scan: misses on `free` in both maps (ground: only where not occupied), hits on the
-    /// ground and obstacle voxels in their own map (which are remembered as ever obstacle). All
-    /// lists sorted.
-    void applyScan(const std::vector<std::uint64_t>& free, const std::vector<std::uint64_t>& groundHits,
+    /// ground and obstacle voxels in their own map (which are remembered as ever obstacle). The
+    /// hit lists sorted.
+    void applyScan(const VoxelBricks& free, const std::vector<std::uint64_t>& groundHits,
                    const std::vector<std::uint64_t>& obstacleHits);
 
     /// Log-odds of a voxel; false if it does not exist in that map.
@@ -170,7 +172,8 @@ private:
     /// word w in `bits`; `skipOccupied`: an occupied voxel keeps its value. A word with one value
     /// for all gets a block of 64 only where a voxel changes.
     void updateWord(Words& t, unsigned w, std::uint64_t bits, float delta, bool skipOccupied, Pool& pool, std::int32_t poolBits);
-    /// The voxels of one brick in one of a scan's lists (applyScan()).
+    /// The voxels of one brick in one of a scan's lists (applyScan()): codes [from, to) of a hit
+    /// list, or the brick's eight words of the free set (`from`).
     struct Run {
         std::uint32_t brick;       ///< position in bricks_
         std::uint32_t shard;

@@ -431,11 +431,15 @@ private:
 
 // ---- byte encoding (gseg/io/bytes.hpp) ----
 
+/// Brick codes hold the 48-bit Morton codes' upper 39 bits.
+constexpr std::uint64_t kBrickLimit = 1ULL << 39;
+
 /// Reads the lists of a scan update; errors say "scan update: ...".
 class Reader {
 public:
     Reader(const std::string& s, std::size_t start) : in_(s, "scan update", start) {}
     std::uint64_t varint() { return in_.varint(); }
+    std::uint8_t byte() { return in_.u8(); }
     std::uint64_t raw64() { return in_.u64(); }
     double real64() { return in_.f64(); }
     float real32() { return in_.f32(); }
@@ -447,6 +451,28 @@ public:
         std::uint64_t prev = 0;
         for (auto& c : out) prev = c = prev + varint();
         return out;
+    }
+    /// writeBricks()'s set: bricks increasing, none empty, within the Morton codes' range.
+    VoxelBricks bricks() {
+        const std::uint64_t n = varint();
+        if (n > in_.remaining() / 10) throw std::runtime_error("scan update: list longer than the data");
+        VoxelBricks v;
+        v.bricks.resize(n), v.words.assign(8 * n, 0);
+        std::uint64_t prev = 0;
+        for (std::uint64_t b = 0; b < n; ++b) {
+            const std::uint64_t delta = varint();
+            if (b > 0 && delta == 0) throw std::runtime_error("scan update: bricks out of order");
+            if (delta >= kBrickLimit - prev) throw std::runtime_error("scan update: brick out of range");
+            prev = v.bricks[b] = prev + delta;
+            const unsigned present = byte();
+            if (present == 0) throw std::runtime_error("scan update: empty brick");
+            for (unsigned k = 0; k < 8; ++k)
+                if (present >> k & 1) {
+                    v.words[8 * b + k] = raw64();
+                    if (v.words[8 * b + k] == 0) throw std::runtime_error("scan update: empty word");
+                }
+        }
+        return v;
     }
     std::vector<GroundCellSample> groundCells() {
         const std::uint64_t n = varint();
@@ -484,9 +510,48 @@ private:
     io::ByteReader in_;
 };
 
-const char kMagic[] = "GSU3", kMagicV2[] = "GSU2", kMagicV1[] = "GSU1";
+const char kMagic[] = "GSU4", kMagicV3[] = "GSU3", kMagicV2[] = "GSU2", kMagicV1[] = "GSU1";
+
+void writeBricks(io::ByteWriter& out, const VoxelBricks& v) {
+    out.varint(v.bricks.size());
+    std::uint64_t prev = 0;
+    for (std::size_t b = 0; b < v.bricks.size(); ++b) {
+        out.varint(v.bricks[b] - prev), prev = v.bricks[b];
+        const std::uint64_t* w = &v.words[8 * b];
+        unsigned present = 0;
+        for (unsigned k = 0; k < 8; ++k) present |= unsigned(w[k] != 0) << k;
+        out.u8(std::uint8_t(present));
+        for (unsigned k = 0; k < 8; ++k)
+            if (w[k]) out.u64(w[k]);
+    }
+}
 
 }  // namespace
+
+std::size_t VoxelBricks::voxels() const {
+    std::size_t n = 0;
+    for (std::uint64_t w : words) n += std::size_t(__builtin_popcountll(w));
+    return n;
+}
+
+std::vector<std::uint64_t> VoxelBricks::codes() const {
+    std::vector<std::uint64_t> out;
+    out.reserve(voxels());
+    for (std::size_t b = 0; b < bricks.size(); ++b)
+        for (std::uint64_t w = 0; w < 8; ++w)
+            for (std::uint64_t bits = words[8 * b + w]; bits; bits &= bits - 1)
+                out.push_back((bricks[b] << 9) | (w << 6) | std::uint64_t(__builtin_ctzll(bits)));
+    return out;
+}
+
+VoxelBricks VoxelBricks::fromCodes(const std::vector<std::uint64_t>& codes) {
+    VoxelBricks v;
+    for (std::uint64_t c : codes) {
+        if (v.bricks.empty() || v.bricks.back() != c >> 9) v.bricks.push_back(c >> 9), v.words.resize(v.words.size() + 8, 0);
+        v.words[v.words.size() - 8 + ((c >> 6) & 7)] |= 1ULL << (c & 63);
+    }
+    return v;
+}
 
 bool ScanUpdate::operator==(const ScanUpdate& o) const {
     return origin == o.origin && free == o.free && groundHits == o.groundHits && obstacleHits == o.obstacleHits &&
@@ -510,7 +575,7 @@ ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacle
     caster.collect(obstacles, caster.obstacleHits(), u);
     caster.castRays();
     u.rays = caster.rays();
-    u.free = caster.crossed().sortedCodes({&caster.groundHits(), &caster.obstacleHits()});
+    caster.crossed().sortedBricks(u.free.bricks, u.free.words, {&caster.groundHits(), &caster.obstacleHits()});
     u.groundHits = caster.groundHits().sortedCodes();
     u.obstacleHits = caster.obstacleHits().sortedCodes();
     u.groundCells = caster.groundCells(ground);
@@ -523,7 +588,8 @@ std::string serializeScanUpdate(const ScanUpdate& u) {
     out.raw(kMagic, 4);
     for (int a = 0; a < 3; ++a) out.f64(u.origin[a]);
     for (std::uint64_t v : {u.groundPoints, u.obstaclePoints, u.rays, u.pointsSkipped}) out.varint(v);
-    for (const auto* list : {&u.free, &u.groundHits, &u.obstacleHits}) {
+    writeBricks(out, u.free);
+    for (const auto* list : {&u.groundHits, &u.obstacleHits}) {
         out.varint(list->size());
         std::uint64_t prev = 0;
         for (std::uint64_t c : *list) out.varint(c - prev), prev = c;
@@ -545,13 +611,13 @@ std::string serializeScanUpdate(const ScanUpdate& u) {
 }
 
 ScanUpdate deserializeScanUpdate(const std::string& bytes) {
-    const bool v1 = bytes.compare(0, 4, kMagicV1) == 0, v2 = bytes.compare(0, 4, kMagicV2) == 0;
-    if (!v1 && !v2 && bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
+    const bool v1 = bytes.compare(0, 4, kMagicV1) == 0, v2 = bytes.compare(0, 4, kMagicV2) == 0, v3 = bytes.compare(0, 4, kMagicV3) == 0;
+    if (!v1 && !v2 && !v3 && bytes.compare(0, 4, kMagic) != 0) throw std::runtime_error("scan update: not a gseg scan update (bad magic)");
     ScanUpdate u;
     Reader in(bytes, 4);
     for (int a = 0; a < 3; ++a) u.origin[a] = in.real64();
     u.groundPoints = in.varint(), u.obstaclePoints = in.varint(), u.rays = in.varint(), u.pointsSkipped = in.varint();
-    u.free = in.codes();
+    u.free = v1 || v2 || v3 ? VoxelBricks::fromCodes(in.codes()) : in.bricks();
     u.groundHits = in.codes();
     u.obstacleHits = in.codes();
     if (!v1) u.groundCells = in.groundCells();

@@ -239,7 +239,21 @@ ScanUpdate takeVoxels(ScanUpdate& u, int rank, int ranks) {
         }
         from.resize(kept);
     };
-    take(u.free, part.free, false);
+    {  // the free bricks
+        std::size_t kept = 0;
+        for (std::size_t b = 0; b < u.free.bricks.size(); ++b) {
+            const std::uint64_t* words = &u.free.words[8 * b];
+            if (mine[u.free.bricks[b] & 3]) {
+                part.free.bricks.push_back(u.free.bricks[b]);
+                part.free.words.insert(part.free.words.end(), words, words + 8);
+            } else {
+                u.free.bricks[kept] = u.free.bricks[b];
+                std::copy(words, words + 8, u.free.words.begin() + std::ptrdiff_t(8 * kept));
+                ++kept;
+            }
+        }
+        u.free.bricks.resize(kept), u.free.words.resize(8 * kept);
+    }
     take(u.groundHits, part.groundHits, false);
     take(u.obstacleHits, part.obstacleHits, true);
     return part;

@@ -191,6 +191,27 @@ public:
             for (int w = 0; w < 8; ++w) m[std::size_t(w)] |= other.masks_[b][std::size_t(w)];
         }
     }
+    /// The voxels of this set that are in none of `minus`, brick by brick: the bricks left with a
+    /// voxel in increasing order (`bricks`), eight words each (`words`).
+    void sortedBricks(std::vector<std::uint64_t>& bricks, std::vector<std::uint64_t>& words,
+                      const std::vector<const BrickSet*>& minus = {}) const {
+        std::vector<std::uint32_t> order(bricks_.size());
+        for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bricks_[a] < bricks_[b]; });
+        bricks.clear(), words.clear();
+        bricks.reserve(order.size()), words.reserve(8 * order.size());
+        for (std::uint32_t b : order) {
+            std::array<std::uint64_t, 8> m = masks_[b];
+            for (const BrickSet* other : minus) {
+                const long o = other->index_.find(bricks_[b]);
+                if (o < 0) continue;
+                for (int w = 0; w < 8; ++w) m[std::size_t(w)] &= ~other->masks_[std::size_t(o)][std::size_t(w)];
+            }
+            if ((m[0] | m[1] | m[2] | m[3] | m[4] | m[5] | m[6] | m[7]) == 0) continue;
+            bricks.push_back(bricks_[b]);
+            words.insert(words.end(), m.begin(), m.end());
+        }
+    }
     /// The voxels of this set that are in none of `minus`, as sorted Morton codes.
     std::vector<std::uint64_t> sortedCodes(const std::vector<const BrickSet*>& minus = {}) const {
         std::vector<std::uint32_t> order(bricks_.size());

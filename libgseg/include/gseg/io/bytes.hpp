@@ -17,7 +17,13 @@ namespace gseg::io {
 class ByteWriter {
 public:
     ByteWriter& u64(std::uint64_t v) {
-        for (int i = 0; i < 8; ++i) bytes_.push_back(char((v >> (8 * i)) & 0xFF));
+        char b[8];
+        for (int i = 0; i < 8; ++i) b[i] = char((v >> (8 * i)) & 0xFF);
+        bytes_.append(b, 8);
+        return *this;
+    }
+    ByteWriter& u8(std::uint8_t v) {
+        bytes_.push_back(char(v));
         return *this;
     }
     ByteWriter& u32(std::uint32_t v) {
@@ -68,6 +74,10 @@ public:
         for (int i = 0; i < 8; ++i) v |= std::uint64_t(static_cast<unsigned char>(bytes_[pos_ + std::size_t(i)])) << (8 * i);
         pos_ += 8;
         return v;
+    }
+    std::uint8_t u8() {
+        need(1);
+        return std::uint8_t(bytes_[pos_++]);
     }
     std::uint32_t u32() {
         need(4);

@@ -38,10 +38,27 @@ struct GroundCellSample {
     }
 };
 
+/// A set of voxels as bricks of 8 x 8 x 8 (Morton code >> 9: the OctoMap subtrees three levels
+/// above the leaves), in increasing order, each with eight words of 64 voxels: bit v of word w is
+/// the voxel whose last nine Morton bits are 64 w + v. No brick is empty. A scan's free space is a
+/// few hundred thousand voxels in a few ten thousand bricks: kept this way from the ray casting to
+/// the map update (and between processes), it is never listed voxel by voxel.
+struct VoxelBricks {
+    std::vector<std::uint64_t> bricks;  ///< brick codes, increasing
+    std::vector<std::uint64_t> words;   ///< eight per brick
+
+    bool empty() const { return bricks.empty(); }
+    std::size_t voxels() const;                ///< how many voxels
+    std::vector<std::uint64_t> codes() const;  ///< the voxels' Morton codes, increasing
+    /// The set of `codes` (sorted).
+    static VoxelBricks fromCodes(const std::vector<std::uint64_t>& codes);
+    bool operator==(const VoxelBricks& o) const { return bricks == o.bricks && words == o.words; }
+};
+
 /// The per-scan result: a plain value (serialisable with serializeScanUpdate()).
 struct ScanUpdate {
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< [m] sensor position, world frame
-    std::vector<std::uint64_t> free;          ///< voxels crossed by a ray and holding no hit of this scan (sorted)
+    VoxelBricks free;                         ///< voxels crossed by a ray and holding no hit of this scan
     std::vector<std::uint64_t> groundHits;    ///< voxels holding a ground point within maxRange (sorted)
     std::vector<std::uint64_t> obstacleHits;  ///< voxels holding an obstacle point within maxRange (sorted)
     std::uint64_t groundPoints = 0;           ///< ground points given
@@ -62,10 +79,10 @@ struct ScanUpdate {
 ScanUpdate castScan(const PointCloudView& ground, const PointCloudView& obstacles, const Eigen::Vector3d& sensorOrigin,
                     const TraversabilityOptions& options);
 
-/// A compact byte string of the update (sorted codes delta-encoded as varints), for sending the
-/// per-scan result to another process. Little-endian, versioned: "GSU3" (with groundCells and the
-/// terrain samples); deserializeScanUpdate() also reads "GSU2" (no terrain samples) and "GSU1" (no
-/// ground cells either).
+/// A compact byte string of the update (sorted codes and bricks delta-encoded as varints, the
+/// free bricks' nonzero words as they are), for sending the per-scan result to another process.
+/// Little-endian, versioned: "GSU4" (free space as bricks); deserializeScanUpdate() also reads
+/// "GSU3" (free space as codes), "GSU2" (no terrain samples either) and "GSU1" (no ground cells).
 std::string serializeScanUpdate(const ScanUpdate& update);
 /// Inverse of serializeScanUpdate(). Throws std::runtime_error on a truncated or malformed string.
 ScanUpdate deserializeScanUpdate(const std::string& bytes);
