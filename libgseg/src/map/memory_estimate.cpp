@@ -26,7 +26,7 @@ constexpr double kStepsPerCell = 1.3;
 
 // Bytes per unit, from the data structures (brick_map.hpp, voxel_keys.hpp), times what the
 // calibration on the sequence-00 scans added (allocator slack, vectors at twice their size).
-constexpr double kBytesPerListedVoxel = 8 * 1.5;   // a scan's sorted voxel codes (free list), grown by doubling
+constexpr double kBytesPerFreeBrick = 8 + 64;      // a scan's free space (VoxelBricks): code and 512 bits
 constexpr double kBytesPerCastBrick = 110 * 1.5;   // a ray caster's brick set: code, 512 bits, hash slot
 constexpr double kBytesPerMapBrick = 390;          // a map brick: two maps' words, the ever-obstacle bits, code, index
 constexpr double kBytesPerMapWord = 2 * 256;       // a word of 64 values in each of the two maps
@@ -36,6 +36,12 @@ constexpr double kProcessBytes = 100e6;            // the process before any sca
 // MB at 0.1 m, of which the two more scans in flight explain 1, 9 and 46 MB; the rest, about 25 MB
 // whatever the resolution, is the worker's segmenter and its malloc arena, kept between scans.
 constexpr double kWorkerBytes = 25e6;
+// Each worker's ray caster marks the voxels near the sensor in a bit cube of 512 voxels a side
+// (scan_update.cpp): 16 MB of zeroed pages, resident where rays marked them: about a page (64
+// bricks' bits) per brick crossed, as the crossed bricks are spread, up to the whole cube (0.1 m
+// and finer, where the cube spans less than the rays).
+constexpr double kCastWindowBytes = double(1ULL << 27) / 8;
+constexpr double kCastWindowPerBrick = 4096;
 // Calibration (peak RSS of rawlog-octomap, six sequence-00 scans, 2 workers, 0.2 to 0.04 m):
 constexpr double kInFlightShare = 0.35;   // at the peak about a third of the scans in flight hold full voxel lists
 constexpr double kSparseGrowth = 0.06;    // of a scan's sparse cells, new in the next one (scans 0.7 m apart)
@@ -113,10 +119,11 @@ RayFootprint rayFootprint(const PointCloudView& points, const Eigen::Vector3d& s
 
 MemoryEstimate estimateMemory(const RayFootprint& f) {
     MemoryEstimate e;
-    e.process = kProcessBytes;
-    e.perWorker = kWorkerBytes;
+    const double window = std::min(kCastWindowBytes, kCastWindowPerBrick * f.bricks);
+    e.process = kProcessBytes + window;
+    e.perWorker = kWorkerBytes + window;
     e.firstOccupied = double(f.endVoxels);
-    e.perScan = kInFlightShare * (kBytesPerListedVoxel * f.voxels + kBytesPerCastBrick * f.bricks);
+    e.perScan = kInFlightShare * (kBytesPerFreeBrick + kBytesPerCastBrick) * f.bricks;
     e.firstMap = kBytesPerMapBrick * f.bricks + kBytesPerMapWord * f.words;
     e.growthPerScan = kSparseGrowth * (kBytesPerMapBrick * f.sparseBricks + kBytesPerMapWord * f.sparseWords) + kMapGrowth * e.firstMap;
     return e;

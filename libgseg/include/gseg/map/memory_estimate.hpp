@@ -10,8 +10,9 @@
 /// cells; N(r) rays are longer than r. Where N(r) exceeds the cells, every cell of the shell is
 /// crossed (saturated: the same cells again for the next scans, which see the same space); beyond,
 /// each ray crosses cells of its own (sparse: new cells for every scan, at fine resolutions nearly
-/// all of them). Counted for voxels (c = resolution: a scan's list of crossed voxels), words of
-/// 4x4x4 voxels (the maps' value blocks) and bricks of 8x8x8 (the maps' and the ray caster's unit),
+/// all of them). Counted for voxels (c = resolution: the voxels a scan crosses), words of 4x4x4
+/// voxels (the maps' value blocks) and bricks of 8x8x8 (the maps', the ray caster's and a scan's
+/// free space's unit),
 /// with bytes per unit from the map layer's data structures, the estimate was calibrated against
 /// the peak resident memory of rawlog-octomap on the six SemanticKITTI sequence-00 scans (README,
 /// Robustness): within 25 % at 0.2, 0.1 and 0.05 m while integrating; a worker thread beyond the
@@ -47,7 +48,7 @@ RayFootprint rayFootprint(const PointCloudView& points, const Eigen::Vector3d& s
 /// [bytes] The parts of a run's memory.
 struct MemoryEstimate {
     double process = 0;      ///< the process before any scan (libraries, segmenters): a constant
-    double perScan = 0;      ///< one scan in flight: its voxel lists and the caster's brick sets
+    double perScan = 0;      ///< one scan in flight: its free bricks and the caster's brick sets
     double firstMap = 0;     ///< the maps after the first scan
     double growthPerScan = 0;  ///< the maps grow by this with every further scan
     /// Each worker thread beyond the first (whose share `process` holds): its segmenter's and ray
