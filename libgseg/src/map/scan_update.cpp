@@ -15,7 +15,6 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_map>
 #include <algorithm>
 #include <array>
 

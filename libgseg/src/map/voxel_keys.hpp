@@ -152,16 +152,6 @@ public:
         word |= bit;
         return added;
     }
-    /// Adds the voxels codes[0, n) (a ray's: consecutive ones mostly share a brick).
-    void insertAll(const std::uint64_t* codes, std::size_t n) {
-        std::uint64_t brick = CodeIndex::kEmpty;
-        std::uint64_t* words = nullptr;
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::uint64_t c = codes[i];
-            if (c >> 9 != brick) brick = c >> 9, words = maskOf(brick).data();
-            words[(c >> 6) & 7] |= 1ULL << (c & 63);
-        }
-    }
     bool contains(std::uint64_t code) const {
         const long b = index_.find(code >> 9);
         return b >= 0 && (masks_[std::size_t(b)][(code >> 6) & 7] >> (code & 63) & 1);
@@ -214,25 +204,12 @@ public:
     }
     /// The voxels of this set that are in none of `minus`, as sorted Morton codes.
     std::vector<std::uint64_t> sortedCodes(const std::vector<const BrickSet*>& minus = {}) const {
-        std::vector<std::uint32_t> order(bricks_.size());
-        for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return bricks_[a] < bricks_[b]; });
-        std::size_t bound = 0;  // every voxel of this set: room enough, one allocation
-        for (const auto& m : masks_)
-            for (std::uint64_t w : m) bound += std::size_t(__builtin_popcountll(w));
-        std::vector<std::uint64_t> out;
-        out.reserve(bound);
-        for (std::uint32_t b : order) {
-            std::array<std::uint64_t, 8> m = masks_[b];
-            for (const BrickSet* other : minus) {
-                const long o = other->index_.find(bricks_[b]);
-                if (o < 0) continue;
-                for (int w = 0; w < 8; ++w) m[std::size_t(w)] &= ~other->masks_[std::size_t(o)][std::size_t(w)];
-            }
+        std::vector<std::uint64_t> bricks, words, out;
+        sortedBricks(bricks, words, minus);
+        for (std::size_t b = 0; b < bricks.size(); ++b)
             for (std::uint64_t w = 0; w < 8; ++w)
-                for (std::uint64_t bits = m[w]; bits; bits &= bits - 1)
-                    out.push_back((bricks_[b] << 9) | (w << 6) | std::uint64_t(__builtin_ctzll(bits)));
-        }
+                for (std::uint64_t bits = words[8 * b + w]; bits; bits &= bits - 1)
+                    out.push_back((bricks[b] << 9) | (w << 6) | std::uint64_t(__builtin_ctzll(bits)));
         return out;
     }
 
