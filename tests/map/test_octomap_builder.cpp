@@ -548,6 +548,13 @@ TEST(OctomapBuilder, MalformedFreeBricksAreRefused) {
              [](auto& o) { o.varint(1000).varint(5).u8(1).u64(1); },                     // more bricks than bytes
          })
         EXPECT_THROW(gseg::map::deserializeScanUpdate(bytesWith(bad)), std::runtime_error);
+    // The versions before (free voxels as codes): a code beyond 48 bits, or a list that wraps, is refused too.
+    for (const std::uint64_t second : {1ULL << 48, ~0ULL}) {
+        gseg::io::ByteWriter old;
+        old.raw("GSU3", 4).f64(0).f64(0).f64(0).varint(0).varint(0).varint(0).varint(0);
+        old.varint(2).varint(5).varint(second).varint(0).varint(0).varint(0).varint(0);
+        EXPECT_THROW(gseg::map::deserializeScanUpdate(old.take()), std::runtime_error) << second;
+    }
 }
 
 TEST(OctomapBuilder, NoOccupiedVoxelStillWritesReadableMaps) {

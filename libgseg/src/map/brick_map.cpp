@@ -181,8 +181,9 @@ void BrickMap::applyShard(unsigned shard, const std::vector<Run>& free, const st
 void BrickMap::applyScan(const VoxelBricks& free, const std::vector<std::uint64_t>& groundHits,
                          const std::vector<std::uint64_t>& obstacleHits) {
     // First, on this thread, every brick the scan touches (made in list order: the same bricks in
-    // the same order as one voxel at a time), as runs: the codes of one brick are consecutive in
-    // a sorted list. Then the shards, each on one thread (both maps of its bricks).
+    // the same order as one voxel at a time), as runs: a free brick's eight words, or the codes of
+    // one brick, consecutive in a sorted hit list. Then the shards, each on one thread (both maps
+    // of its bricks).
     auto runsOf = [&](const std::vector<std::uint64_t>& codes, std::vector<Run>& runs) {
         runs.clear();
         for (std::size_t i = 0; i < codes.size();) {

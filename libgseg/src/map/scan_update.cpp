@@ -430,8 +430,8 @@ private:
 
 // ---- byte encoding (gseg/io/bytes.hpp) ----
 
-/// Brick codes hold the 48-bit Morton codes' upper 39 bits.
-constexpr std::uint64_t kBrickLimit = 1ULL << 39;
+/// Morton codes of 16-bit keys hold 48 bits; brick codes their upper 39.
+constexpr std::uint64_t kCodeLimit = 1ULL << 48, kBrickLimit = kCodeLimit >> 9;
 
 /// Reads the lists of a scan update; errors say "scan update: ...".
 class Reader {
@@ -448,7 +448,11 @@ public:
         if (n > in_.remaining()) throw std::runtime_error("scan update: list longer than the data");
         std::vector<std::uint64_t> out(n);
         std::uint64_t prev = 0;
-        for (auto& c : out) prev = c = prev + varint();
+        for (auto& c : out) {
+            const std::uint64_t delta = varint();
+            if (delta >= kCodeLimit - prev) throw std::runtime_error("scan update: voxel out of range");
+            prev = c = prev + delta;
+        }
         return out;
     }
     /// writeBricks()'s set: bricks increasing, none empty, within the Morton codes' range.
