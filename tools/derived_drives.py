@@ -2,6 +2,7 @@
 """Drives you do not have, derived from the labelled ones: a check that a map rule generalises.
 
   tools/derived_drives.py make OUT SEQ...       derived drive folders in OUT
+  tools/derived_drives.py frames OUT SEQ...     a one-frame drive in OUT of every labelled scan of SEQ
   tools/derived_drives.py score OUT BIN CONFIG  map every drive in OUT with BIN/rawlog-octomap and
                                                 CONFIG, score it with ../shared/tools/score_map.py
 
@@ -14,6 +15,10 @@ five drives the shared data does not have:
   NNlowz  the sensor 0.5 m lower (every point's z + 0.5 in the sensor frame, poses unchanged);
           `score` maps it with distToGround: auto (CONFIG's copy, which must hold a fixed height)
   NNhighz the sensor 0.5 m higher (z - 0.5; a van's or truck's roof), mapped as lowz is
+`frames` writes, for each labelled scan of a sequence folder SEQ (velodyne/X.bin with
+labels/X.label, no poses needed: e.g. ../shared/data/semantickitti-extra/sequences/10), a drive of
+that one frame, named sSEQ_X (the identity pose and calibration): the scans of sequences, scenes and
+terrain no labelled drive has, mapped from one scan (the model grows from that scan's own ground).
 Labels travel with their points; score_map.py's truth comes from the derived points, so each drive
 is scored against what its own sensor saw. `score` prints one line per drive: traversable
 precision, recall, unsafe beyond one cell [%], then the mean and worst over the drives.
@@ -87,6 +92,38 @@ def derive(seq, final, mode):
     os.rename(out, final)
 
 
+def frames(out, seqs):
+    """One-frame drives of every labelled scan of each sequence folder (written beside, renamed at
+    the end, as derive() does)."""
+    for seq in seqs:
+        name = os.path.basename(os.path.normpath(seq))
+        velodyne, labels = os.path.join(seq, 'velodyne'), os.path.join(seq, 'labels')
+        if not os.path.isdir(velodyne) or not os.path.isdir(labels):
+            sys.exit(f'{seq}: no velodyne/ and labels/ (a labelled KITTI sequence folder)')
+        scans = sorted(f[:-4] for f in os.listdir(velodyne) if f.endswith('.bin') and os.path.exists(os.path.join(labels, f[:-4] + '.label')))
+        if not scans:
+            sys.exit(f'{seq}: no scan with its labels')
+        for k in scans:
+            final = os.path.join(out, f's{name}_{k}')
+            if os.path.exists(final):
+                sys.exit(f'{final} exists: remove it or give another OUT')
+            points, lab = os.path.getsize(os.path.join(velodyne, k + '.bin')), os.path.getsize(os.path.join(labels, k + '.label'))
+            if points != 4 * lab:
+                sys.exit(f'{seq}: scan {k}: {points // 16} points but {lab // 4} labels')
+            part = final + '.partial'
+            shutil.rmtree(part, ignore_errors=True)
+            os.makedirs(os.path.join(part, 'velodyne'))
+            os.makedirs(os.path.join(part, 'labels'))
+            shutil.copy(os.path.join(velodyne, k + '.bin'), os.path.join(part, 'velodyne', '000000.bin'))
+            shutil.copy(os.path.join(labels, k + '.label'), os.path.join(part, 'labels', '000000.label'))
+            identity = '1 0 0 0 0 1 0 0 0 0 1 0'
+            open(os.path.join(part, 'poses.txt'), 'w').write(identity + '\n')
+            open(os.path.join(part, 'calib.txt'), 'w').write(f'Tr: {identity}\n')
+            open(os.path.join(part, 'times.txt'), 'w').write('0.0\n')
+            os.rename(part, final)
+            print(f's{name}_{k}', flush=True)
+
+
 def make(out, seqs):
     for seq in seqs:
         name = os.path.basename(os.path.normpath(seq))
@@ -123,6 +160,8 @@ if __name__ == '__main__':
     a = sys.argv[1:]
     if len(a) >= 3 and a[0] == 'make':
         make(a[1], a[2:])
+    elif len(a) >= 3 and a[0] == 'frames':
+        frames(a[1], a[2:])
     elif len(a) == 4 and a[0] == 'score':
         score(a[1], a[2], a[3])
     else:

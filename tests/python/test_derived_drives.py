@@ -71,3 +71,25 @@ def test_an_existing_derived_drive_is_not_replaced(tmp_path):
     r = subprocess.run([sys.executable, str(TOOL), "make", str(tmp_path / "d"), str(seq)], capture_output=True, text=True)
     assert r.returncode != 0 and "exists" in r.stderr
     assert (tmp_path / "d" / "00r2" / "keep").read_text() == "x"
+
+
+def test_one_frame_drives_of_the_labelled_scans_of_a_sequence(tmp_path):
+    seq = tmp_path / "10"
+    _drive(seq, frames=2)
+    (seq / "poses.txt").unlink()  # scans without poses (as semantickitti-extra's)
+    (seq / "velodyne" / "000002.bin").write_bytes(b"")  # a scan without labels is not one
+    out = tmp_path / "frames"
+    r = subprocess.run([sys.executable, str(TOOL), "frames", str(out), str(seq)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["s10_000000", "s10_000001"]
+    p, lab = _read(out / "s10_000001", 0)
+    p0, lab0 = _read(seq, 1)
+    assert np.array_equal(p, p0) and np.array_equal(lab, lab0)
+    assert (out / "s10_000001" / "poses.txt").read_text() == "1 0 0 0 0 1 0 0 0 0 1 0\n"
+    assert (out / "s10_000001" / "calib.txt").read_text().startswith("Tr: 1 0 0 0 0 1 0 0 0 0 1 0")
+    again = subprocess.run([sys.executable, str(TOOL), "frames", str(out), str(seq)], capture_output=True, text=True)
+    assert again.returncode != 0 and "exists" in again.stderr
+    np.zeros(5, np.uint32).tofile(seq / "labels" / "000000.label")
+    bad = subprocess.run([sys.executable, str(TOOL), "frames", str(tmp_path / "f2"), str(seq)], capture_output=True, text=True)
+    assert bad.returncode != 0 and "1200 points but 5 labels" in bad.stderr
+    assert not (tmp_path / "f2" / "s10_000000").exists()

@@ -60,7 +60,7 @@ void fillGaps(LayerTiles& g, const TraversabilityOptions& o, const ObstacleColum
     const float trav = float(ColumnClass::Traversable);
     struct Fill {
         std::int64_t ix, iy;
-        float z, slopeDeg, clearance;
+        float z, slopeDeg;
     };
     std::vector<Fill> fills;
     forEachCell(g, candidates, [&](std::int64_t cx, std::int64_t cy) {
@@ -96,17 +96,18 @@ void fillGaps(LayerTiles& g, const TraversabilityOptions& o, const ObstacleColum
         // A ray passed over the interpolated ground within the robot's height, none went below it.
         if (!rayFree(column, bestZ, bestZ + float(o.clearance))) return;
         if (rayFree(column, bestZ - float(o.clearance), bestZ - float(o.maxStep))) return;
-        // Nothing stands in it: no obstacle voxel between minObstacleHeight and clearance above.
-        float lowest = std::numeric_limits<float>::infinity();
+        // Nothing stands in it: no obstacle voxel reaches higher than minObstacleHeight over that
+        // ground (its top, not its centre: the cell has no ground of its own to measure from). A
+        // column that returned something higher (a crown, a bush's top, a bridge) is not a gap:
+        // its ground was hidden, and whether what stood there reaches down no ray could say.
         if (const auto col = obstacles.find(column); col != obstacles.end())
             for (float z : col->second)
-                if (z > bestZ + o.minObstacleHeight) lowest = std::min(lowest, z - float(res / 2));
-        if (lowest - bestZ < o.clearance) return;
-        fills.push_back({cx, cy, bestZ, bestSlope, lowest - bestZ});
+                if (z + float(res / 2) > bestZ + o.minObstacleHeight) return;
+        fills.push_back({cx, cy, bestZ, bestSlope});
     });
     for (const Fill& f : fills) {
         g.at(kElevation, f.ix, f.iy) = f.z, g.at(kSlope, f.ix, f.iy) = f.slopeDeg, g.at(kClass, f.ix, f.iy) = trav;
-        g.at(kSource, f.ix, f.iy) = 2, g.at(kClearance, f.ix, f.iy) = f.clearance;
+        g.at(kSource, f.ix, f.iy) = 2, g.at(kClearance, f.ix, f.iy) = std::numeric_limits<float>::infinity();
         g.at(kCost, f.ix, f.iy) = float(std::min(99.0, std::floor(99.0 * f.slopeDeg / o.maxSlope)));
     }
 }

@@ -31,9 +31,10 @@
 /// body or a ledge whose top no ray reached, stays unknown). With fillGaps, an
 /// unknown cell that lies on a straight line (along x, y or a diagonal) between two traversable
 /// cells at most maxGapWidth apart (TraversabilityOptions::gapWidth()) becomes traversable (`source`
-/// 2, elevation interpolated, cost from the interpolated slope, clearance from its obstacle voxels)
-/// where the two ends differ by at most maxStep and maxSlope, no obstacle voxel stands between
-/// minObstacleHeight and clearance above that ground, a ray of the drive crossed the column between
+/// 2, elevation interpolated, cost from the interpolated slope, clearance infinite) where the two
+/// ends differ by at most maxStep and maxSlope, no obstacle voxel of the column reaches (its top)
+/// higher than minObstacleHeight above that ground (at any height: a column that returned a tree's
+/// crown or a bush's top is not a gap, its ground was hidden), a ray of the drive crossed the column between
 /// the interpolated ground and the clearance, and no ray crossed it more than maxStep below that
 /// ground (a ditch or a drop: rays went into it). The first known cell along a line ends the search
 /// (an obstacle between is never crossed).
