@@ -3,8 +3,11 @@
 
   tools/derived_drives.py make OUT SEQ...       derived drive folders in OUT
   tools/derived_drives.py frames OUT SEQ...     a one-frame drive in OUT of every labelled scan of SEQ
-  tools/derived_drives.py score OUT BIN CONFIG  map every drive in OUT with BIN/rawlog-octomap and
-                                                CONFIG, score it with ../shared/tools/score_map.py
+  tools/derived_drives.py score OUT BIN CONFIG [--single]
+                                                map every drive in OUT with BIN/rawlog-octomap and
+                                                CONFIG, score it with ../shared/tools/score_map.py;
+                                                --single: also without the drive's terrain model
+                                                (driveTerrain and fillGaps false), side by side
 
 `make` writes, for each labelled KITTI drive folder SEQ (velodyne/, labels/, poses.txt, calib.txt),
 five drives the shared data does not have:
@@ -21,7 +24,8 @@ that one frame, named sSEQ_X (the identity pose and calibration): the scans of s
 terrain no labelled drive has, mapped from one scan (the model grows from that scan's own ground).
 Labels travel with their points; score_map.py's truth comes from the derived points, so each drive
 is scored against what its own sensor saw. `score` prints one line per drive: traversable
-precision, recall, unsafe beyond one cell [%], then the mean and worst over the drives.
+precision, recall, unsafe beyond one cell [%] (with --single, the single-scan map's first), then the
+mean and worst over the drives.
 Writes only under OUT; the shared data is read in place.
 """
 import array, json, math, os, re, shutil, subprocess, sys
@@ -132,28 +136,43 @@ def make(out, seqs):
             print(f'{name}{mode}', flush=True)
 
 
-def score(out, bindir, config):
-    auto = os.path.join(out, 'config_auto_height.yaml')
+def score(out, bindir, config, single=False):
     text = open(config).read()
     if not re.search(r'^distToGround:\s*[0-9.]+', text, re.M):
         sys.exit(f'{config}: needs a fixed distToGround (the lowz and highz drives use a copy with auto)')
-    open(auto, 'w').write(re.sub(r'^distToGround:\s*[0-9.]+', 'distToGround: auto', text, count=1, flags=re.M))
+    configs = {'': text}
+    if single:
+        if not re.search(r'^\s*driveTerrain:', text, re.M) or not re.search(r'^\s*fillGaps:', text, re.M):
+            sys.exit(f'{config}: --single needs the keys driveTerrain and fillGaps in it')
+        configs = {'single_': re.sub(r'^(\s*(?:driveTerrain|fillGaps):)\s*\S+', r'\1 false', text, flags=re.M), '': text}
+    paths = {}
+    for tag, t in configs.items():
+        for auto in (False, True):
+            path = os.path.join(out, f'config_{tag}{"auto_height" if auto else "fixed_height"}.yaml')
+            open(path, 'w').write(re.sub(r'^distToGround:\s*[0-9.]+', 'distToGround: auto', t, count=1, flags=re.M) if auto else t)
+            paths[(tag, auto)] = path
     rows = []
     for d in sorted(e for e in os.listdir(out) if os.path.isdir(os.path.join(out, e, 'velodyne'))):
-        folder, rawlog, prefix = os.path.join(out, d), os.path.join(out, d + '.rawlog'), os.path.join(out, 'maps', d)
+        folder, rawlog = os.path.join(out, d), os.path.join(out, d + '.rawlog')
         os.makedirs(os.path.join(out, 'maps'), exist_ok=True)
         if not os.path.exists(rawlog):
             subprocess.run([os.path.join(bindir, 'kitti2rawlog'), '-q', '-w', '-i', folder, '-o', rawlog], check=True)
-        subprocess.run([os.path.join(bindir, 'rawlog-octomap'), '-q', '-w', '-i', rawlog, '-o', prefix,
-                        '-c', auto if d.endswith(('lowz', 'highz')) else config], check=True)
-        m = json.loads(subprocess.run([sys.executable, SCORER, folder, prefix + '_costmap.yaml', '--json'],
-                                      check=True, capture_output=True, text=True).stdout)['map']
-        rows.append((d, m['trav_P'], m['trav_R'], m['unsafe1']))
-        print(f'{d:8s} P {m["trav_P"]:6.2f}  R {m["trav_R"]:6.2f}  unsafe1 {m["unsafe1"]:5.2f} %', flush=True)
+        row = [d]
+        for tag in configs:
+            prefix = os.path.join(out, 'maps', tag + d)
+            subprocess.run([os.path.join(bindir, 'rawlog-octomap'), '-q', '-w', '-i', rawlog, '-o', prefix,
+                            '-c', paths[(tag, d.endswith(('lowz', 'highz')))]], check=True)
+            m = json.loads(subprocess.run([sys.executable, SCORER, folder, prefix + '_costmap.yaml', '--json'],
+                                          check=True, capture_output=True, text=True).stdout)['map']
+            row.append((m['trav_P'], m['trav_R'], m['unsafe1']))
+        rows.append(row)
+        print(f'{d:8s} ' + '  |  '.join(f'P {p:6.2f}  R {r:6.2f}  unsafe1 {u:5.2f} %' for p, r, u in row[1:]), flush=True)
     if rows:
         n = len(rows)
-        print(f'mean     P {sum(r[1] for r in rows) / n:6.2f}  R {sum(r[2] for r in rows) / n:6.2f}  '
-              f'worst: P {min(r[1] for r in rows):.2f}, R {min(r[2] for r in rows):.2f}, unsafe1 {max(r[3] for r in rows):.2f} %')
+        print('mean     ' + '  |  '.join(
+            f'P {sum(r[k][0] for r in rows) / n:6.2f}  R {sum(r[k][1] for r in rows) / n:6.2f}  '
+            f'worst: P {min(r[k][0] for r in rows):.2f}, R {min(r[k][1] for r in rows):.2f}, unsafe1 {max(r[k][2] for r in rows):.2f} %'
+            for k in range(1, len(configs) + 1)))
 
 
 if __name__ == '__main__':
@@ -162,7 +181,7 @@ if __name__ == '__main__':
         make(a[1], a[2:])
     elif len(a) >= 3 and a[0] == 'frames':
         frames(a[1], a[2:])
-    elif len(a) == 4 and a[0] == 'score':
-        score(a[1], a[2], a[3])
+    elif len(a) in (4, 5) and a[0] == 'score' and (len(a) == 4 or a[4] == '--single'):
+        score(a[1], a[2], a[3], single=len(a) == 5)
     else:
         sys.exit(__doc__)

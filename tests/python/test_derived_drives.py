@@ -1,9 +1,10 @@
-"""tools/derived_drives.py make: the drives it derives keep the right rings, frames and labels."""
+"""tools/derived_drives.py: the drives it derives (make, frames) keep the right rings, frames and labels; score maps them."""
 import pathlib
 import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 TOOL = pathlib.Path(__file__).resolve().parents[2] / "tools" / "derived_drives.py"
 
@@ -93,3 +94,32 @@ def test_one_frame_drives_of_the_labelled_scans_of_a_sequence(tmp_path):
     bad = subprocess.run([sys.executable, str(TOOL), "frames", str(tmp_path / "f2"), str(seq)], capture_output=True, text=True)
     assert bad.returncode != 0 and "1200 points but 5 labels" in bad.stderr
     assert not (tmp_path / "f2" / "s10_000000").exists()
+
+
+def test_score_single_maps_each_drive_alone_and_with_its_terrain_model(tmp_path):
+    from conftest import BIN, SHARED, SRC
+    seq = SHARED / "data/semantickitti-extra/sequences/10"
+    if not (seq / "velodyne/000000.bin").exists():
+        pytest.skip(f"{seq} is absent (the shared data is not beside this checkout)")
+    if not (BIN / "rawlog-octomap").exists():
+        pytest.skip(f"{BIN}/rawlog-octomap is not built")
+    work = tmp_path / "w"
+    (work / "velodyne").mkdir(parents=True)
+    (work / "labels").mkdir()
+    (work / "velodyne/000000.bin").write_bytes((seq / "velodyne/000000.bin").read_bytes())
+    (work / "labels/000000.label").write_bytes((seq / "labels/000000.label").read_bytes())
+    (work / "poses.txt").write_text("1 0 0 0 0 1 0 0 0 0 1 0\n")
+    (work / "calib.txt").write_text("Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "s10").symlink_to(work)
+    r = subprocess.run([sys.executable, str(TOOL), "score", str(out), str(BIN), str(SRC / "config/kitti_hdl64.yaml"), "--single"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    line = r.stdout.splitlines()[0]
+    assert line.startswith("s10 ") and line.count("|") == 1, line
+    single, model = ([float(x) for x in part.replace("%", "").split()[1::2][:3]] for part in line[4:].split("|"))
+    assert "driveTerrain: false" in (out / "config_single_fixed_height.yaml").read_text()
+    assert (out / "maps/single_s10_costmap.yaml").exists() and (out / "maps/s10_costmap.yaml").exists()
+    # One rural frame (sequence 10): the model finds ground the scan alone left out (89.1 -> 92.0).
+    assert model[1] > single[1] + 1, line
