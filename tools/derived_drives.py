@@ -47,18 +47,25 @@ def rings(p, n, min_ring_points=200):
     return out
 
 
-def derive(seq, final, mode):
-    """Writes the derived drive into a temporary folder beside `final`, renamed at the end: a failed
-    run leaves no half drive."""
-    for need in ('velodyne', 'labels', 'poses.txt', 'calib.txt'):
-        if not os.path.exists(os.path.join(seq, need)):
-            sys.exit(f'{seq}: no {need} (a labelled KITTI drive folder has velodyne/, labels/, poses.txt, calib.txt)')
+def begin(final):
+    """A drive is written into a temporary folder beside `final` (returned, with velodyne/ and
+    labels/), renamed to `final` at the end: a failed run leaves no half drive. An existing `final`
+    is refused."""
     if os.path.exists(final):
         sys.exit(f'{final} exists: remove it or give another OUT')
     out = final + '.partial'
     shutil.rmtree(out, ignore_errors=True)
     os.makedirs(os.path.join(out, 'velodyne'))
     os.makedirs(os.path.join(out, 'labels'))
+    return out
+
+
+def derive(seq, final, mode):
+    """Writes the derived drive (begin())."""
+    for need in ('velodyne', 'labels', 'poses.txt', 'calib.txt'):
+        if not os.path.exists(os.path.join(seq, need)):
+            sys.exit(f'{seq}: no {need} (a labelled KITTI drive folder has velodyne/, labels/, poses.txt, calib.txt)')
+    out = begin(final)
     frames = sorted(f[:-4] for f in os.listdir(os.path.join(seq, 'velodyne')) if f.endswith('.bin'))
     poses = [l for l in open(os.path.join(seq, 'poses.txt')).read().splitlines() if l.strip()]
     if len(poses) < len(frames):
@@ -97,8 +104,7 @@ def derive(seq, final, mode):
 
 
 def frames(out, seqs):
-    """One-frame drives of every labelled scan of each sequence folder (written beside, renamed at
-    the end, as derive() does)."""
+    """One-frame drives of every labelled scan of each sequence folder (begin())."""
     for seq in seqs:
         name = os.path.basename(os.path.normpath(seq))
         velodyne, labels = os.path.join(seq, 'velodyne'), os.path.join(seq, 'labels')
@@ -109,15 +115,10 @@ def frames(out, seqs):
             sys.exit(f'{seq}: no scan with its labels')
         for k in scans:
             final = os.path.join(out, f's{name}_{k}')
-            if os.path.exists(final):
-                sys.exit(f'{final} exists: remove it or give another OUT')
             points, lab = os.path.getsize(os.path.join(velodyne, k + '.bin')), os.path.getsize(os.path.join(labels, k + '.label'))
             if points != 4 * lab:
                 sys.exit(f'{seq}: scan {k}: {points // 16} points but {lab // 4} labels')
-            part = final + '.partial'
-            shutil.rmtree(part, ignore_errors=True)
-            os.makedirs(os.path.join(part, 'velodyne'))
-            os.makedirs(os.path.join(part, 'labels'))
+            part = begin(final)
             shutil.copy(os.path.join(velodyne, k + '.bin'), os.path.join(part, 'velodyne', '000000.bin'))
             shutil.copy(os.path.join(labels, k + '.label'), os.path.join(part, 'labels', '000000.label'))
             identity = '1 0 0 0 0 1 0 0 0 0 1 0'
