@@ -24,6 +24,10 @@ const OptionTable<TraversabilityOptions>& table() {
              "obstacle voxels higher than this above the column's ground do not block it (branches, bridges); the robot's minimum clearance"},
             {"minGroundPoints", &O::minGroundPoints, "points", "ground points (whole drive) a cell needs for an elevation, >= 1"},
             {"maxSlope", &O::maxSlope, "deg", "steepest ground slope that is traversable, in (0, 90)"},
+            {"slopeRadius", &O::slopeRadius, "m",
+             "where the plane through a cell and its 8 neighbours is steeper than maxSlope and no obstacle voxel lower than "
+             "clearance above the cell stands within this radius, the plane through the cells within it judges (a rough "
+             "surface's bumps averaged at the robot's scale), [0, 10] and at most 50 cells (below 2 cells: the 3 x 3 plane alone)"},
             {"maxStep", &O::maxStep, "m", "largest height jump (up or down) to a neighbouring cell that is traversable, > 0"},
             {"maxRoughness", &O::maxRoughness, "m", "largest standard deviation of a cell's ground heights that is traversable, > 0"},
             {"maxGroundRise", &O::maxGroundRise, "m",
@@ -64,6 +68,8 @@ const OptionTable<TraversabilityOptions>& table() {
 
 /// [cells] the largest groundRiseRadius / resolution (a disc of about 126,000 cells looked at per cell).
 constexpr double kMaxGroundRiseCells = 200;
+/// [cells] the largest slopeRadius / resolution (a disc of about 7,900 cells, for the cells steeper than maxSlope).
+constexpr double kMaxSlopeCells = 50;
 
 /// lo < v < hi (or lo <= v <= hi with `inclusive`).
 void requireInRange(double v, const char* name, double lo, double hi, bool inclusive = false) {
@@ -99,6 +105,13 @@ void TraversabilityOptions::validate() const {
     if (minGroundPoints < 1)
         throw std::invalid_argument("TraversabilityOptions.minGroundPoints = " + std::to_string(minGroundPoints) + ": must be >= 1");
     requireInRange(maxSlope, "maxSlope [deg]", 0.0, 90.0);
+    requireInRange(slopeRadius, "slopeRadius [m]", 0.0, 10.0, true);
+    if (slopeRadius / resolution > kMaxSlopeCells) {
+        std::ostringstream s;
+        s << "TraversabilityOptions.slopeRadius = " << slopeRadius << " m at resolution " << resolution << " m is a disc of "
+          << long(slopeRadius / resolution) << " cells' radius: at most " << kMaxSlopeCells << " (lower slopeRadius or raise the resolution)";
+        throw std::invalid_argument(s.str());
+    }
     if (!(maxStep > 0)) throw std::invalid_argument("TraversabilityOptions.maxStep = " + std::to_string(maxStep) + ": must be > 0 m");
     if (!(maxRoughness > 0))
         throw std::invalid_argument("TraversabilityOptions.maxRoughness = " + std::to_string(maxRoughness) + ": must be > 0 m");

@@ -115,6 +115,77 @@ TEST(TerrainLayers, RampsOfTenAndTwentyDegreesHaveTheirSlope) {
     }
 }
 
+/// A 15 deg ramp rising along x from x = 8 m, each 0.2 m cell of it raised or lowered by up to 4 cm
+/// (uniform, from a hash of the cell: a rough track, the same in every scan).
+World roughRamp() {
+    World w;
+    w.ground = [](double x, double y) {
+        std::uint64_t h = std::uint64_t(std::int64_t(std::floor(x / 0.2))) * 0x9E3779B97F4A7C15ULL ^
+                          (std::uint64_t(std::int64_t(std::floor(y / 0.2))) + 0x632BE59BD9B4E019ULL) * 0xC2B2AE3D27D4EB4FULL;
+        h ^= h >> 29, h *= 0xBF58476D1CE4E5B9ULL, h ^= h >> 32;
+        const double bump = 0.04 * (double(h >> 11) / double(1ULL << 53) * 2 - 1);
+        return (x > 8.0 ? (x - 8.0) * std::tan(15.0 * kPi / 180.0) : 0.0) + bump;
+    };
+    return w;
+}
+
+TEST(TerrainLayers, RoughRampWithinTheSlopeLimitIsTraversableAtTheRobotsScale) {
+    // The plane through 3 x 3 cells (0.6 m) of the rough 15 deg track tilts beyond 20 deg in places;
+    // through the cells within slopeRadius (0.5 m) the bumps average out. With slopeRadius 0 (the
+    // 3 x 3 plane alone, the rule before) those cells are blocked.
+    const World w = roughRamp();
+    const auto sensors = straightDrive(w, 0.0, 4, 0.5);
+    TraversabilityOptions narrowOnly;
+    narrowOnly.slopeRadius = 0;
+    const LayerGrid g = drive(w, sensors).layers(), narrow = drive(w, sensors, narrowOnly).layers();
+    int cells = 0, traversable = 0, narrowBlocked = 0;
+    for (double x = 9.1; x < 14.0; x += 0.2)
+        for (double y = -1.9; y < 2.0; y += 0.2) {
+            if (std::isnan(at(g, "class", x, y))) continue;
+            ++cells;
+            traversable += at(g, "class", x, y) == kTraversable;
+            if (at(narrow, "class", x, y) == kBlocked) {
+                ++narrowBlocked;
+                EXPECT_GT(at(narrow, "slope", x, y), 20.0f) << "blocked by its 3 x 3 slope alone at (" << x << ", " << y << ")";
+                EXPECT_NEAR(at(g, "slope", x, y), 15.0, 4.0) << "judged over 0.5 m: the track's slope at (" << x << ", " << y << ")";
+            } else {
+                EXPECT_EQ(at(g, "slope", x, y), at(narrow, "slope", x, y)) << "judged again only where the 3 x 3 plane is too steep";
+            }
+        }
+    ASSERT_GT(cells, 300);
+    EXPECT_GT(narrowBlocked, 3) << "the bumps must tilt some 3 x 3 planes beyond 20 deg, or this tests nothing";
+    EXPECT_EQ(traversable, cells) << cells - traversable << " of " << cells << " cells of the 15 deg track blocked";
+}
+
+TEST(TerrainLayers, NextToAnObstacleTheSlopeIsJudgedOverThreeByThreeCells) {
+    // The rough track with a post (0.2 m square, 1.5 m high) on it: within slopeRadius of the post's
+    // voxels every cell keeps its 3 x 3 plane's slope (beside a bush or a wall's foot the ground the
+    // segmenter leaves is not judged at a wider scale); away from it some cells are judged again.
+    World w = roughRamp();
+    Box post;
+    post.lo[0] = 11.0, post.lo[1] = 0.4, post.hi[0] = 11.2, post.hi[1] = 0.6;
+    post.lo[2] = w.ground(11.1, 0.5) - 0.1, post.hi[2] = w.ground(11.1, 0.5) + 1.5;
+    w.boxes.push_back(post);
+    const auto sensors = straightDrive(w, 0.0, 4, 0.5);
+    TraversabilityOptions narrowOnly;
+    narrowOnly.slopeRadius = 0;
+    const LayerGrid g = drive(w, sensors).layers(), narrow = drive(w, sensors, narrowOnly).layers();
+    int near = 0, widenedAway = 0;
+    for (double x = 9.1; x < 14.0; x += 0.2)
+        for (double y = -1.9; y < 2.0; y += 0.2) {
+            const float s = at(g, "slope", x, y), s3 = at(narrow, "slope", x, y);
+            if (std::isnan(s)) continue;
+            if (std::hypot(x - 11.1, y - 0.5) < 0.55) {
+                ++near;
+                EXPECT_EQ(s, s3) << "beside the post at (" << x << ", " << y << ")";
+            } else {
+                widenedAway += s < s3;
+            }
+        }
+    EXPECT_GT(near, 3);
+    EXPECT_GT(widenedAway, 3);
+}
+
 TEST(TerrainLayers, KerbOfFifteenCentimetresIsAStepOfFifteen) {
     World w;
     w.ground = [](double x, double) { return x >= 10.0 ? 0.15 : 0.0; };  // on a cell boundary (0.2 m cells)
@@ -377,6 +448,13 @@ TEST(TerrainLayers, RobotLimitsAreValidated) {
     EXPECT_THROW(o.validate(), std::invalid_argument);
     o = {};
     o.maxSlope = 95;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o = {};
+    o.slopeRadius = -0.1;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o.slopeRadius = 0;  // the 3 x 3 plane alone
+    EXPECT_NO_THROW(o.validate());
+    o.resolution = 0.01, o.slopeRadius = 1;  // a disc of 100 cells' radius
     EXPECT_THROW(o.validate(), std::invalid_argument);
     o = {};
     o.set("maxStep", "0.1");

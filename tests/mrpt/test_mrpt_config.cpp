@@ -316,7 +316,7 @@ TEST(ConfigOptionTables, EveryFieldOfBothOptionStructsLoadsFromYamlAndIniAlike) 
     const std::map<std::string, std::string> mapValues = {
         {"resolution", "0.1"}, {"maxRange", "40"},  {"probHit", "0.8"},  {"probMiss", "0.3"},
         {"clampMin", "0.1"},   {"clampMax", "0.95"}, {"occupancyThreshold", "0.6"}, {"clearance", "2.5"},
-        {"minGroundPoints", "4"}, {"maxSlope", "15"}, {"maxStep", "0.3"}, {"maxRoughness", "0.15"},
+        {"minGroundPoints", "4"}, {"maxSlope", "15"}, {"slopeRadius", "0.8"}, {"maxStep", "0.3"}, {"maxRoughness", "0.15"},
         {"maxGroundRise", "0.5"}, {"groundRiseRadius", "1.2"}, {"obstacleClearProbability", "0.2"},
         {"minObstacleHeight", "0.25"}, {"driveTerrain", "false"}, {"terrainTolerance", "0.08"}, {"terrainRadius", "1.5"},
         {"terrainSparseRadius", "2.5"},

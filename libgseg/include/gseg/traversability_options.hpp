@@ -26,6 +26,7 @@ struct TraversabilityOptions {
     // ---- the 2.5D layers and the costmap (gseg/map/terrain_layers.hpp); defaults for a car-sized robot ----
     int minGroundPoints = 3;          ///< [points] ground points (whole drive) a cell needs for an elevation, >= 1
     double maxSlope = 20.0;           ///< [deg] steepest ground a cell may have and be traversable, (0, 90)
+    double slopeRadius = 0.5;         ///< [m] where the plane through a cell and its 8 neighbours is steeper than maxSlope and no obstacle voxel lower than clearance above the cell stands within this, the plane through the cells within this judges (rough ground's bumps averaged at the robot's scale), [0, 10] and at most 50 cells (below 2 cells: the 3 x 3 plane alone)
     double maxStep = 0.25;            ///< [m] largest height jump (up or down) to a neighbouring cell that is traversable, > 0
     double maxRoughness = 0.1;        ///< [m] largest standard deviation of a cell's ground heights that is traversable, > 0
     double maxGroundRise = 0.38;      ///< [m] a cell whose elevation lies more than this above the lowest elevation within groundRiseRadius is not traversable (flat tops of hedges and bushes the segmenter calls ground); > groundRiseRadius * tan(maxSlope)

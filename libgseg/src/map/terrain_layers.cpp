@@ -162,7 +162,7 @@ LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& o
     }
     std::vector<LayerTiles::Info> info{
             {"elevation", "m", "mean height of the ground points (map frame z)"},
-            {"slope", "deg", "slope of the least-squares plane through the ground-point centroids of the cell and its 8 neighbours"},
+            {"slope", "deg", "slope of the least-squares plane through the ground-point centroids of the cell and its 8 neighbours (steeper than maxSlope with no obstacle within slopeRadius: of the cells within slopeRadius)"},
             {"step", "m", "largest height difference between a ground point of the cell and one of a neighbouring cell, up or down"},
             {"roughness", "m", "standard deviation of the ground point heights in the cell"},
             {"clearance", "m", "free height above the ground up to the lowest obstacle (inf: none)"},
@@ -204,31 +204,66 @@ LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& o
     if (g.tiles() == 0) g.touch(cellOf(lo[0]), cellOf(lo[1]));  // nothing seen: the one unknown cell
     const auto tiles = g.tileList();
 
-    // Slope and step from the 3 x 3 neighbourhood of each cell with an elevation.
+    // Slope and step from the 3 x 3 neighbourhood of each cell with an elevation. Where that plane
+    // is steeper than maxSlope and no obstacle voxel lower than `clearance` above the cell's ground
+    // stands within slopeRadius, the slope is that of the plane through the cells within
+    // slopeRadius: on rough ground the 3 x 3 plane (0.6 m at 0.2 m cells) follows bumps of a few
+    // centimetres, a car's wheels do not; next to an obstacle (a bush's top the segmenter called
+    // ground, the foot of a wall) the 3 x 3 plane judges.
     Cursor nElevation(g, kElevation), nLowZ(g, kLowZ), nHighZ(g, kHighZ), nOffX(g, kOffX), nOffY(g, kOffY);
+    struct Plane {  // least-squares z = a + b x + c y through (x, y, z) points
+        double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, sx = 0, sy = 0, sz = 0, m = 0;
+        void add(double x, double y, double z) { sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z, sx += x, sy += y, sz += z, ++m; }
+        /// [deg] its inclination; NaN with fewer than 3 points or (nearly) on a line.
+        float slopeDegrees(double res) const {
+            if (m < 3) return kNaN;
+            // Centred normal equations.
+            const double cxx = sxx - sx * sx / m, cxy = sxy - sx * sy / m, cyy = syy - sy * sy / m;
+            const double cxz = sxz - sx * sz / m, cyz = syz - sy * sz / m;
+            const double det = cxx * cyy - cxy * cxy;
+            if (!(det > 0.25 * res * res * res * res)) return kNaN;
+            const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
+            return float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
+        }
+    };
+    std::vector<std::pair<int, int>> slopeDisc;  // the cells within slopeRadius; none below 2 cells (the 3 x 3 alone)
+    if (const int n = int(std::floor(o.slopeRadius / res + 1e-9)); n >= 2)
+        for (int dy = -n; dy <= n; ++dy)
+            for (int dx = -n; dx <= n; ++dx)
+                if ((dx * dx + dy * dy) * res * res <= o.slopeRadius * o.slopeRadius * (1 + 1e-9)) slopeDisc.emplace_back(dx, dy);
+    auto obstacleWithin = [&](std::int64_t cx, std::int64_t cy, float below) {
+        for (const auto& [dx, dy] : slopeDisc) {
+            const auto col = obstacles.find(columnKey(cx + dx, cy + dy));
+            if (col != obstacles.end())
+                for (float z : col->second)
+                    if (z < below) return true;
+        }
+        return false;
+    };
     forEachCell(g, tiles, [&](std::int64_t cx, std::int64_t cy) {
         const float z0 = elevation.get(cx, cy);
         if (std::isnan(z0)) return;
-        double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, sx = 0, sy = 0, sz = 0, m = 0, jump = 0;
+        Plane near;
+        double jump = 0;
         const float low0 = lowZ.get(cx, cy), high0 = highZ.get(cx, cy);
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
                 const float z = nElevation.get(cx + dx, cy + dy);  // NaN outside the box and the tiles
                 if (std::isnan(z)) continue;
-                const double x = dx * res + nOffX.get(cx + dx, cy + dy), y = dy * res + nOffY.get(cx + dx, cy + dy);
-                sxx += x * x, sxy += x * y, syy += y * y, sxz += x * z, syz += y * z, sx += x, sy += y, sz += z, ++m;
+                near.add(dx * res + nOffX.get(cx + dx, cy + dy), dy * res + nOffY.get(cx + dx, cy + dy), z);
                 if (dx != 0 || dy != 0)
                     jump = std::max({jump, double(nHighZ.get(cx + dx, cy + dy)) - double(low0), double(high0) - double(nLowZ.get(cx + dx, cy + dy))});
             }
         step.at(cx, cy) = float(jump);
-        if (m < 3) return;
-        // Centred normal equations of z = a + b x + c y.
-        const double cxx = sxx - sx * sx / m, cxy = sxy - sx * sy / m, cyy = syy - sy * sy / m;
-        const double cxz = sxz - sx * sz / m, cyz = syz - sy * sz / m;
-        const double det = cxx * cyy - cxy * cxy;
-        if (!(det > 0.25 * res * res * res * res)) return;  // the centroids (nearly) on a line: no plane
-        const double b = (cxz * cyy - cyz * cxy) / det, c = (cyz * cxx - cxz * cxy) / det;
-        slope.at(cx, cy) = float(std::atan(std::hypot(b, c)) * 180.0 / kPi);
+        const float s = near.slopeDegrees(res);
+        if (std::isnan(s)) return;
+        slope.at(cx, cy) = s;
+        if (!(s > o.maxSlope) || slopeDisc.empty() || obstacleWithin(cx, cy, z0 + float(o.clearance))) return;
+        Plane wide;
+        for (const auto& [dx, dy] : slopeDisc)
+            if (const float z = nElevation.get(cx + dx, cy + dy); !std::isnan(z))
+                wide.add(dx * res + nOffX.get(cx + dx, cy + dy), dy * res + nOffY.get(cx + dx, cy + dy), z);
+        if (const float w = wide.slopeDegrees(res); !std::isnan(w)) slope.at(cx, cy) = w;
     });
 
     // Rise above the lowest elevation within groundRiseRadius (a disc of cell centres).
