@@ -61,6 +61,9 @@ Picture::Picture(int width, int height, Colour background)
                                     " pixels: each side must be 1 to 16384");
     image_ = std::make_unique<::mrpt::img::CImage>(width, height, ::mrpt::img::CH_RGB);
     bgr_ = image_->getChannelsOrder() == "BGR";
+    // The pixels stay where they are for the picture's life (nothing resizes it): rows are found
+    // from the first row's address, not through CImage's checked access per pixel.
+    pixels_ = image_->ptrLine<std::uint8_t>(0), stride_ = image_->getRowStride();
     fill(0, 0, width - 1, height - 1, background);
 }
 
@@ -75,14 +78,17 @@ Colour Picture::textColour() const {
 
 void Picture::pixel(int x, int y, Colour c) {
     if (x < 0 || y < 0 || x >= width_ || y >= height_) return;
-    std::uint8_t* p = image_->ptrLine<std::uint8_t>(unsigned(y)) + 3 * std::size_t(x);
+    std::uint8_t* p = pixels_ + std::size_t(y) * stride_ + 3 * std::size_t(x);
     p[0] = bgr_ ? c.b : c.r, p[1] = c.g, p[2] = bgr_ ? c.r : c.b;
 }
 
 void Picture::fill(int x0, int y0, int x1, int y1, Colour c) {
     x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, width_ - 1), y1 = std::min(y1, height_ - 1);
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) pixel(x, y, c);
+    const std::uint8_t a = bgr_ ? c.b : c.r, b = c.g, d = bgr_ ? c.r : c.b;
+    for (int y = y0; y <= y1; ++y) {
+        std::uint8_t* p = pixels_ + std::size_t(y) * stride_ + 3 * std::size_t(x0);
+        for (int x = x0; x <= x1; ++x, p += 3) p[0] = a, p[1] = b, p[2] = d;
+    }
 }
 
 void Picture::line(int x0, int y0, int x1, int y1, Colour c, int width) {

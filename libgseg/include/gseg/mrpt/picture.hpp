@@ -107,7 +107,7 @@ public:
     /// Writes png() to `path` through gseg::io::AtomicFile (complete or absent).
     void save(const std::string& path) const;
 
-    ::mrpt::img::CImage& image() { return *image_; }
+    ::mrpt::img::CImage& image() { return *image_; }  ///< draw on it, never resize it (pixel() keeps its rows' address)
     const ::mrpt::img::CImage& image() const { return *image_; }
 
 private:
@@ -117,6 +117,8 @@ private:
     int width_ = 0, height_ = 0;
     Colour background_;
     bool bgr_ = false;  ///< channel order of the image
+    std::uint8_t* pixels_ = nullptr;  ///< the image's first row
+    std::size_t stride_ = 0;          ///< [bytes] from one row to the next
 };
 
 /// "12 m", "0.5 m": a length as the pictures label it.
