@@ -84,6 +84,7 @@ void Picture::pixel(int x, int y, Colour c) {
 
 void Picture::fill(int x0, int y0, int x1, int y1, Colour c) {
     x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, width_ - 1), y1 = std::min(y1, height_ - 1);
+    if (x0 > x1 || y0 > y1) return;  // wholly outside: no row address beyond the image is formed
     const std::uint8_t a = bgr_ ? c.b : c.r, b = c.g, d = bgr_ ? c.r : c.b;
     for (int y = y0; y <= y1; ++y) {
         std::uint8_t* p = pixels_ + std::size_t(y) * stride_ + 3 * std::size_t(x0);
