@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -63,21 +64,45 @@ void TerrainOptions::validate() const {
 
 namespace {
 
+/// The most cells of a scan's box that terrainSamples() indexes directly: 2^20 (4 MB of slots, a
+/// 0.2 m grid 200 m across), more for clouds of more than 2^18 points (4 slots a point).
+std::size_t denseCellLimit(std::size_t points) { return std::max<std::size_t>(std::size_t(1) << 20, 4 * points); }
+
+/// A point of a scan that adds to a terrain sample: its index, label and cell.
+struct SampledPoint {
+    std::uint32_t index;
+    bool ground;
+    std::int32_t ix, iy;
+};
+
+/// Adds a point at height `z` to sample `c` (a sample's sums follow the input order of its points).
+void addToSample(TerrainSample& c, float z, bool ground) {
+    c.lowZ = std::min(c.lowZ, z), c.highZ = std::max(c.highZ, z);
+    if (ground) ++c.groundCount, c.groundSumZ += z;
+}
+
+TerrainSample newSample(std::int32_t ix, std::int32_t iy, float z) {
+    TerrainSample n;
+    n.ix = ix, n.iy = iy, n.lowZ = n.highZ = z;
+    return n;
+}
+
 /// The samples of the points of `ground` that `take(i, true)` accepts, then of those of
-/// `nonGround` that `take(i, false)` accepts (see terrainSamples()).
+/// `nonGround` that `take(i, false)` accepts (see terrainSamples()); `maxDenseCells` bounds the
+/// cells of the points' bounding box that are indexed directly (beyond it, a hash table).
 template <class Take>
 std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCloudView& nonGround, Take&& take,
-                                     double cellSize, double maxRange, const Eigen::Vector3d& origin) {
+                                     double cellSize, double maxRange, const Eigen::Vector3d& origin, std::size_t maxDenseCells) {
     if (!(std::isfinite(cellSize) && cellSize > 0)) throw std::invalid_argument("terrainSamples: cell size must be positive");
-    // Each point adds to its cell's sample, in input order (ground first): an open-addressing
-    // table from the cell to its sample, sized by the points (memory follows the points).
-    std::vector<TerrainSample> out;
-    std::size_t slots = 64;
-    while (slots < 2 * (ground.size() + nonGround.size())) slots *= 2;
-    std::vector<std::uint32_t> table(slots, 0);  // 0: empty, else index into out + 1
-    std::size_t last = 0;                         // the last point's sample + 1 (0: none): a scan's
-                                                  // next point mostly falls in the same cell
-    auto add = [&](const PointCloudView& pts, bool isGround) {
+    if (ground.size() + nonGround.size() >= std::size_t(UINT32_MAX)) throw std::invalid_argument("terrainSamples: more than 2^32 points");
+    // The points that count, in input order (ground first), with their cells and the cells' box.
+    // Kept between scans (per thread): a scan's points in fresh pages cost more than sampling them.
+    thread_local std::vector<SampledPoint> kept;
+    if (kept.size() < ground.size() + nonGround.size()) kept.resize(ground.size() + nonGround.size());
+    SampledPoint* const points = kept.data();
+    std::size_t count = 0;
+    std::int32_t lo[2] = {INT32_MAX, INT32_MAX}, hi[2] = {INT32_MIN, INT32_MIN};
+    auto accept = [&](const PointCloudView& pts, bool isGround) {
         for (std::size_t i = 0; i < pts.size(); ++i) {
             if (!take(i, isGround)) continue;
             const float* p = pts.point(i);
@@ -86,26 +111,62 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
             if (!(dx * dx + dy * dy + dz * dz <= maxRange * maxRange)) continue;
             std::int32_t ix = 0, iy = 0;
             if (!cellIndex(p[0], cellSize, ix) || !cellIndex(p[1], cellSize, iy)) continue;
-            if (!(last && out[last - 1].ix == ix && out[last - 1].iy == iy)) {
-                const std::uint64_t key = tileKey(ix, iy);
-                std::size_t h = std::size_t((key * 0x9E3779B97F4A7C15ULL) >> 20) & (slots - 1);
-                while (table[h] && !(out[table[h] - 1].ix == ix && out[table[h] - 1].iy == iy)) h = (h + 1) & (slots - 1);
-                if (!table[h]) {
-                    TerrainSample n;
-                    n.ix = ix, n.iy = iy, n.lowZ = n.highZ = p[2];
-                    out.push_back(n);
-                    table[h] = std::uint32_t(out.size());
-                }
-                last = table[h];
-            }
-            TerrainSample& c = out[last - 1];
-            c.lowZ = std::min(c.lowZ, p[2]), c.highZ = std::max(c.highZ, p[2]);
-            if (isGround) ++c.groundCount, c.groundSumZ += p[2];
+            points[count++] = {std::uint32_t(i), isGround, ix, iy};
+            lo[0] = std::min(lo[0], ix), hi[0] = std::max(hi[0], ix), lo[1] = std::min(lo[1], iy), hi[1] = std::max(hi[1], iy);
         }
     };
-    add(ground, true);
-    add(nonGround, false);
+    accept(ground, true);
+    accept(nonGround, false);
+    std::vector<TerrainSample> out;
+    if (count == 0) return out;
+    const SampledPoint* const end = points + count;
+    auto z = [&](const SampledPoint& s) { return (s.ground ? ground : nonGround).point(s.index)[2]; };
+    const std::uint64_t nx = std::uint64_t(std::int64_t(hi[0]) - lo[0]) + 1, ny = std::uint64_t(std::int64_t(hi[1]) - lo[1]) + 1;
+    if (nx * ny <= maxDenseCells) {
+        // The box's cells indexed directly, x-major: the points of a ring land in neighbouring
+        // slots, and reading the slots in order gives the samples sorted by (ix, iy). The slots
+        // are kept between scans (per thread), all 0 again on return.
+        thread_local std::vector<std::uint32_t> slots;  // 0: empty, else index into out + 1
+        if (slots.size() < nx * ny) slots.assign(nx * ny, 0);
+        std::uint32_t* slot = slots.data();
+        std::size_t last = SIZE_MAX;  // the last point's slot: a scan's next point mostly shares it
+        out.reserve(count / 4);
+        for (const SampledPoint* it = points; it != end; ++it) {
+            const SampledPoint& s = *it;
+            const std::size_t k = std::size_t(std::int64_t(s.ix) - lo[0]) * ny + std::size_t(std::int64_t(s.iy) - lo[1]);
+            if (k != last) {
+                if (!slot[k]) out.push_back(newSample(s.ix, s.iy, z(s))), slot[k] = std::uint32_t(out.size());
+                last = k;
+            }
+            addToSample(out[slot[k] - 1], z(s), s.ground);
+        }
+        std::vector<TerrainSample> sorted;
+        sorted.reserve(out.size());
+        for (std::size_t k = 0, n = nx * ny; k < n && sorted.size() < out.size(); ++k)
+            if (slot[k]) sorted.push_back(out[slot[k] - 1]), slot[k] = 0;
+        if (slots.size() > denseCellLimit(0)) slots = {};  // a big cloud's buffers not kept
+        if (kept.size() > denseCellLimit(0)) kept = {};
+        return sorted;
+    }
+    // A box too large to index (points spread over a wide area): an open-addressing table from
+    // the cell to its sample, sized by the points.
+    std::size_t size = 64;
+    while (size < 2 * count) size *= 2;
+    std::vector<std::uint32_t> table(size, 0);  // 0: empty, else index into out + 1
+    std::size_t last = 0;                        // the last point's sample + 1 (0: none)
+    for (const SampledPoint* it = points; it != end; ++it) {
+        const SampledPoint& s = *it;
+        if (!(last && out[last - 1].ix == s.ix && out[last - 1].iy == s.iy)) {
+            const std::uint64_t key = tileKey(s.ix, s.iy);
+            std::size_t h = std::size_t((key * 0x9E3779B97F4A7C15ULL) >> 20) & (size - 1);
+            while (table[h] && !(out[table[h] - 1].ix == s.ix && out[table[h] - 1].iy == s.iy)) h = (h + 1) & (size - 1);
+            if (!table[h]) out.push_back(newSample(s.ix, s.iy, z(s))), table[h] = std::uint32_t(out.size());
+            last = table[h];
+        }
+        addToSample(out[last - 1], z(s), s.ground);
+    }
     std::sort(out.begin(), out.end(), [](const TerrainSample& a, const TerrainSample& b) { return a.ix != b.ix ? a.ix < b.ix : a.iy < b.iy; });
+    if (kept.size() > denseCellLimit(0)) kept = {};
     return out;
 }
 
@@ -113,26 +174,21 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
 
 std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const PointCloudView& nonGround, double cellSize,
                                           double maxRange, const Eigen::Vector3d& origin) {
-    return samplesOf(ground, nonGround, [](std::size_t, bool) { return true; }, cellSize, maxRange, origin);
+    return samplesOf(ground, nonGround, [](std::size_t, bool) { return true; }, cellSize, maxRange, origin, denseCellLimit(ground.size() + nonGround.size()));
 }
 
 std::vector<TerrainSample> terrainSamples(const PointCloudView& points, const std::vector<std::uint8_t>& labels, double cellSize,
                                           double maxRange, const Eigen::Vector3d& origin) {
     if (labels.size() != points.size())
         throw std::invalid_argument("terrainSamples: " + std::to_string(labels.size()) + " labels for " + std::to_string(points.size()) + " points");
-    return samplesOf(points, points, [&](std::size_t i, bool ground) { return labels[i] == (ground ? 1 : 0); }, cellSize, maxRange, origin);
+    return samplesOf(points, points, [&](std::size_t i, bool ground) { return labels[i] == (ground ? 1 : 0); }, cellSize, maxRange, origin,
+                     denseCellLimit(points.size()));
 }
 
 TerrainModel::TerrainModel(const TerrainOptions& options) : options_(options) { options_.validate(); }
 TerrainModel::~TerrainModel() = default;
 TerrainModel::TerrainModel(TerrainModel&&) noexcept = default;
 TerrainModel& TerrainModel::operator=(TerrainModel&&) noexcept = default;
-
-TerrainCell* TerrainModel::get(std::int32_t ix, std::int32_t iy) {
-    auto& tile = tiles_[tileKey(ix >> kTileBits, iy >> kTileBits)];
-    if (!tile) tile = std::make_unique<Tile>();
-    return &tile->cells[std::size_t((iy & kTileMask) * kTileSize + (ix & kTileMask))];
-}
 
 TerrainCell* TerrainModel::findMutable(std::int32_t ix, std::int32_t iy) {
     const auto it = tiles_.find(tileKey(ix >> kTileBits, iy >> kTileBits));
@@ -149,11 +205,19 @@ std::size_t TerrainModel::bytes() const { return tiles_.size() * (sizeof(Tile) +
 
 void TerrainModel::add(const std::vector<TerrainSample>& samples) {
     ++scans_;
+    std::uint64_t lastKey = 0;
+    Tile* tile = nullptr;  // the last sample's tile: samples sorted by (ix, iy) share it in runs
     for (const TerrainSample& s : samples) {
-        TerrainCell* c = get(s.ix, s.iy);
+        const std::uint64_t key = tileKey(s.ix >> kTileBits, s.iy >> kTileBits);
+        if (!tile || key != lastKey) {
+            auto& t = tiles_[key];
+            if (!t) t = std::make_unique<Tile>();
+            tile = t.get(), lastKey = key;
+        }
+        TerrainCell* c = &tile->cells[std::size_t((s.iy & kTileMask) * kTileSize + (s.ix & kTileMask))];
         if (c->lowScans == 0) {
             ++cells_;
-            ++tiles_[tileKey(s.ix >> kTileBits, s.iy >> kTileBits)]->used;
+            ++tile->used;
         }
         ++c->lowScans;
         c->lowSum += s.lowZ;

@@ -31,6 +31,8 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
+#include <random>
 #include <set>
 #include <sstream>
 #include <string>
@@ -85,6 +87,59 @@ TEST(TerrainSamples, SumsLowestAndHighestPerCellSkippingNaNAndFarPoints) {
     EXPECT_THROW(gseg::terrainSamples(gseg::PointCloudView(), gseg::PointCloudView(), 0.0), std::invalid_argument);
 }
 
+
+/// The samples of `ground` + `other` (x, y, z triples) computed one point at a time with a map:
+/// what terrainSamples() must give, whichever index it uses.
+std::vector<TerrainSample> referenceSamples(const std::vector<float>& ground, const std::vector<float>& other, double cell) {
+    std::map<std::pair<int, int>, TerrainSample> cells;
+    for (const auto* pts : {&ground, &other})
+        for (std::size_t i = 0; i + 2 < pts->size(); i += 3) {
+            const float x = (*pts)[i], y = (*pts)[i + 1], z = (*pts)[i + 2];
+            const int ix = int(std::floor(x / cell)), iy = int(std::floor(y / cell));
+            auto [it, added] = cells.try_emplace({ix, iy});
+            TerrainSample& s = it->second;
+            if (added) s.ix = ix, s.iy = iy, s.lowZ = s.highZ = z;
+            s.lowZ = std::min(s.lowZ, z), s.highZ = std::max(s.highZ, z);
+            if (pts == &ground) ++s.groundCount, s.groundSumZ += z;
+        }
+    std::vector<TerrainSample> out;
+    for (const auto& [key, s] : cells) out.push_back(s);
+    return out;
+}
+
+TEST(TerrainSamples, TheSameSamplesWhetherTheCellsAreIndexedDirectlyOrHashed) {
+    // Two scans' worth of points, rings around two sensors 5 km apart: each alone spans a box
+    // small enough to index directly, both together a box of 25,000 x 25,000 cells, hashed.
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> unit(0.f, 1.f);
+    auto scan = [&](float cx, float cy, std::vector<float>& ground, std::vector<float>& other) {
+        for (int ring = 0; ring < 16; ++ring)
+            for (int a = 0; a < 900; ++a) {
+                const float r = 3.f + 2.5f * ring + 0.3f * unit(rng), t = 6.2831853f * (a + unit(rng)) / 900.f;
+                const float z = ring < 12 ? 0.05f * unit(rng) : 0.2f + 1.5f * unit(rng);
+                auto& dst = ring < 12 || unit(rng) < 0.2f ? ground : other;
+                dst.insert(dst.end(), {cx + r * std::cos(t), cy + r * std::sin(t), z});
+            }
+    };
+    std::vector<float> g1, o1, g2, o2;
+    scan(100.f, -40.f, g1, o1);
+    scan(5100.f, 4960.f, g2, o2);
+    auto view = [](const std::vector<float>& v) { return gseg::PointCloudView(v.data(), v.size() / 3); };
+    const auto a = gseg::terrainSamples(view(g1), view(o1), 0.2);
+    const auto b = gseg::terrainSamples(view(g2), view(o2), 0.2);
+    EXPECT_EQ(a, referenceSamples(g1, o1, 0.2));
+    EXPECT_EQ(b, referenceSamples(g2, o2, 0.2));
+    std::vector<float> g = g1, o = o1;
+    g.insert(g.end(), g2.begin(), g2.end()), o.insert(o.end(), o2.begin(), o2.end());
+    const auto both = gseg::terrainSamples(view(g), view(o), 0.2);
+    std::vector<TerrainSample> joined = a;
+    joined.insert(joined.end(), b.begin(), b.end());
+    EXPECT_GT(a.size(), 5000u);
+    EXPECT_EQ(both, joined);
+    EXPECT_EQ(both, referenceSamples(g, o, 0.2));
+    // Called again (the directly indexed slots are kept between calls): the same.
+    EXPECT_EQ(gseg::terrainSamples(view(g1), view(o1), 0.2), a);
+}
 /// A 20 x 20 cell flat ground patch (cells 0..19) seen as ground by `scans` scans at z = 0.
 TerrainModel flatPatch(int scans, const TerrainOptions& o = TerrainOptions()) {
     TerrainModel m(o);

@@ -153,7 +153,6 @@ public:
 
 private:
     struct Tile;
-    TerrainCell* get(std::int32_t ix, std::int32_t iy);  ///< allocates the tile
     TerrainCell* findMutable(std::int32_t ix, std::int32_t iy);
     template <class F>
     void forEachCell(F&& f);

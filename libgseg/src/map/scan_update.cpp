@@ -240,6 +240,8 @@ public:
     void begin(const TraversabilityOptions& o, const Eigen::Vector3d& sensorOrigin) {
         if (!geometry_ || geometry_->getResolution() != o.resolution) geometry_ = std::make_unique<octomap::OcTree>(o.resolution);
         maxRange_ = o.maxRange, limit_ = 2 * o.extent();
+        const double inside = o.maxRange * (1 - 1e-9);
+        insideSq_ = inside * inside;
         origin_ = octomap::point3d(float(sensorOrigin.x()), float(sensorOrigin.y()), float(sensorOrigin.z()));
         if (!keyOf(origin_, originKey_)) {
             std::ostringstream s;
@@ -267,9 +269,8 @@ public:
         std::size_t last = SIZE_MAX;  // the last point's cell in out: the next point mostly shares it
         for (std::size_t i = 0; i < pts.size(); ++i) {
             const octomap::point3d p(pts.x(i), pts.y(i), pts.z(i));
-            const double range = (p - origin_).norm();
             octomap::OcTreeKey key;
-            if (!(range <= maxRange_) || !keyOf(p, key)) continue;
+            if (!withinRange((p - origin_).norm_sq()) || !keyOf(p, key)) continue;
             const std::uint32_t cell = (std::uint32_t(key[0]) << 16) | key[1];
             const double z = pts.z(i);
             if (last == SIZE_MAX || out[last].cell != cell) {
@@ -294,8 +295,9 @@ public:
         for (std::size_t i = 0; i < pts.size(); ++i) {
             octomap::point3d p(pts.x(i), pts.y(i), pts.z(i));
             const octomap::point3d d = p - origin_;
-            const double range = d.norm();
-            const bool hit = range <= maxRange_;
+            const double squared = d.norm_sq();
+            const bool hit = withinRange(squared);
+            const double range = hit ? 0 : std::sqrt(squared);  // only a ray cut at maxRange needs it
             if (!hit) p = origin_ + d * float(maxRange_ / range);
             octomap::OcTreeKey key;
             if (!std::isfinite(range) || !keyOf(p, key)) {
@@ -352,6 +354,11 @@ public:
 private:
     std::unique_ptr<octomap::OcTree> geometry_;  ///< an empty tree: key arithmetic only
     double maxRange_ = 0, limit_ = 0;
+    double insideSq_ = 0;  ///< below this squared range a point is within maxRange_ without taking the root
+
+    /// Whether a point at this squared distance (octomap's norm_sq()) lies within maxRange_, as
+    /// octomap's norm() <= maxRange_ says, the root taken only near the limit.
+    bool withinRange(double squared) const { return squared <= insideSq_ || std::sqrt(squared) <= maxRange_; }
     octomap::point3d origin_;
     octomap::OcTreeKey originKey_;
     std::uint64_t originCode_ = 0, originLocal_ = 0;  ///< the origin's voxel: map code, window_'s code

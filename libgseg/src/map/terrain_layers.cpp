@@ -1,6 +1,7 @@
 #include <gseg/map/terrain_layers.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -114,14 +115,43 @@ void fillGaps(LayerTiles& g, const TraversabilityOptions& o, const ObstacleColum
 
 }  // namespace
 
+struct GroundCells::Tile {
+    std::array<GroundCellSums, 256> cells;  ///< 16 x 16, x-major; count 0: no ground seen
+};
+
+GroundCells::GroundCells() = default;
+GroundCells::~GroundCells() = default;
+GroundCells::GroundCells(GroundCells&&) noexcept = default;
+GroundCells& GroundCells::operator=(GroundCells&&) noexcept = default;
+
 void GroundCells::add(const std::vector<GroundCellSample>& samples) {
+    std::uint32_t lastKey = 0;
+    Tile* tile = nullptr;  // the last sample's tile
     for (const GroundCellSample& s : samples) {
-        auto [it, added] = cells_.try_emplace(s.cell);
-        GroundCellSums& c = it->second;
-        if (added) c.minZ = s.minZ, c.maxZ = s.maxZ;
+        if (s.count == 0) continue;  // says nothing (a cell is known by its points)
+        const std::uint32_t key = ((s.cell >> 20) << 12) | ((s.cell & 0xffffu) >> 4);
+        if (!tile || key != lastKey) {
+            auto& t = tiles_[key];
+            if (!t) t = std::make_unique<Tile>();
+            tile = t.get(), lastKey = key;
+        }
+        GroundCellSums& c = tile->cells[((s.cell >> 16 & 15u) << 4) | (s.cell & 15u)];
+        if (c.count == 0) c.minZ = s.minZ, c.maxZ = s.maxZ, ++cells_;
         c.count += s.count, c.sumZ += s.sumZ, c.sumZ2 += s.sumZ2, c.sumX += s.sumX, c.sumY += s.sumY;
         c.minZ = std::min(c.minZ, s.minZ), c.maxZ = std::max(c.maxZ, s.maxZ);
     }
+}
+
+void GroundCells::forEach(const std::function<void(std::uint32_t, const GroundCellSums&)>& f) const {
+    for (const auto& [key, tile] : tiles_)
+        for (std::uint32_t i = 0; i < 256; ++i)
+            if (tile->cells[i].count)
+                f((((key >> 12) << 4 | i >> 4) << 16) | ((key & 0xfffu) << 4 | (i & 15u)), tile->cells[i]);
+}
+
+void GroundCells::clear() {
+    tiles_.clear();
+    cells_ = 0;
 }
 
 const std::vector<std::string>& terrainLayerNames() {
@@ -138,8 +168,9 @@ LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& o
         lo[0] = std::min(lo[0], keyX(cell)), hi[0] = std::max(hi[0], keyX(cell));
         lo[1] = std::min(lo[1], keyY(cell)), hi[1] = std::max(hi[1], keyY(cell));
     };
-    for (const auto& [cell, sums] : ground.cells())
+    ground.forEach([&](std::uint32_t cell, const GroundCellSums& sums) {
         if (sums.count >= minPoints) extend(cell);
+    });
     for (const auto& [cell, zs] : obstacles)
         if (!zs.empty()) extend(cell);
     // The terrain model's cells (the map's columns: key = cell index + 32768).
@@ -180,8 +211,8 @@ LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& o
     Cursor cls(g, kClass), cost(g, kCost), source(g, kSource), lowZ(g, kLowZ), highZ(g, kHighZ), offX(g, kOffX), offY(g, kOffY);
     Cursor rise(g, kRise);
 
-    for (const auto& [cell, s] : ground.cells()) {
-        if (s.count < minPoints) continue;
+    ground.forEach([&](std::uint32_t cell, const GroundCellSums& s) {
+        if (s.count < minPoints) return;
         const double n = double(s.count), mean = s.sumZ / n;
         const std::int64_t ix = cellOf(keyX(cell)), iy = cellOf(keyY(cell));
         elevation.at(ix, iy) = float(mean);
@@ -189,7 +220,7 @@ LayerTiles terrainLayerTiles(const GroundCells& ground, const ObstacleColumns& o
         offX.at(ix, iy) = float(s.sumX / n - centreX(ix)), offY.at(ix, iy) = float(s.sumY / n - centreY(iy));
         roughness.at(ix, iy) = float(std::sqrt(std::max(0.0, s.sumZ2 / n - mean * mean)));
         source.at(ix, iy) = 0;
-    }
+    });
     // The drive's terrain model where the scans' ground points are too few: its elevation, no
     // spread (roughness 0; the step rule sees the modelled height).
     for (const Modelled& m : modelled) {

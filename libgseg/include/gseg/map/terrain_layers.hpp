@@ -49,6 +49,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -63,15 +64,26 @@ struct GroundCellSums {
     float minZ = 0, maxZ = 0;    ///< [m]
 };
 
-/// Accumulates the GroundCellSample lists of the scans, in scan order.
+/// Accumulates the GroundCellSample lists of the scans, in scan order, in tiles of 16 x 16 cells
+/// allocated where ground was seen (a scan's samples, sorted by cell, fall in runs of one tile).
 class GroundCells {
 public:
+    GroundCells();
+    ~GroundCells();
+    GroundCells(GroundCells&&) noexcept;
+    GroundCells& operator=(GroundCells&&) noexcept;
+
     void add(const std::vector<GroundCellSample>& samples);
-    const std::unordered_map<std::uint32_t, GroundCellSums>& cells() const { return cells_; }
-    void clear() { cells_.clear(); }
+    /// Calls f(cell, sums) for every cell with ground points (cell: the column key of
+    /// GroundCellSample::cell), in no particular order.
+    void forEach(const std::function<void(std::uint32_t, const GroundCellSums&)>& f) const;
+    std::size_t size() const { return cells_; }  ///< cells with ground points
+    void clear();
 
 private:
-    std::unordered_map<std::uint32_t, GroundCellSums> cells_;  ///< by column key (GroundCellSample::cell)
+    struct Tile;
+    std::unordered_map<std::uint32_t, std::unique_ptr<Tile>> tiles_;  ///< by the cell key's x and y >> 4
+    std::size_t cells_ = 0;
 };
 
 /// The z [m] of the centres of the occupied obstacle voxels of each column (by column key).
