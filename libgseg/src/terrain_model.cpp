@@ -88,17 +88,18 @@ TerrainSample newSample(std::int32_t ix, std::int32_t iy, float z) {
 }
 
 /// The samples of the points of `ground` that `take(i, true)` accepts, then of those of
-/// `nonGround` that `take(i, false)` accepts (see terrainSamples()); `maxDenseCells` bounds the
-/// cells of the points' bounding box that are indexed directly (beyond it, a hash table).
+/// `nonGround` that `take(i, false)` accepts (see terrainSamples()); at most `most` points are
+/// accepted in all. The cells of the accepted points' box are indexed directly where they are at
+/// most denseCellLimit(most), else hashed.
 template <class Take>
 std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCloudView& nonGround, Take&& take,
-                                     double cellSize, double maxRange, const Eigen::Vector3d& origin, std::size_t maxDenseCells) {
+                                     double cellSize, double maxRange, const Eigen::Vector3d& origin, std::size_t most) {
     if (!(std::isfinite(cellSize) && cellSize > 0)) throw std::invalid_argument("terrainSamples: cell size must be positive");
-    if (ground.size() + nonGround.size() >= std::size_t(UINT32_MAX)) throw std::invalid_argument("terrainSamples: more than 2^32 points");
+    if (most >= std::size_t(UINT32_MAX)) throw std::invalid_argument("terrainSamples: " + std::to_string(most) + " points: at most 2^32 - 2");
     // The points that count, in input order (ground first), with their cells and the cells' box.
     // Kept between scans (per thread): a scan's points in fresh pages cost more than sampling them.
     thread_local std::vector<SampledPoint> kept;
-    if (kept.size() < ground.size() + nonGround.size()) kept.resize(ground.size() + nonGround.size());
+    if (kept.size() < most) kept.resize(most);
     SampledPoint* const points = kept.data();
     std::size_t count = 0;
     std::int32_t lo[2] = {INT32_MAX, INT32_MAX}, hi[2] = {INT32_MIN, INT32_MIN};
@@ -122,11 +123,19 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
     const SampledPoint* const end = points + count;
     auto z = [&](const SampledPoint& s) { return (s.ground ? ground : nonGround).point(s.index)[2]; };
     const std::uint64_t nx = std::uint64_t(std::int64_t(hi[0]) - lo[0]) + 1, ny = std::uint64_t(std::int64_t(hi[1]) - lo[1]) + 1;
-    if (nx * ny <= maxDenseCells) {
+    if (nx * ny <= denseCellLimit(most)) {
         // The box's cells indexed directly, x-major: the points of a ring land in neighbouring
         // slots, and reading the slots in order gives the samples sorted by (ix, iy). The slots
-        // are kept between scans (per thread), all 0 again on return.
+        // are kept between scans (per thread), all 0 again on return (dropped if an allocation
+        // fails on the way).
         thread_local std::vector<std::uint32_t> slots;  // 0: empty, else index into out + 1
+        struct Dropped {
+            std::vector<std::uint32_t>& slots;
+            bool clean = false;
+            ~Dropped() {
+                if (!clean) slots = {};
+            }
+        } dropped{slots};
         if (slots.size() < nx * ny) slots.assign(nx * ny, 0);
         std::uint32_t* slot = slots.data();
         std::size_t last = SIZE_MAX;  // the last point's slot: a scan's next point mostly shares it
@@ -144,7 +153,7 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
         sorted.reserve(out.size());
         for (std::size_t k = 0, n = nx * ny; k < n && sorted.size() < out.size(); ++k)
             if (slot[k]) sorted.push_back(out[slot[k] - 1]), slot[k] = 0;
-        if (slots.size() > denseCellLimit(0)) slots = {};  // a big cloud's buffers not kept
+        dropped.clean = slots.size() <= denseCellLimit(0);  // a big cloud's buffers not kept
         if (kept.size() > denseCellLimit(0)) kept = {};
         return sorted;
     }
@@ -174,15 +183,16 @@ std::vector<TerrainSample> samplesOf(const PointCloudView& ground, const PointCl
 
 std::vector<TerrainSample> terrainSamples(const PointCloudView& ground, const PointCloudView& nonGround, double cellSize,
                                           double maxRange, const Eigen::Vector3d& origin) {
-    return samplesOf(ground, nonGround, [](std::size_t, bool) { return true; }, cellSize, maxRange, origin, denseCellLimit(ground.size() + nonGround.size()));
+    return samplesOf(ground, nonGround, [](std::size_t, bool) { return true; }, cellSize, maxRange, origin, ground.size() + nonGround.size());
 }
 
 std::vector<TerrainSample> terrainSamples(const PointCloudView& points, const std::vector<std::uint8_t>& labels, double cellSize,
                                           double maxRange, const Eigen::Vector3d& origin) {
     if (labels.size() != points.size())
         throw std::invalid_argument("terrainSamples: " + std::to_string(labels.size()) + " labels for " + std::to_string(points.size()) + " points");
+    // A point is taken as ground or as not, never both: at most points.size() in all.
     return samplesOf(points, points, [&](std::size_t i, bool ground) { return labels[i] == (ground ? 1 : 0); }, cellSize, maxRange, origin,
-                     denseCellLimit(points.size()));
+                     points.size());
 }
 
 TerrainModel::TerrainModel(const TerrainOptions& options) : options_(options) { options_.validate(); }
