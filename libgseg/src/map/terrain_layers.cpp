@@ -121,8 +121,6 @@ struct GroundCells::Tile {
 
 GroundCells::GroundCells() = default;
 GroundCells::~GroundCells() = default;
-GroundCells::GroundCells(GroundCells&&) noexcept = default;
-GroundCells& GroundCells::operator=(GroundCells&&) noexcept = default;
 
 void GroundCells::add(const std::vector<GroundCellSample>& samples) {
     std::uint32_t lastKey = 0;
@@ -136,7 +134,7 @@ void GroundCells::add(const std::vector<GroundCellSample>& samples) {
             tile = t.get(), lastKey = key;
         }
         GroundCellSums& c = tile->cells[((s.cell >> 16 & 15u) << 4) | (s.cell & 15u)];
-        if (c.count == 0) c.minZ = s.minZ, c.maxZ = s.maxZ, ++cells_;
+        if (c.count == 0) c.minZ = s.minZ, c.maxZ = s.maxZ;
         c.count += s.count, c.sumZ += s.sumZ, c.sumZ2 += s.sumZ2, c.sumX += s.sumX, c.sumY += s.sumY;
         c.minZ = std::min(c.minZ, s.minZ), c.maxZ = std::max(c.maxZ, s.maxZ);
     }
@@ -147,11 +145,6 @@ void GroundCells::forEach(const std::function<void(std::uint32_t, const GroundCe
         for (std::uint32_t i = 0; i < 256; ++i)
             if (tile->cells[i].count)
                 f((((key >> 12) << 4 | i >> 4) << 16) | ((key & 0xfffu) << 4 | (i & 15u)), tile->cells[i]);
-}
-
-void GroundCells::clear() {
-    tiles_.clear();
-    cells_ = 0;
 }
 
 const std::vector<std::string>& terrainLayerNames() {

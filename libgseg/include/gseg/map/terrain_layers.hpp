@@ -70,20 +70,15 @@ class GroundCells {
 public:
     GroundCells();
     ~GroundCells();
-    GroundCells(GroundCells&&) noexcept;
-    GroundCells& operator=(GroundCells&&) noexcept;
 
     void add(const std::vector<GroundCellSample>& samples);
     /// Calls f(cell, sums) for every cell with ground points (cell: the column key of
     /// GroundCellSample::cell), in no particular order.
     void forEach(const std::function<void(std::uint32_t, const GroundCellSums&)>& f) const;
-    std::size_t size() const { return cells_; }  ///< cells with ground points
-    void clear();
 
 private:
     struct Tile;
     std::unordered_map<std::uint32_t, std::unique_ptr<Tile>> tiles_;  ///< by the cell key's x and y >> 4
-    std::size_t cells_ = 0;
 };
 
 /// The z [m] of the centres of the occupied obstacle voxels of each column (by column key).
